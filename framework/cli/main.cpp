@@ -1,0 +1,226 @@
+// The rkhs-study command: run study definitions, list plugins, validate study files.
+// Exit codes: 0 success; 1 the study ran but some trials failed (their reasons are recorded);
+// 2 bad input (command line, study file) or a broken plugin registration.
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "rkhs/approximation.hpp"
+#include "rkhs/build_info.hpp"
+#include "rkhs/centres.hpp"
+#include "rkhs/kernel.hpp"
+#include "rkhs/output.hpp"
+#include "rkhs/plugins.hpp"
+#include "rkhs/run.hpp"
+#include "rkhs/study.hpp"
+#include "rkhs/study_rates.hpp"
+#include "rkhs/target.hpp"
+
+namespace {
+
+constexpr int exit_ok = 0, exit_failed_trials = 1, exit_bad_input = 2;
+
+std::string utc_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buffer;
+}
+
+std::string describe_parameter(const rkhs::ParameterSpec& spec) {
+  std::string out = fmt::format("    {:<14} {}", spec.name, spec.doc);
+  std::string detail;
+  if (!spec.default_doc.empty()) detail = "default " + spec.default_doc;
+  else detail = "default " + rkhs::format_value(spec.default_value);
+  if (spec.type == rkhs::ParameterType::choice) {
+    detail += "; one of";
+    for (std::size_t i = 0; i < spec.choices.size(); ++i) detail += (i ? ", " : " ") + spec.choices[i];
+  } else if (!spec.allowed.empty()) {
+    detail += "; one of";
+    for (std::size_t i = 0; i < spec.allowed.size(); ++i)
+      detail += (i ? ", " : " ") + rkhs::format_real(spec.allowed[i]);
+  } else if (spec.type != rkhs::ParameterType::boolean) {
+    const bool lo = spec.min > -1e308, hi = spec.max < 1e308;
+    auto bound = [&](double v) {
+      return spec.type == rkhs::ParameterType::integer
+                 ? std::to_string(static_cast<long long>(v)) : rkhs::format_real(v);
+    };
+    if (lo) detail += fmt::format("; {} {}", spec.min_exclusive ? ">" : ">=", bound(spec.min));
+    if (hi) detail += fmt::format("; {} {}", spec.max_exclusive ? "<" : "<=", bound(spec.max));
+  }
+  return out + " (" + detail + ")";
+}
+
+template <class RegistryType>
+void list_registry(const RegistryType& registry, std::ostream& out) {
+  out << registry.kind() << " plugins:\n";
+  for (const auto& name : registry.names()) {
+    const auto& info = registry.find(name)->info;
+    out << fmt::format("  {:<10} {}\n", name, info.doc);
+    for (const auto& spec : info.parameters) out << describe_parameter(spec) << "\n";
+    for (const auto& [key, value] : info.traits) out << fmt::format("    [{}] {}\n", key, value);
+  }
+  out << "\n";
+}
+
+int command_list(const std::string& kind) {
+  const bool all = kind.empty();
+  if (all || kind == "kernel" || kind == "kernels") list_registry(rkhs::kernel_registry(), std::cout);
+  if (all || kind == "centres") list_registry(rkhs::centre_registry(), std::cout);
+  if (all || kind == "target" || kind == "targets") list_registry(rkhs::target_registry(), std::cout);
+  if (all || kind == "metric" || kind == "metrics") {
+    std::cout << "metrics (approximation trials):\n";
+    for (const auto& name : rkhs::approximation_metric_names()) std::cout << "  " << name << "\n";
+  }
+  return exit_ok;
+}
+
+// Appends each finished trial to a journal, flushed at once, so an interrupted run keeps what
+// it computed; removed once the outputs are complete.
+class Journal {
+ public:
+  Journal(const std::filesystem::path& file, const std::vector<std::string>& metrics) : file_(file) {
+    out_.open(file, std::ios::trunc);
+    out_ << "index,key,status,reason";
+    for (const auto& m : metrics) out_ << "," << m;
+    out_ << "\n" << std::flush;
+  }
+  void record(const rkhs::TrialSpec& trial, const rkhs::TrialResult& result,
+              const std::vector<std::string>& metrics) {
+    const auto& names = rkhs::approximation_metric_names();
+    out_ << trial.index << "," << rkhs::csv_field(trial.key) << "," << (result.ok ? "ok" : "failed")
+         << "," << rkhs::csv_field(result.reason);
+    for (const auto& m : metrics)
+      out_ << "," << rkhs::csv_number(result.metrics[std::find(names.begin(), names.end(), m) - names.begin()]);
+    out_ << "\n" << std::flush;
+  }
+  void remove() {
+    out_.close();
+    std::filesystem::remove(file_);
+  }
+
+ private:
+  std::filesystem::path file_;
+  std::ofstream out_;
+};
+
+int command_run(const std::string& study_file, std::string out_dir, int threads, bool quiet) {
+  const auto study = rkhs::load_study(study_file);
+  if (out_dir.empty()) out_dir = (std::filesystem::path("results") / study.name).string();
+  const auto trials = study.trials();
+  const int thread_count = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::filesystem::create_directories(out_dir);
+  Journal journal(std::filesystem::path(out_dir) / "journal.csv", study.metrics);
+
+  if (!quiet)
+    std::cerr << fmt::format("rkhs-study: {} ({} trials, {} threads) -> {}\n", study.name,
+                             trials.size(), thread_count, out_dir);
+  const std::string started = utc_now();
+  const auto start = std::chrono::steady_clock::now();
+  auto last_report = start;
+  std::size_t done = 0, failed = 0;
+  rkhs::RunOptions options;
+  options.threads = thread_count;
+  options.on_trial_finished = [&](const rkhs::TrialSpec& trial, const rkhs::TrialResult& result) {
+    journal.record(trial, result, study.metrics);
+    ++done;
+    if (!result.ok) {
+      ++failed;
+      if (!quiet) std::cerr << fmt::format("  trial failed: {}: {}\n", trial.key, result.reason);
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (!quiet && (now - last_report > std::chrono::seconds(2) || done == trials.size())) {
+      last_report = now;
+      std::cerr << fmt::format("  {}/{} trials done, {} failed, {:.1f} s\n", done, trials.size(),
+                               failed, std::chrono::duration<double>(now - start).count());
+    }
+  };
+  rkhs::freeze_registries();
+  const auto results = rkhs::run_trials(study, trials, options);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto rates = rkhs::compute_rates(study, trials, results);
+  const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started};
+  rkhs::write_outputs(record, out_dir);
+  journal.remove();
+
+  if (!quiet) std::cout << rkhs::console_tables(record);
+  std::cout << fmt::format("{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
+                           "rates.csv, summary.json\n",
+                           study.name, trials.size(), trials.size() - failed, failed, seconds, out_dir);
+  return failed ? exit_failed_trials : exit_ok;
+}
+
+int command_validate(const std::string& study_file) {
+  const auto study = rkhs::load_study(study_file);
+  const auto trials = study.trials();
+  std::cout << fmt::format("{}: valid; {} kernels x {} targets x {} centre placements x {} values "
+                           "of n = {} trials\n",
+                           study_file, study.kernels.size(), study.targets.size(),
+                           study.centres.size(), study.n_values.size(), trials.size());
+  return exit_ok;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rkhs-study: convergence studies of kernel approximation and adaptive estimation "
+               "in reproducing kernel Hilbert spaces"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("rkhs-study ") + rkhs::build_info().version);
+
+  std::string study_file, out_dir, kind;
+  int threads = 0;
+  bool quiet = false;
+  auto* run = app.add_subcommand("run", "run a study: trials, rates, trials.csv, rates.csv, summary.json");
+  run->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
+  run->add_option("--out", out_dir, "output directory (default: results/<study name>)");
+  run->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  run->add_flag("--quiet,-q", quiet, "print only the final summary line");
+
+  auto* list = app.add_subcommand("list", "list plugins (kernel, centres, target) or metrics, with parameters");
+  list->add_option("kind", kind, "kernel, centres, target or metrics (default: all)")
+      ->check(CLI::IsMember({"kernel", "kernels", "centres", "target", "targets", "metric", "metrics"}));
+
+  auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
+  validate->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? exit_ok : exit_bad_input;
+  }
+
+  if (const auto errors = rkhs::registration_errors(); !errors.empty()) {
+    for (const auto& e : errors) std::cerr << "rkhs-study: plugin registration error: " << e << "\n";
+    return exit_bad_input;
+  }
+  if (const auto missing = rkhs::missing_builtin_plugins(); !missing.empty()) {
+    for (const auto& m : missing) std::cerr << "rkhs-study: built-in plugin missing: " << m << "\n";
+    return exit_bad_input;
+  }
+
+  try {
+    if (*run) return command_run(study_file, out_dir, threads, quiet);
+    if (*list) return command_list(kind);
+    if (*validate) return command_validate(study_file);
+  } catch (const rkhs::StudyError& e) {
+    std::cerr << e.what() << "\n";
+    return exit_bad_input;
+  } catch (const std::exception& e) {
+    std::cerr << "rkhs-study: " << e.what() << "\n";
+    return exit_bad_input;
+  }
+  return exit_ok;
+}

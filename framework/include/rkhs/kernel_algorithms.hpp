@@ -1,0 +1,186 @@
+#pragma once
+// Matrix assembly templated on the concrete kernel type, and the AnyKernel adaptor that
+// exposes it. Three paths, chosen at compile time or from the kernel's properties:
+//   - feature-map kernels (B-splines): G = Phi Phi^T with Phi sparse, cost O(support) per row;
+//   - compactly supported kernels: only pairs closer than the support radius are evaluated;
+//   - global kernels: the dense double loop, one inlined k(x, y) per entry.
+
+#include <Eigen/Sparse>
+#include <algorithm>
+#include <numeric>
+
+#include "rkhs/kernel.hpp"
+
+namespace rkhs {
+
+namespace detail {
+
+/// Rows: points, columns: features. Each row holds the point's sparse features.
+template <FeatureMapKernel K>
+Eigen::SparseMatrix<double, Eigen::RowMajor> feature_matrix(const K& kernel,
+                                                            std::span<const double> points) {
+  SparseFeatures features;
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    kernel.features(points[m], features);
+    for (std::size_t f = 0; f < features.size(); ++f)
+      triplets.emplace_back(static_cast<int>(m), features.index[f], features.value[f]);
+  }
+  Eigen::SparseMatrix<double, Eigen::RowMajor> phi(static_cast<Eigen::Index>(points.size()),
+                                                   static_cast<Eigen::Index>(kernel.feature_count()));
+  phi.setFromTriplets(triplets.begin(), triplets.end());
+  return phi;
+}
+
+/// Calls visit(m, i) for every pair of point m and centre i with domain distance below
+/// `radius` (and possibly a few more at the boundary of the window), in increasing i for each m.
+template <class Visit>
+void for_each_pair_within(const Domain& domain, double radius, std::span<const double> points,
+                          std::span<const double> centres, Visit&& visit) {
+  std::vector<std::size_t> order(centres.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::vector<double> sorted(centres.size());
+  for (std::size_t i = 0; i < centres.size(); ++i) sorted[i] = domain.wrap(centres[i]);
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return sorted[a] < sorted[b]; });
+  std::vector<double> keys(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) keys[k] = sorted[order[k]];
+  std::vector<std::size_t> hits;
+  const bool everything = domain.periodic && 2 * radius >= domain.length;
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    hits.clear();
+    if (everything) {
+      for (std::size_t i = 0; i < centres.size(); ++i) hits.push_back(i);
+    } else {
+      const double x = domain.wrap(points[m]);
+      auto add_range = [&](double lo, double hi) {
+        auto first = std::lower_bound(keys.begin(), keys.end(), lo);
+        auto last = std::upper_bound(keys.begin(), keys.end(), hi);
+        for (auto it = first; it < last; ++it) hits.push_back(order[it - keys.begin()]);
+      };
+      add_range(x - radius, x + radius);
+      if (domain.periodic) {
+        if (x - radius < 0) add_range(x - radius + domain.length, domain.length);
+        if (x + radius >= domain.length) add_range(0.0, x + radius - domain.length);
+      }
+      std::sort(hits.begin(), hits.end());
+      hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+    }
+    for (std::size_t i : hits) visit(m, i);
+  }
+}
+
+}  // namespace detail
+
+/// K_mi = k(points[m], centres[i]).
+template <KernelFunction K>
+Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
+                               std::span<const double> points, std::span<const double> centres) {
+  const auto rows = static_cast<Eigen::Index>(points.size());
+  const auto cols = static_cast<Eigen::Index>(centres.size());
+  if constexpr (FeatureMapKernel<K>) {
+    (void)domain;
+    const auto phi_points = detail::feature_matrix(kernel, points);
+    const auto phi_centres = detail::feature_matrix(kernel, centres);
+    Eigen::SparseMatrix<double, Eigen::RowMajor> product = phi_points * phi_centres.transpose();
+    return Eigen::MatrixXd(product);
+  } else {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(rows, cols);
+    const double radius = kernel.properties().support_radius;
+    if (radius > 0) {
+      detail::for_each_pair_within(domain, radius, points, centres, [&](std::size_t m, std::size_t i) {
+        out(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(i)) = kernel(points[m], centres[i]);
+      });
+    } else {
+      for (Eigen::Index i = 0; i < cols; ++i)
+        for (Eigen::Index m = 0; m < rows; ++m) out(m, i) = kernel(points[m], centres[i]);
+    }
+    return out;
+  }
+}
+
+/// G_ij = k(c_i, c_j), exactly symmetric.
+template <KernelFunction K>
+Eigen::MatrixXd assemble_gram(const K& kernel, const Domain& domain,
+                              std::span<const double> centres) {
+  const auto n = static_cast<Eigen::Index>(centres.size());
+  Eigen::MatrixXd gram;
+  if constexpr (FeatureMapKernel<K>) {
+    gram = assemble_cross(kernel, domain, centres, centres);
+  } else if (kernel.properties().support_radius > 0) {
+    gram = assemble_cross(kernel, domain, centres, centres);
+  } else {
+    gram.resize(n, n);
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index i = j; i < n; ++i) gram(i, j) = kernel(centres[i], centres[j]);
+  }
+  // Symmetrise from the lower triangle: round-off in the two triangles may differ.
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index i = j + 1; i < n; ++i) gram(j, i) = gram(i, j);
+  return gram;
+}
+
+/// The AnyKernel adaptor of a concrete kernel type.
+template <KernelFunction K>
+class KernelModel final : public AnyKernel {
+ public:
+  KernelModel(const ParameterSet& parameters, const Domain& domain)
+      : kernel_(parameters, domain),
+        name_(K::info().name),
+        parameters_(parameters),
+        domain_(domain),
+        properties_(kernel_.properties()) {}
+
+  const K& kernel() const noexcept { return kernel_; }
+
+  const std::string& name() const noexcept override { return name_; }
+  const ParameterSet& parameters() const noexcept override { return parameters_; }
+  const Domain& domain() const noexcept override { return domain_; }
+  const KernelProperties& properties() const noexcept override { return properties_; }
+
+  double evaluate(double x, double y) const override { return kernel_(x, y); }
+  Eigen::MatrixXd gram(std::span<const double> centres) const override {
+    return assemble_gram(kernel_, domain_, centres);
+  }
+  Eigen::MatrixXd cross(std::span<const double> points,
+                        std::span<const double> centres) const override {
+    return assemble_cross(kernel_, domain_, points, centres);
+  }
+  Eigen::VectorXd diagonal(std::span<const double> points) const override {
+    Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
+    for (std::size_t m = 0; m < points.size(); ++m)
+      out(static_cast<Eigen::Index>(m)) = kernel_(points[m], points[m]);
+    return out;
+  }
+  std::size_t feature_count() const noexcept override {
+    if constexpr (FeatureMapKernel<K>) return kernel_.feature_count();
+    else return 0;
+  }
+
+ private:
+  K kernel_;
+  std::string name_;
+  ParameterSet parameters_;
+  Domain domain_;
+  KernelProperties properties_;
+};
+
+/// Registers kernel type K (its info() and a KernelModel<K> factory) into kernel_registry().
+template <KernelFunction K>
+bool register_kernel() noexcept {
+  try {
+    return kernel_registry().add(K::info(), [](const ParameterSet& p, const Domain& d) {
+      return std::unique_ptr<AnyKernel>(std::make_unique<KernelModel<K>>(p, d));
+    });
+  } catch (...) {
+    return false;
+  }
+}
+
+}  // namespace rkhs
+
+/// Registers a kernel type at start-up. Use once, at namespace scope, in the kernel's .cpp file.
+#define RKHS_REGISTER_KERNEL(Type)                                                   \
+  namespace {                                                                        \
+  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_kernel_registered_) =            \
+      ::rkhs::register_kernel<Type>();                                               \
+  }

@@ -1,0 +1,50 @@
+#pragma once
+// A finished run written out: trials.csv (tidy, one row per trial), rates.csv (one row per
+// group, metric and rate: the fit and every pairwise rate), summary.json (the study, its
+// provenance, trials and rates), and the console tables. Files are written to a temporary name
+// and renamed, so a reader never sees a half-written file.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "rkhs/run.hpp"
+#include "rkhs/study.hpp"
+#include "rkhs/study_rates.hpp"
+
+namespace rkhs {
+
+struct RunRecord {
+  const StudyDefinition& study;
+  const std::vector<TrialSpec>& trials;
+  const std::vector<TrialResult>& results;
+  const std::vector<MetricSeries>& rates;
+  int threads = 1;
+  double wall_seconds = 0;
+  std::string started;  ///< ISO 8601 UTC time the run started
+};
+
+/// The axis columns of trials.csv and rates.csv: kernel, each kernel parameter by its own name,
+/// target, target_<parameter>, centres, centres_<parameter>, in order of first appearance.
+std::vector<std::string> axis_columns(const std::vector<TrialSpec>& trials);
+/// The values of those columns for one trial ("" where a column does not apply).
+std::vector<std::string> axis_values(const std::vector<std::string>& columns, const TrialSpec& trial);
+
+std::string trials_csv(const RunRecord& run);
+std::string rates_csv(const RunRecord& run);
+std::string summary_json(const RunRecord& run);
+/// One ConvergenceTable per metric and group.
+std::string console_tables(const RunRecord& run);
+
+/// Writes trials.csv, rates.csv and summary.json into `directory` (created if needed).
+void write_outputs(const RunRecord& run, const std::filesystem::path& directory);
+
+/// Writes `content` to `file` atomically (temporary file, then rename).
+void write_file_atomically(const std::filesystem::path& file, const std::string& content);
+
+/// A CSV field, quoted when it contains a comma, quote or line break (RFC 4180).
+std::string csv_field(const std::string& value);
+/// A real for CSV: shortest round-trip representation, "inf"/"-inf", "" for NaN.
+std::string csv_number(double value);
+
+}  // namespace rkhs

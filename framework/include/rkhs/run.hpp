@@ -1,0 +1,38 @@
+#pragma once
+// Running trials: each trial is one oneTBB task; a trial that throws, produces NaN or exceeds
+// its limits is recorded as failed with its reason, and the others go on. Results are stored by
+// trial index and every trial is computed sequentially inside its task, so they are
+// bit-identical for any thread count.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rkhs/study.hpp"
+
+namespace rkhs {
+
+struct TrialResult {
+  bool ok = false;
+  std::string reason;             ///< why the trial failed (empty when ok)
+  std::vector<double> metrics;    ///< aligned with approximation_metric_names(); NaN if not measured
+  std::string solve_method;       ///< how the Gram matrix was solved
+  std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
+  double seconds = 0;             ///< wall time (not part of the deterministic results)
+};
+
+struct RunOptions {
+  int threads = 0;  ///< worker threads; 0: all hardware threads
+  /// Called after each trial, from the worker thread that ran it, serialised by a mutex.
+  std::function<void(const TrialSpec&, const TrialResult&)> on_trial_finished;
+};
+
+/// Runs one trial; never throws (failures are returned as results).
+TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial);
+
+/// Runs `trials` concurrently, largest first; results in the order of `trials`.
+std::vector<TrialResult> run_trials(const StudyDefinition& study,
+                                    const std::vector<TrialSpec>& trials,
+                                    const RunOptions& options);
+
+}  // namespace rkhs

@@ -1,0 +1,295 @@
+#include "rkhs/output.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+
+#include "rkhs/approximation.hpp"
+#include "rkhs/build_info.hpp"
+#include "rkhs/convergence_table.hpp"
+
+namespace rkhs {
+
+namespace {
+
+std::string join(const std::vector<std::string>& items, std::string_view separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? std::string(separator) : "") + items[i];
+  return out;
+}
+
+std::string csv_row(const std::vector<std::string>& fields) {
+  std::string out;
+  for (std::size_t i = 0; i < fields.size(); ++i) out += (i ? "," : "") + csv_field(fields[i]);
+  return out + "\n";
+}
+
+std::size_t metric_index(const std::string& metric) {
+  const auto& names = approximation_metric_names();
+  return std::find(names.begin(), names.end(), metric) - names.begin();
+}
+
+std::string abscissa_name(const StudyDefinition& study) {
+  return study.abscissa == Abscissa::n ? "n" : "h";
+}
+
+// Minimal JSON writing: strings escaped, non-finite numbers as null (with the value kept as
+// a string beside it where it matters, e.g. an infinite condition number).
+std::string json_string(std::string_view text) {
+  std::string out = "\"";
+  for (char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) out += fmt::format("\\u{:04x}", static_cast<int>(c));
+        else out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string json_number(double value) {
+  if (std::isfinite(value)) return format_real(value);
+  if (std::isnan(value)) return "null";
+  return value > 0 ? "\"inf\"" : "\"-inf\"";
+}
+
+std::string json_value(const ParameterValue& value) {
+  if (std::holds_alternative<std::string>(value)) return json_string(std::get<std::string>(value));
+  if (std::holds_alternative<bool>(value)) return std::get<bool>(value) ? "true" : "false";
+  return format_value(value);
+}
+
+std::string json_parameters(const ParameterSet& parameters) {
+  std::vector<std::string> items;
+  for (const auto& [name, value] : parameters.values())
+    items.push_back(json_string(name) + ": " + json_value(value));
+  return "{" + join(items, ", ") + "}";
+}
+
+std::string json_plugin(const PluginChoice& choice) {
+  return fmt::format("{{\"name\": {}, \"parameters\": {}}}", json_string(choice.name),
+                     json_parameters(choice.parameters));
+}
+
+std::string group_label(const TrialSpec& trial) { return trial.group_key; }
+
+}  // namespace
+
+std::string csv_field(const std::string& value) {
+  if (value.find_first_of(",\"\n\r") == std::string::npos) return value;
+  std::string out = "\"";
+  for (char c : value) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string csv_number(double value) { return std::isnan(value) ? "" : format_real(value); }
+
+std::vector<std::string> axis_columns(const std::vector<TrialSpec>& trials) {
+  std::vector<std::string> kernel{"kernel"}, target{"target"}, centres{"centres"};
+  auto add = [](std::vector<std::string>& columns, const std::string& column) {
+    if (std::find(columns.begin(), columns.end(), column) == columns.end()) columns.push_back(column);
+  };
+  for (const auto& trial : trials) {
+    for (const auto& [name, value] : trial.kernel.parameters.values()) add(kernel, name);
+    for (const auto& [name, value] : trial.target.parameters.values()) add(target, "target_" + name);
+    for (const auto& [name, value] : trial.centres.parameters.values()) add(centres, "centres_" + name);
+  }
+  kernel.insert(kernel.end(), target.begin(), target.end());
+  kernel.insert(kernel.end(), centres.begin(), centres.end());
+  return kernel;
+}
+
+std::vector<std::string> axis_values(const std::vector<std::string>& columns, const TrialSpec& trial) {
+  std::map<std::string, std::string> values{{"kernel", trial.kernel.name},
+                                            {"target", trial.target.name},
+                                            {"centres", trial.centres.name}};
+  for (const auto& [name, value] : trial.kernel.parameters.values()) values[name] = format_value(value);
+  for (const auto& [name, value] : trial.target.parameters.values())
+    values["target_" + name] = format_value(value);
+  for (const auto& [name, value] : trial.centres.parameters.values())
+    values["centres_" + name] = format_value(value);
+  std::vector<std::string> out;
+  for (const auto& column : columns) out.push_back(values.contains(column) ? values[column] : "");
+  return out;
+}
+
+std::string trials_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  header.push_back("n");
+  header.insert(header.end(), run.study.metrics.begin(), run.study.metrics.end());
+  for (const char* extra : {"status", "reason", "solve", "flags"}) header.push_back(extra);
+  std::string out = csv_row(header);
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    auto row = axis_values(columns, trial);
+    row.push_back(std::to_string(trial.n));
+    for (const auto& metric : run.study.metrics)
+      row.push_back(csv_number(result.metrics[metric_index(metric)]));
+    row.push_back(result.ok ? "ok" : "failed");
+    row.push_back(result.reason);
+    row.push_back(result.solve_method);
+    row.push_back(join(result.flags, ";"));
+    out += csv_row(row);
+  }
+  return out;
+}
+
+std::string rates_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  for (const char* extra : {"metric", "abscissa", "kind", "n_from", "n_to", "points", "rate",
+                            "std_error", "ci_low", "ci_high", "r_squared", "note"})
+    header.push_back(extra);
+  std::string out = csv_row(header);
+  for (const auto& series : run.rates) {
+    if (series.trials.empty()) continue;
+    const auto axes = axis_values(columns, run.trials[series.trials.front()]);
+    auto row_start = [&](const char* kind, std::size_t from, std::size_t to) {
+      auto row = axes;
+      row.push_back(series.metric);
+      row.push_back(abscissa_name(run.study));
+      row.push_back(kind);
+      row.push_back(std::to_string(from));
+      row.push_back(std::to_string(to));
+      return row;
+    };
+    const auto& n_of = [&](std::size_t k) { return run.trials[series.trials[k]].n; };
+    {
+      std::size_t from = n_of(0), to = n_of(series.trials.size() - 1);
+      if (series.fit && !series.fit->used.empty()) {
+        from = n_of(series.fit->used.front());
+        to = n_of(series.fit->used.back());
+      }
+      auto row = row_start("fit", from, to);
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      const auto& fit = series.fit;
+      row.push_back(std::to_string(fit ? fit->points : 0));
+      for (double v : {fit ? fit->rate : nan, fit ? fit->std_error : nan, fit ? fit->ci_low : nan,
+                       fit ? fit->ci_high : nan, fit ? fit->r_squared : nan})
+        row.push_back(csv_number(v));
+      row.push_back(series.note);
+      out += csv_row(row);
+    }
+    for (std::size_t k = 0; k < series.pairwise.size(); ++k) {
+      auto row = row_start("pairwise", n_of(k), n_of(k + 1));
+      row.push_back("2");
+      row.push_back(csv_number(series.pairwise[k]));
+      for (int i = 0; i < 4; ++i) row.push_back("");
+      const bool doubtful = series.flagged[k] || series.flagged[k + 1];
+      row.push_back(doubtful ? "flagged value (not used in the fit)" : "");
+      out += csv_row(row);
+    }
+  }
+  return out;
+}
+
+std::string summary_json(const RunRecord& run) {
+  const auto& study = run.study;
+  const auto& build = build_info();
+  std::string out = "{\n";
+  out += fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
+                     json_string(study.name), json_string(study.description),
+                     json_string(study.source), json_string(study.kind));
+  out += fmt::format(
+      "  \"provenance\": {{\"version\": {}, \"git_commit\": {}, \"compiler\": {}, "
+      "\"build_type\": {}, \"threads\": {}, \"started\": {}, \"wall_seconds\": {}}},\n",
+      json_string(build.version), json_string(build.git_commit), json_string(build.compiler),
+      json_string(build.build_type), run.threads, json_string(run.started),
+      json_number(std::round(run.wall_seconds * 1000) / 1000));
+  out += fmt::format("  \"domain\": {{\"length\": {}, \"periodic\": {}}},\n",
+                     json_number(study.domain.length), study.domain.periodic ? "true" : "false");
+  std::vector<std::string> n_values;
+  for (auto n : study.n_values) n_values.push_back(std::to_string(n));
+  out += fmt::format("  \"n\": [{}],\n  \"evaluation_points\": {},\n  \"abscissa\": {},\n",
+                     join(n_values, ", "), study.evaluation_points,
+                     json_string(abscissa_name(study)));
+  std::size_t failed = 0;
+  for (const auto& r : run.results) failed += r.ok ? 0 : 1;
+  out += fmt::format("  \"counts\": {{\"trials\": {}, \"ok\": {}, \"failed\": {}}},\n",
+                     run.trials.size(), run.trials.size() - failed, failed);
+
+  out += "  \"trials\": [\n";
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    std::vector<std::string> metrics, flags;
+    for (const auto& metric : study.metrics)
+      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[metric_index(metric)]));
+    for (const auto& flag : result.flags) flags.push_back(json_string(flag));
+    out += fmt::format(
+        "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
+        "\"n\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, \"flags\": [{}], "
+        "\"metrics\": {{{}}}}}{}\n",
+        trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
+        json_plugin(trial.centres), trial.n, json_string(result.ok ? "ok" : "failed"),
+        json_string(result.reason), json_string(result.solve_method), join(flags, ", "),
+        join(metrics, ", "), trial.index + 1 < run.trials.size() ? "," : "");
+  }
+  out += "  ],\n  \"rates\": [\n";
+  for (std::size_t s = 0; s < run.rates.size(); ++s) {
+    const auto& series = run.rates[s];
+    const auto& fit = series.fit;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<std::string> pairwise;
+    for (double r : series.pairwise) pairwise.push_back(json_number(r));
+    out += fmt::format(
+        "    {{\"group\": {}, \"metric\": {}, \"model\": \"power_law\", \"rate\": {}, "
+        "\"std_error\": {}, \"ci_low\": {}, \"ci_high\": {}, \"r_squared\": {}, \"points\": {}, "
+        "\"pairwise\": [{}], \"note\": {}}}{}\n",
+        json_string(group_label(run.trials[series.trials.front()])), json_string(series.metric),
+        json_number(fit ? fit->rate : nan), json_number(fit ? fit->std_error : nan),
+        json_number(fit ? fit->ci_low : nan), json_number(fit ? fit->ci_high : nan),
+        json_number(fit ? fit->r_squared : nan), fit ? fit->points : 0, join(pairwise, ", "),
+        json_string(series.note), s + 1 < run.rates.size() ? "," : "");
+  }
+  out += "  ]\n}\n";
+  return out;
+}
+
+std::string console_tables(const RunRecord& run) {
+  std::string out;
+  for (const auto& metric : run.study.metrics) {
+    for (const auto& series : run.rates) {
+      if (series.metric != metric || series.trials.empty()) continue;
+      std::vector<TableRow> rows;
+      for (std::size_t k = 0; k < series.trials.size(); ++k)
+        rows.push_back({series.abscissa[k], series.values[k], static_cast<bool>(series.flagged[k])});
+      out += format_convergence_table(metric, group_label(run.trials[series.trials.front()]),
+                                      abscissa_name(run.study), rows, series.fit);
+      if (!series.note.empty()) out += "  note: " + series.note + "\n";
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
+  const auto temporary = file.string() + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + temporary);
+    out << content;
+    out.flush();
+    if (!out) throw std::runtime_error("error writing " + temporary);
+  }
+  std::filesystem::rename(temporary, file);
+}
+
+void write_outputs(const RunRecord& run, const std::filesystem::path& directory) {
+  std::filesystem::create_directories(directory);
+  write_file_atomically(directory / "trials.csv", trials_csv(run));
+  write_file_atomically(directory / "rates.csv", rates_csv(run));
+  write_file_atomically(directory / "summary.json", summary_json(run));
+}
+
+}  // namespace rkhs

@@ -1,0 +1,130 @@
+// The rkhs-study command as a user runs it: outputs, exit codes, error messages.
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Outcome {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+Outcome run(const std::string& arguments) {
+  const std::string command = std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  REQUIRE(pipe);
+  std::string output;
+  char buffer[4096];
+  while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string read(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+fs::path scratch(const std::string& name) {
+  auto dir = fs::temp_directory_path() / ("rkhs_cli_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+const char* const small_study = R"([study]
+name = "cli_small"
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [8, 16, 32]
+[[kernel]]
+name = "bspline"
+degree = [1, 2]
+J = 5
+)";
+
+}  // namespace
+
+TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") {
+  const auto dir = scratch("run");
+  std::ofstream(dir / "study.toml") << small_study;
+  const auto outcome = run("run " + (dir / "study.toml").string() + " --out " +
+                           (dir / "out").string() + " --threads 2");
+  INFO(outcome.output);
+  REQUIRE(outcome.exit_code == 0);
+  CHECK_THAT(outcome.output, Catch::Contains("power_function_sup"));
+  CHECK_THAT(outcome.output, Catch::Contains("fitted rate"));
+  CHECK_THAT(outcome.output, Catch::Contains("cli_small: 6 trials, 6 ok, 0 failed"));
+
+  const auto trials = read(dir / "out" / "trials.csv");
+  CHECK_THAT(trials, Catch::StartsWith("kernel,degree,r,n0,J,target,target_amplitude,target_cycles,"
+                                       "target_phase,centres,centres_offset,n,fill_distance,"));
+  CHECK_THAT(trials, Catch::Contains(",status,reason,solve,flags\n"));
+  CHECK(std::count(trials.begin(), trials.end(), '\n') == 7);
+  const auto rates = read(dir / "out" / "rates.csv");
+  CHECK_THAT(rates, Catch::Contains("metric,abscissa,kind,n_from,n_to,points,rate,std_error,ci_low,ci_high,r_squared,note"));
+  CHECK_THAT(rates, Catch::Contains("power_function_sup,n,fit,8,32,3,"));
+  CHECK_FALSE(fs::exists(dir / "out" / "journal.csv"));
+  const int json_ok = std::system(("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
+                                   "assert d[\"counts\"][\"trials\"]==6 and len(d[\"rates\"])>0' " +
+                                   (dir / "out" / "summary.json").string()).c_str());
+  CHECK(json_ok == 0);
+
+  // The same study with one thread writes the same trials.csv, byte for byte.
+  REQUIRE(run("run " + (dir / "study.toml").string() + " --quiet --out " + (dir / "one").string() +
+              " --threads 1").exit_code == 0);
+  CHECK(read(dir / "one" / "trials.csv") == trials);
+  CHECK(read(dir / "one" / "rates.csv") == rates);
+}
+
+TEST_CASE("bad input exits with code 2 and says where", "[cli]") {
+  const auto dir = scratch("bad");
+  std::string text = small_study;
+  text.replace(text.find("\"bspline\""), 9, "\"bsplin\"");
+  std::ofstream(dir / "bad.toml") << text;
+  auto outcome = run("run " + (dir / "bad.toml").string());
+  CHECK(outcome.exit_code == 2);
+  CHECK_THAT(outcome.output, Catch::Contains("bad.toml:9:8: kernel.name: unknown kernel 'bsplin'"));
+  CHECK_THAT(outcome.output, Catch::Contains("did you mean 'bspline'?"));
+
+  CHECK(run("run " + (dir / "missing.toml").string()).exit_code == 2);
+  CHECK(run("run").exit_code == 2);
+  CHECK(run("frobnicate").exit_code == 2);
+  CHECK(run("run " + (dir / "bad.toml").string() + " --threads 0").exit_code == 2);
+  CHECK(run("list nonsense").exit_code == 2);
+}
+
+TEST_CASE("list shows plugins with parameters and docs; --help works", "[cli]") {
+  auto outcome = run("list kernel");
+  CHECK(outcome.exit_code == 0);
+  for (const char* expected : {"bspline", "gaussian", "matern", "wendland", "sigma", "degree"})
+    CHECK_THAT(outcome.output, Catch::Contains(expected));
+  outcome = run("list");
+  CHECK_THAT(outcome.output, Catch::Contains("uniform"));
+  CHECK_THAT(outcome.output, Catch::Contains("power_function_sup"));
+  for (const char* help : {"--help", "run --help", "list --help", "validate --help"}) {
+    outcome = run(help);
+    CHECK(outcome.exit_code == 0);
+    CHECK_THAT(outcome.output, Catch::Contains("Usage"));
+  }
+}
+
+TEST_CASE("the project's studies are valid", "[cli]") {
+  for (const auto& entry : fs::directory_iterator(fs::path(RKHS_STUDY_SOURCE_DIR) / "studies")) {
+    if (entry.path().extension() != ".toml") continue;
+    const auto outcome = run("validate " + entry.path().string());
+    INFO(outcome.output);
+    CHECK(outcome.exit_code == 0);
+  }
+}

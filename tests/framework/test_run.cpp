@@ -1,0 +1,131 @@
+// The scheduler: bit-identical results for any thread count; failures recorded, study goes on.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+
+#include "rkhs/approximation.hpp"
+#include "rkhs/kernel_algorithms.hpp"
+#include "rkhs/run.hpp"
+#include "rkhs/study.hpp"
+
+using namespace rkhs;
+
+namespace {
+
+// A kernel that misbehaves on purpose: throws for x beyond `throw_beyond`, or returns NaN.
+struct MisbehavingKernel {
+  static PluginInfo info() {
+    return {"test_misbehaving", "throws or returns NaN, for scheduler tests",
+            {choice_parameter("mode", "throw", "what goes wrong", {"throw", "nan"})}, {}};
+  }
+  MisbehavingKernel(const ParameterSet& p, const Domain&) : nan_(p.choice("mode") == "nan") {}
+  double operator()(double x, double y) const {
+    if (nan_) return std::numeric_limits<double>::quiet_NaN();
+    if (x > 5.0) throw std::runtime_error("kernel evaluated beyond 5");
+    return std::exp(-(x - y) * (x - y));
+  }
+  KernelProperties properties() const { return {}; }
+  bool nan_;
+};
+
+// Registers the test kernel for the lifetime of the object.
+struct ScopedTestKernel {
+  ScopedTestKernel() { REQUIRE(register_kernel<MisbehavingKernel>()); }
+  ~ScopedTestKernel() { kernel_registry().remove("test_misbehaving"); }
+};
+
+bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("results are bit-identical for 1, 2 and 4 threads", "[run]") {
+  const auto study = parse_study(R"(
+[study]
+name = "determinism"
+evaluation_points = 512
+[domain]
+radius = 4
+[grid]
+n = [5, 9, 17, 33]
+[[kernel]]
+name = "gaussian"
+sigma = [0.7, 1.3]
+[[kernel]]
+name = "bspline"
+degree = [1, 2]
+[[kernel]]
+name = "wendland"
+radius = 3.0
+[[centres]]
+name = "random"
+seed = [1, 2]
+)", "determinism.toml");
+  const auto trials = study.trials();
+  const auto one = run_trials(study, trials, {1, {}});
+  for (int threads : {2, 4}) {
+    const auto many = run_trials(study, trials, {threads, {}});
+    REQUIRE(many.size() == one.size());
+    for (std::size_t i = 0; i < one.size(); ++i) {
+      INFO("trial " << trials[i].key << " with " << threads << " threads");
+      CHECK(one[i].ok);
+      CHECK(bitwise_equal(one[i].metrics, many[i].metrics));
+      CHECK(one[i].flags == many[i].flags);
+      CHECK(one[i].solve_method == many[i].solve_method);
+    }
+  }
+  // Different seeds give different centre sets (and so different fill distances).
+  CHECK(one[0].metrics[0] != one[4].metrics[0]);
+}
+
+TEST_CASE("a throwing or NaN trial is recorded as failed and the others go on", "[run]") {
+  ScopedTestKernel scoped;
+  const auto study = parse_study(R"(
+[study]
+name = "failures"
+evaluation_points = 64
+[domain]
+length = 10
+periodic = false
+[grid]
+n = [4, 8]
+[[kernel]]
+name = "test_misbehaving"
+mode = ["throw", "nan"]
+[[kernel]]
+name = "gaussian"
+)", "failures.toml");
+  const auto trials = study.trials();
+  std::size_t reported = 0;
+  const auto results = run_trials(study, trials, {2, [&](const TrialSpec&, const TrialResult&) { ++reported; }});
+  CHECK(reported == trials.size());
+  REQUIRE(results.size() == 6);
+  CHECK_FALSE(results[0].ok);
+  CHECK(results[0].reason == "kernel evaluated beyond 5");
+  CHECK_FALSE(results[2].ok);
+  CHECK_THAT(results[2].reason, Catch::Contains("non-finite"));
+  for (double v : results[2].metrics) CHECK(std::isnan(v));
+  CHECK(results[4].ok);
+  CHECK(results[5].ok);
+}
+
+TEST_CASE("a trial above its matrix limit fails up front", "[run]") {
+  const auto study = parse_study(R"(
+[study]
+name = "limits"
+[domain]
+radius = 4
+[grid]
+n = [10, 4000]
+[[kernel]]
+name = "gaussian"
+[limits]
+matrix_megabytes = 50
+)", "limits.toml");
+  const auto results = run_trials(study, study.trials(), {1, {}});
+  CHECK(results[0].ok);
+  CHECK_FALSE(results[1].ok);
+  CHECK_THAT(results[1].reason, Catch::Contains("above limits.matrix_megabytes = 50"));
+}
