@@ -139,6 +139,7 @@ void check_contract(const rkhs::AnyKernel& kernel, const Domain& domain, Tally& 
     INFO("n = " << n << ", condition " << power.condition << ", dropped " << power.dropped
                 << ", tolerance " << power.tolerance);
     CHECK(power.squared.minCoeff() >= -power.tolerance);
+    WARN("DEBUG " << kernel.name() << " " << kernel.parameters().canonical() << (domain.periodic ? " P" : " I") << " n=" << n << " cond=" << power.condition << " drop=" << power.dropped << " tol=" << power.tolerance << " minP2=" << power.squared.minCoeff() << " maxP2=" << power.squared.maxCoeff());
     // Evaluation points 257 + 16j are the uniform centres of 16; every n-th of them is a centre.
     double at_centres = 0;
     for (std::size_t i = 0; i < 16; i += 16 / n)
@@ -182,4 +183,5 @@ TEST_CASE("every registered kernel satisfies the kernel contract", "[kernel][con
   // as the Gaussian with sigma = 50, are legitimately skipped).
   INFO(tally.monotonicity_checked << " of " << 2 * tally.kernels << " nested comparisons checked");
   CHECK(tally.monotonicity_checked >= tally.kernels);
+  WARN("DEBUG " << tally.monotonicity_checked << " of " << 2 * tally.kernels);
 }
