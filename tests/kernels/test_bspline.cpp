@@ -185,6 +185,25 @@ TEST_CASE("B-spline features of a point are distinct and the count matches", "[k
   CHECK(open.feature_count() == 3u * ((1u << 5) - 1) + 5u * 2u);
 }
 
+TEST_CASE("B-spline Gram matrices have the rank of the finest spline space", "[kernel][bspline]") {
+  // The level spaces are nested, so k has rank n_J (periodic) or n_J + p (interval), well below
+  // feature_count(): more centres than that give a singular Gram matrix.
+  for (bool periodic : {true, false}) {
+    const rkhs::Domain domain{rkhs::test::track_length, periodic};
+    for (int p = 1; p <= 3; ++p) {
+      const Setting s{p, static_cast<double>(p), 4, 2};
+      auto kernel = rkhs::test::make_registered_kernel("bspline", given_of(s), domain);
+      const int rank = (s.n0 << s.levels) + (periodic ? 0 : p);
+      const auto centres = rkhs::test::scattered_points(static_cast<std::size_t>(2 * rank), domain.length);
+      const Eigen::VectorXd lambda =
+          Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(kernel->gram(centres)).eigenvalues();
+      INFO((periodic ? "periodic" : "interval") << " degree " << p << ": eigenvalues " << lambda.transpose());
+      const double zero = 1e3 * static_cast<double>(lambda.size()) * rkhs::test::epsilon * lambda.maxCoeff();
+      CHECK((lambda.array() > zero).count() == rank);
+    }
+  }
+}
+
 TEST_CASE("B-spline kernel metadata", "[kernel][bspline]") {
   const rkhs::Domain track{rkhs::test::track_length, true};
   const auto kernel = rkhs::test::make_kernel_of<MultiscaleBSpline>({{"degree", std::int64_t{2}}}, track);

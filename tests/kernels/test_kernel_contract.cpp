@@ -139,7 +139,6 @@ void check_contract(const rkhs::AnyKernel& kernel, const Domain& domain, Tally& 
     INFO("n = " << n << ", condition " << power.condition << ", dropped " << power.dropped
                 << ", tolerance " << power.tolerance);
     CHECK(power.squared.minCoeff() >= -power.tolerance);
-    WARN("DEBUG " << kernel.name() << " " << kernel.parameters().canonical() << (domain.periodic ? " P" : " I") << " n=" << n << " cond=" << power.condition << " drop=" << power.dropped << " tol=" << power.tolerance << " minP2=" << power.squared.minCoeff() << " maxP2=" << power.squared.maxCoeff());
     // Evaluation points 257 + 16j are the uniform centres of 16; every n-th of them is a centre.
     double at_centres = 0;
     for (std::size_t i = 0; i < 16; i += 16 / n)
@@ -147,8 +146,9 @@ void check_contract(const rkhs::AnyKernel& kernel, const Domain& domain, Tally& 
     CHECK(at_centres <= power.tolerance + 1e-14 * scale);
     if (n > 4) {
       // Truncating a nonzero (ill-conditioned) eigenvalue changes the space, so the nested
-      // comparison is only meaningful without truncation, or when the Gram is exactly rank
-      // deficient (finite feature map), and when the tolerance is small.
+      // comparison is only meaningful without truncation, or for a finite feature map, whose
+      // Gram matrices beyond its rank are exactly singular (the dropped eigenvalues are zeros),
+      // and when the tolerance is small.
       const bool meaningful = (power.dropped == 0 && previous.dropped == 0) || kernel.feature_count() > 0;
       const double tolerance = power.tolerance + previous.tolerance;
       if (meaningful && tolerance < 1e-6 * scale) {
@@ -183,5 +183,4 @@ TEST_CASE("every registered kernel satisfies the kernel contract", "[kernel][con
   // as the Gaussian with sigma = 50, are legitimately skipped).
   INFO(tally.monotonicity_checked << " of " << 2 * tally.kernels << " nested comparisons checked");
   CHECK(tally.monotonicity_checked >= tally.kernels);
-  WARN("DEBUG " << tally.monotonicity_checked << " of " << 2 * tally.kernels);
 }

@@ -22,9 +22,9 @@
 // (interval). Each point has exactly (p + 1)(J + 1) features (some may be 0 at knots).
 // operator() forms the same products on the stack, O((p + 1)(J + 1)), without allocation.
 //
-// Properties: positive SEMIdefinite only (positive_definite = false): a finite sum of feature
-// products has rank <= feature_count(), so a Gram matrix of more centres than features is
-// singular; on fewer points in general position it is definite. Native space equivalent to
+// Properties: positive SEMIdefinite only (positive_definite = false). The level spaces are
+// nested, so k has rank n_J (periodic) or n_J + p (interval), fewer than feature_count(): a Gram
+// matrix of more centres than that is singular (n_J = 256 with the defaults). Native space equivalent to
 // H^r when 1/2 < r < p + 1/2 (the limit J -> infinity; sobolev_order is empty otherwise).
 // Support radius (p + 1) h0 (a level-0 spline), not stationary.
 // Fails: ParameterError naming "n0" when the domain is periodic and n0 < degree + 1 (a spline
