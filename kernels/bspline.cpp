@@ -17,10 +17,9 @@ PluginInfo MultiscaleBSpline::info() {
   return {
       "bspline",
       "multiscale B-spline kernel sum_j 2^{j(1-2r)} sum_k N_p(2^j u/h0 - k) N_p(2^j v/h0 - k)",
-      {integer_parameter("degree", 1, "spline degree p (1: hat, 2: quadratic)", 0, max_degree),
-       r,
-       integer_parameter("n0", 4, "cells on level 0, h0 = L / n0 (periodic: n0 >= degree + 1)",
-                         1, max_n0),
+      {integer_parameter("degree", 1, "spline degree p (1: hat, 2: quadratic)", 0, max_degree), r,
+       integer_parameter("n0", 4, "cells on level 0, h0 = L / n0 (periodic: n0 >= degree + 1)", 1,
+                         max_n0),
        integer_parameter("J", 6, "finest level", 0, max_level)},
       {{"positive definite", "semidefinite (finite feature map)"},
        {"smoothness", "tau = r (Sobolev H^r) when 1/2 < r < degree + 1/2"},
@@ -40,7 +39,8 @@ MultiscaleBSpline::MultiscaleBSpline(const ParameterSet& parameters, const Domai
 
   const auto n0 = parameters.integer("n0");
   if (n0 < 1 || n0 > max_n0)
-    throw ParameterError("n0", fmt::format("parameter 'n0' must be in [1, {}], found {}", max_n0, n0));
+    throw ParameterError("n0",
+                         fmt::format("parameter 'n0' must be in [1, {}], found {}", max_n0, n0));
   if (periodic_ && n0 < degree + 1)
     throw ParameterError(
         "n0", fmt::format("parameter 'n0' must be >= degree + 1 = {} on a periodic domain (a "
@@ -50,17 +50,19 @@ MultiscaleBSpline::MultiscaleBSpline(const ParameterSet& parameters, const Domai
 
   const auto levels = parameters.integer("J");
   if (levels < 0 || levels > max_level)
-    throw ParameterError("J", fmt::format("parameter 'J' must be in [0, {}], found {}", max_level,
-                                          levels));
+    throw ParameterError(
+        "J", fmt::format("parameter 'J' must be in [0, {}], found {}", max_level, levels));
   levels_ = static_cast<int>(levels);
 
   if (parameters.given("r")) {
     r_ = parameters.real("r");
     if (!(r_ > 0) || !std::isfinite(r_))
-      throw ParameterError("r", fmt::format("parameter 'r' must be > 0, found {}", format_real(r_)));
+      throw ParameterError("r",
+                           fmt::format("parameter 'r' must be > 0, found {}", format_real(r_)));
   } else if (degree_ == 0) {
-    throw ParameterError("r", "parameter 'r' defaults to degree, which is 0, but r must be > 0: "
-                              "give r explicitly for degree = 0");
+    throw ParameterError("r",
+                         "parameter 'r' defaults to degree, which is 0, but r must be > 0: "
+                         "give r explicitly for degree = 0");
   } else {
     r_ = degree_;
   }

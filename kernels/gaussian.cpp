@@ -21,8 +21,7 @@ PluginInfo Gaussian::info() {
 }
 
 Gaussian::Gaussian(const ParameterSet& parameters, const Domain& domain)
-    : sigma_(parameters.real("sigma")),
-      domain_(domain) {
+    : sigma_(parameters.real("sigma")), domain_(domain) {
   if (!(sigma_ > 0) || !std::isfinite(sigma_))
     throw ParameterError("sigma", "parameter 'sigma' must be > 0 and finite");
   const double factor = parameters.choice("convention") == "sigma2" ? 1.0 : 2.0;

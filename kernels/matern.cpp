@@ -16,24 +16,31 @@ PluginInfo Matern::info() {
       {{"positive definite", "yes"},
        {"smoothness", "tau = nu + 1/2 (Sobolev H^tau)"},
        {"support", "global"},
-       {"periodic", "by images, truncated below 1e-16 k(0)"}},
+       {"periodic", "sum of all images, in closed form"}},
   };
 }
 
 Matern::Matern(const ParameterSet& parameters, const Domain& domain)
     : nu_(parameters.real("nu")), length_scale_(parameters.real("length_scale")), domain_(domain) {
-  if (nu_ == 0.5) order_ = 0;
-  else if (nu_ == 1.5) order_ = 1;
-  else if (nu_ == 2.5) order_ = 2;
+  if (nu_ == 0.5)
+    order_ = 0;
+  else if (nu_ == 1.5)
+    order_ = 1;
+  else if (nu_ == 2.5)
+    order_ = 2;
   else
     throw ParameterError("nu", fmt::format("parameter 'nu' must be one of 0.5, 1.5, 2.5, found {}",
                                            format_real(nu_)));
   if (!(length_scale_ > 0) || !std::isfinite(length_scale_))
     throw ParameterError("length_scale", "parameter 'length_scale' must be > 0 and finite");
   rate_ = std::sqrt(2.0 * nu_) / length_scale_;
-  if (domain_.periodic)
-    images_ = rkhs::kernels::image_count([this](double r) { return profile(r); }, domain_.length,
-                                         image_tolerance);
+  if (domain_.periodic) {
+    period_ = rate_ * domain_.length;
+    const double q = std::exp(-period_), one_minus_q = -std::expm1(-period_);
+    geometric_[0] = 1.0 / one_minus_q;
+    geometric_[1] = q / (one_minus_q * one_minus_q);
+    geometric_[2] = q * (1.0 + q) / (one_minus_q * one_minus_q * one_minus_q);
+  }
 }
 
 KernelProperties Matern::properties() const noexcept {

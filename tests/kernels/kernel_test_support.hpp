@@ -2,9 +2,8 @@
 // Helpers shared by the kernel tests: creating kernels through the registry, point sets, and the
 // power function with a round-off tolerance.
 
-#include <catch2/catch.hpp>
-
 #include <Eigen/Dense>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -27,8 +26,7 @@ inline constexpr double track_length = 2 * pi * 4;
 
 /// Creates `name` from the kernel registry with `given` parameters (others default).
 inline std::unique_ptr<AnyKernel> make_registered_kernel(const std::string& name,
-                                                         const Given& given,
-                                                         const Domain& domain) {
+                                                         const Given& given, const Domain& domain) {
   const auto* entry = kernel_registry().find(name);
   REQUIRE(entry != nullptr);
   return entry->factory(ParameterSet::resolve(entry->info.parameters, given), domain);
@@ -43,12 +41,14 @@ K make_kernel_of(const Given& given, const Domain& domain) {
 /// c_i = i L / n, i = 0..n-1: nested when n doubles, on both kinds of domain.
 inline std::vector<double> uniform_centres(std::size_t n, double length) {
   std::vector<double> out(n);
-  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(i) * length / static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i)
+    out[i] = static_cast<double>(i) * length / static_cast<double>(n);
   return out;
 }
 
 /// `count` points in [0, L) from the golden-ratio sequence: spread out, off every uniform grid.
-inline std::vector<double> scattered_points(std::size_t count, double length, double start = 0.1234) {
+inline std::vector<double> scattered_points(std::size_t count, double length,
+                                            double start = 0.1234) {
   const double golden = 0.61803398874989484820;
   std::vector<double> out(count);
   double u = start;
@@ -70,8 +70,8 @@ inline std::vector<double> scattered_points(std::size_t count, double length, do
 struct PowerFunction {
   Eigen::VectorXd squared;
   double tolerance = 0;
-  double condition = 0;   ///< lambda_max / smallest kept eigenvalue
-  int dropped = 0;        ///< eigenvalues treated as zero
+  double condition = 0;  ///< lambda_max / smallest kept eigenvalue
+  int dropped = 0;       ///< eigenvalues treated as zero
 };
 
 inline PowerFunction power_function_squared(const AnyKernel& kernel,

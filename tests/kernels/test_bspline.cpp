@@ -1,8 +1,7 @@
 // The multiscale B-spline kernel against an independent evaluation of model.md section 3.
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -18,7 +17,8 @@ using rkhs::test::Given;
 // N_p by the Cox-de Boor recursion on the knots 0..p+1 (independent of the kernel's pieces).
 double cox_de_boor(int degree, double x) {
   if (degree == 0) return (x >= 0 && x < 1) ? 1.0 : 0.0;
-  return (x * cox_de_boor(degree - 1, x) + (degree + 1 - x) * cox_de_boor(degree - 1, x - 1)) / degree;
+  return (x * cox_de_boor(degree - 1, x) + (degree + 1 - x) * cox_de_boor(degree - 1, x - 1)) /
+         degree;
 }
 
 struct Setting {
@@ -43,13 +43,17 @@ double reference_kernel(const Setting& s, double length, bool periodic, double u
       return total;
     };
     const int first = periodic ? 0 : -s.degree;
-    for (int k = first; k < cells; ++k) sum += std::pow(2.0, j * (1 - 2 * s.r)) * spline(x - k) * spline(y - k);
+    for (int k = first; k < cells; ++k)
+      sum += std::pow(2.0, j * (1 - 2 * s.r)) * spline(x - k) * spline(y - k);
   }
   return sum;
 }
 
 Given given_of(const Setting& s) {
-  return {{"degree", std::int64_t{s.degree}}, {"r", s.r}, {"n0", std::int64_t{s.n0}}, {"J", std::int64_t{s.levels}}};
+  return {{"degree", std::int64_t{s.degree}},
+          {"r", s.r},
+          {"n0", std::int64_t{s.n0}},
+          {"J", std::int64_t{s.levels}}};
 }
 
 double sparse_dot(const rkhs::SparseFeatures& a, const rkhs::SparseFeatures& b) {
@@ -80,7 +84,8 @@ TEST_CASE("cardinal B-splines take their known values", "[kernel][bspline]") {
     CHECK(MultiscaleBSpline::cardinal_bspline(p, p + 1.5) == 0.0);
     double worst = 0;
     for (double x = -1.0; x <= 5.0; x += 1.0 / 64 + 1e-3)
-      worst = std::max(worst, std::abs(MultiscaleBSpline::cardinal_bspline(p, x) - cox_de_boor(p, x)));
+      worst =
+          std::max(worst, std::abs(MultiscaleBSpline::cardinal_bspline(p, x) - cox_de_boor(p, x)));
     CHECK(worst <= 1e-15);
   }
 }
@@ -106,7 +111,8 @@ TEST_CASE("each level of the feature map is a weighted partition of unity", "[ke
       const auto kernel = rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of(s), domain);
       // Level j occupies feature indices [offset_j, offset_{j+1}).
       std::vector<int> offset{0};
-      for (int j = 0; j <= s.levels; ++j) offset.push_back(offset.back() + (s.n0 << j) + (periodic ? 0 : p));
+      for (int j = 0; j <= s.levels; ++j)
+        offset.push_back(offset.back() + (s.n0 << j) + (periodic ? 0 : p));
       REQUIRE(kernel.feature_count() == static_cast<std::size_t>(offset.back()));
       rkhs::SparseFeatures f;
       double worst = 0;
@@ -127,21 +133,23 @@ TEST_CASE("each level of the feature map is a weighted partition of unity", "[ke
 }
 
 TEST_CASE("B-spline kernel and feature map equal the double sum of model.md", "[kernel][bspline]") {
-  const std::vector<Setting> settings{{0, 0.75, 4, 3}, {1, 1.0, 4, 4}, {2, 2.0, 4, 3}, {3, 3.0, 4, 2},
-                                      {1, 0.6, 2, 3},  {2, 1.5, 3, 2}, {3, 2.5, 5, 3}, {3, 1.0, 1, 2}};
+  const std::vector<Setting> settings{{0, 0.75, 4, 3}, {1, 1.0, 4, 4}, {2, 2.0, 4, 3},
+                                      {3, 3.0, 4, 2},  {1, 0.6, 2, 3}, {2, 1.5, 3, 2},
+                                      {3, 2.5, 5, 3},  {3, 1.0, 1, 2}};
   for (bool periodic : {true, false}) {
     const rkhs::Domain domain{rkhs::test::track_length, periodic};
     for (const auto& s : settings) {
       if (periodic && s.n0 < s.degree + 1) continue;
-      INFO((periodic ? "periodic" : "interval") << " degree " << s.degree << " r " << s.r << " n0 "
-                                               << s.n0 << " J " << s.levels);
+      INFO((periodic ? "periodic" : "interval")
+           << " degree " << s.degree << " r " << s.r << " n0 " << s.n0 << " J " << s.levels);
       const auto kernel = rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of(s), domain);
       auto points = rkhs::test::scattered_points(40, domain.length);
       // Knots, the seam and the end points, where pieces meet. Degree 0 is discontinuous there
       // and its value at a knot depends on how u / h0 rounds (and at u = L on the interval the
       // kernel takes the left limit, the right-open N_0 would give 0), so it skips them.
       if (s.degree > 0) {
-        for (double u : {0.0, domain.length / s.n0, 0.5 * domain.length, domain.length * (1 - 1e-16)})
+        for (double u :
+             {0.0, domain.length / s.n0, 0.5 * domain.length, domain.length * (1 - 1e-16)})
           points.push_back(u);
         if (!periodic) points.push_back(domain.length);
       }
@@ -171,7 +179,8 @@ TEST_CASE("B-spline kernel and feature map equal the double sum of model.md", "[
 TEST_CASE("B-spline features of a point are distinct and the count matches", "[kernel][bspline]") {
   // n0 = degree + 1 on the periodic domain: every level-0 spline wraps around the whole track.
   const rkhs::Domain track{rkhs::test::track_length, true};
-  const auto kernel = rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of({3, 3.0, 4, 6}), track);
+  const auto kernel =
+      rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of({3, 3.0, 4, 6}), track);
   CHECK(kernel.feature_count() == 4u * ((1u << 7) - 1));
   rkhs::SparseFeatures f;
   for (double u : rkhs::test::scattered_points(100, track.length)) {
@@ -181,7 +190,8 @@ TEST_CASE("B-spline features of a point are distinct and the count matches", "[k
     CHECK(std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end());
   }
   const rkhs::Domain interval{rkhs::test::track_length, false};
-  const auto open = rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of({2, 2.0, 3, 4}), interval);
+  const auto open =
+      rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of({2, 2.0, 3, 4}), interval);
   CHECK(open.feature_count() == 3u * ((1u << 5) - 1) + 5u * 2u);
 }
 
@@ -194,11 +204,14 @@ TEST_CASE("B-spline Gram matrices have the rank of the finest spline space", "[k
       const Setting s{p, static_cast<double>(p), 4, 2};
       auto kernel = rkhs::test::make_registered_kernel("bspline", given_of(s), domain);
       const int rank = (s.n0 << s.levels) + (periodic ? 0 : p);
-      const auto centres = rkhs::test::scattered_points(static_cast<std::size_t>(2 * rank), domain.length);
+      const auto centres =
+          rkhs::test::scattered_points(static_cast<std::size_t>(2 * rank), domain.length);
       const Eigen::VectorXd lambda =
           Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(kernel->gram(centres)).eigenvalues();
-      INFO((periodic ? "periodic" : "interval") << " degree " << p << ": eigenvalues " << lambda.transpose());
-      const double zero = 1e3 * static_cast<double>(lambda.size()) * rkhs::test::epsilon * lambda.maxCoeff();
+      INFO((periodic ? "periodic" : "interval")
+           << " degree " << p << ": eigenvalues " << lambda.transpose());
+      const double zero =
+          1e3 * static_cast<double>(lambda.size()) * rkhs::test::epsilon * lambda.maxCoeff();
       CHECK((lambda.array() > zero).count() == rank);
     }
   }
@@ -206,7 +219,8 @@ TEST_CASE("B-spline Gram matrices have the rank of the finest spline space", "[k
 
 TEST_CASE("B-spline kernel metadata", "[kernel][bspline]") {
   const rkhs::Domain track{rkhs::test::track_length, true};
-  const auto kernel = rkhs::test::make_kernel_of<MultiscaleBSpline>({{"degree", std::int64_t{2}}}, track);
+  const auto kernel =
+      rkhs::test::make_kernel_of<MultiscaleBSpline>({{"degree", std::int64_t{2}}}, track);
   const auto props = kernel.properties();
   CHECK_FALSE(props.positive_definite);
   CHECK_FALSE(props.stationary);
@@ -215,8 +229,8 @@ TEST_CASE("B-spline kernel metadata", "[kernel][bspline]") {
   CHECK(props.support_radius == Approx(3 * track.length / 4));
   // Zero beyond the level-0 support on the interval, where the radius is below L.
   const rkhs::Domain interval{rkhs::test::track_length, false};
-  const auto narrow =
-      rkhs::test::make_kernel_of<MultiscaleBSpline>({{"degree", std::int64_t{1}}, {"n0", std::int64_t{8}}}, interval);
+  const auto narrow = rkhs::test::make_kernel_of<MultiscaleBSpline>(
+      {{"degree", std::int64_t{1}}, {"n0", std::int64_t{8}}}, interval);
   const double radius = narrow.properties().support_radius;
   CHECK(radius == Approx(2 * interval.length / 8));
   // Not stationary: points closer than the radius share a level-0 spline only if they are in

@@ -1,8 +1,8 @@
 // The periodised Gaussian against its Fourier series (Poisson summation):
-//   sum_m exp(-(d + m L)^2 / (2 sigma^2)) = (sigma sqrt(2 pi) / L) sum_k exp(-2 pi^2 sigma^2 k^2 / L^2) cos(2 pi k d / L).
+//   sum_m exp(-(d + m L)^2 / (2 sigma^2))
+//     = (sigma sqrt(2 pi) / L) sum_k exp(-2 pi^2 sigma^2 k^2 / L^2) cos(2 pi k d / L).
 
 #include <catch2/catch.hpp>
-
 #include <cmath>
 
 #include "kernel_test_support.hpp"
@@ -37,7 +37,8 @@ TEST_CASE("periodised Gaussian equals its Fourier series", "[kernel][gaussian]")
         const double at_zero = fourier_series(width, length, 0.0);
         double worst = 0;
         for (double d = -0.5 * length; d <= 0.5 * length; d += length / 97)
-          worst = std::max(worst, std::abs(kernel(3.0 + d, 3.0) - fourier_series(width, length, d)));
+          worst =
+              std::max(worst, std::abs(kernel(3.0 + d, 3.0) - fourier_series(width, length, d)));
         INFO("L " << length << " sigma " << sigma << " " << convention << " images "
                   << kernel.image_count() << " error " << worst << " k(0) " << at_zero);
         CHECK(worst <= 1e-13 * at_zero);

@@ -2,10 +2,9 @@
 // registered tomorrow is tested with its default parameters the moment it registers; the built-in
 // ones also with a few variants that stress their code paths (images, few features, wide support).
 
-#include <catch2/catch.hpp>
-
 #include <Eigen/Dense>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -33,7 +32,8 @@ std::vector<Given> variants_of(const std::string& name, bool periodic) {
     out.push_back({{"degree", std::int64_t{1}}, {"n0", std::int64_t{2}}, {"J", std::int64_t{1}}});
     // n0 = degree + 1: the smallest periodic level, every spline covers the whole track.
     out.push_back({{"degree", std::int64_t{3}}, {"n0", std::int64_t{4}}, {"J", std::int64_t{2}}});
-    if (!periodic) out.push_back({{"degree", std::int64_t{3}}, {"n0", std::int64_t{1}}, {"J", std::int64_t{2}}});
+    if (!periodic)
+      out.push_back({{"degree", std::int64_t{3}}, {"n0", std::int64_t{1}}, {"J", std::int64_t{2}}});
   } else if (name == "wendland") {
     out.push_back({{"k", std::int64_t{0}}, {"radius", 2.0}});
     out.push_back({{"k", std::int64_t{2}}, {"radius", 3.0}});
@@ -124,7 +124,8 @@ void check_contract(const rkhs::AnyKernel& kernel, const Domain& domain, Tally& 
   double cross_error = 0;
   for (Eigen::Index m = 0; m < cross.rows(); ++m)
     for (Eigen::Index i = 0; i < cross.cols(); ++i)
-      cross_error = std::max(cross_error, std::abs(cross(m, i) - kernel.evaluate(points[m], centres[i])));
+      cross_error =
+          std::max(cross_error, std::abs(cross(m, i) - kernel.evaluate(points[m], centres[i])));
   CHECK(cross_error <= 1e-14 * scale);
 
   // Power function on nested uniform centres 4 -> 8 -> 16: >= 0, ~0 at the centres,
@@ -142,14 +143,16 @@ void check_contract(const rkhs::AnyKernel& kernel, const Domain& domain, Tally& 
     // Evaluation points 257 + 16j are the uniform centres of 16; every n-th of them is a centre.
     double at_centres = 0;
     for (std::size_t i = 0; i < 16; i += 16 / n)
-      at_centres = std::max(at_centres, std::abs(power.squared(static_cast<Eigen::Index>(257 + i))));
+      at_centres =
+          std::max(at_centres, std::abs(power.squared(static_cast<Eigen::Index>(257 + i))));
     CHECK(at_centres <= power.tolerance + 1e-14 * scale);
     if (n > 4) {
       // Truncating a nonzero (ill-conditioned) eigenvalue changes the space, so the nested
       // comparison is only meaningful without truncation, or for a finite feature map, whose
       // Gram matrices beyond its rank are exactly singular (the dropped eigenvalues are zeros),
       // and when the tolerance is small.
-      const bool meaningful = (power.dropped == 0 && previous.dropped == 0) || kernel.feature_count() > 0;
+      const bool meaningful =
+          (power.dropped == 0 && previous.dropped == 0) || kernel.feature_count() > 0;
       const double tolerance = power.tolerance + previous.tolerance;
       if (meaningful && tolerance < 1e-6 * scale) {
         const double increase = (power.squared - previous.squared).maxCoeff();

@@ -1,9 +1,8 @@
 // The built-in kernels are all registered (the static-library trap: a linker that drops a
 // plugin's object file drops its registrar silently) and declare themselves completely.
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <string>
 #include <vector>
 

@@ -2,7 +2,6 @@
 // periodised kernel against a brute-force image sum.
 
 #include <catch2/catch.hpp>
-
 #include <cmath>
 
 #include "kernel_test_support.hpp"
@@ -41,11 +40,13 @@ TEST_CASE("periodised Wendland kernels equal their image sums", "[kernel][wendla
   const rkhs::Domain track{length, true};
   for (std::int64_t k = 0; k <= 3; ++k) {
     for (double radius : {1.0, 0.5 * length, 0.6 * length, 3.3 * length}) {
-      const auto kernel = rkhs::test::make_kernel_of<Wendland>({{"k", k}, {"radius", radius}}, track);
+      const auto kernel =
+          rkhs::test::make_kernel_of<Wendland>({{"k", k}, {"radius", radius}}, track);
       double worst = 0;
       for (double d = -0.5 * length; d <= 0.5 * length; d += length / 83) {
         double expected = 0;
-        for (int m = -20; m <= 20; ++m) expected += Wendland::phi(static_cast<int>(k), std::abs(d + m * length) / radius);
+        for (int m = -20; m <= 20; ++m)
+          expected += Wendland::phi(static_cast<int>(k), std::abs(d + m * length) / radius);
         worst = std::max(worst, std::abs(kernel(d + 0.5, 0.5) - expected));
       }
       INFO("k " << k << ", radius " << radius << ", error " << worst);
@@ -59,7 +60,8 @@ TEST_CASE("periodised Wendland kernels equal their image sums", "[kernel][wendla
 TEST_CASE("Wendland kernel metadata", "[kernel][wendland]") {
   const rkhs::Domain track{rkhs::test::track_length, true};
   for (std::int64_t k = 0; k <= 3; ++k) {
-    const auto props = rkhs::test::make_kernel_of<Wendland>({{"k", k}, {"radius", 1.5}}, track).properties();
+    const auto props =
+        rkhs::test::make_kernel_of<Wendland>({{"k", k}, {"radius", 1.5}}, track).properties();
     CHECK(props.positive_definite);
     CHECK(props.sobolev_order == static_cast<double>(k) + 1.0);
     CHECK(props.support_radius == 1.5);

@@ -17,16 +17,19 @@
 //   J       integer 0..16, default 6: finest level.
 //
 // The kernel is evaluated through its sparse feature map, never by a dense double loop:
-//   phi_{j,k}(u) = 2^{j (1 - 2r) / 2} N_p(2^j u / h0 - k),  k(u, v) = sum phi_{j,k}(u) phi_{j,k}(v),
+//   phi_{j,k}(u) = 2^{j (1 - 2r) / 2} N_p(2^j u / h0 - k),
+//   k(u, v) = sum_{j,k} phi_{j,k}(u) phi_{j,k}(v),
 // with feature index offset_j + k (periodic, k wrapped into [0, n_j)) or offset_j + k + p
 // (interval). Each point has exactly (p + 1)(J + 1) features (some may be 0 at knots).
 // operator() forms the same products on the stack, O((p + 1)(J + 1)), without allocation.
+// Arguments must be finite.
 //
 // Properties: positive SEMIdefinite only (positive_definite = false). The level spaces are
-// nested, so k has rank n_J (periodic) or n_J + p (interval), fewer than feature_count(): a Gram
-// matrix of more centres than that is singular (n_J = 256 with the defaults). Native space equivalent to
-// H^r when 1/2 < r < p + 1/2 (the limit J -> infinity; sobolev_order is empty otherwise).
-// Support radius (p + 1) h0 (a level-0 spline), not stationary.
+// nested, so k has rank n_J (periodic) or n_J + p (interval), fewer than feature_count():
+// a Gram matrix of more centres than that is singular (n_J = 256 with the defaults).
+// Native space equivalent to H^r when 1/2 < r < p + 1/2 (the limit J -> infinity;
+// sobolev_order is empty otherwise). Support radius (p + 1) h0 (a level-0 spline); not
+// stationary.
 // Fails: ParameterError naming "n0" when the domain is periodic and n0 < degree + 1 (a spline
 // would overlap its own periodic copy), naming "r" when degree = 0 and r is not given, and
 // naming "degree" / "J" / "n0" for values outside their declared ranges.
@@ -108,7 +111,9 @@ class MultiscaleBSpline {
     }
   }
 
-  std::size_t feature_count() const noexcept { return static_cast<std::size_t>(offset_[levels_ + 1]); }
+  std::size_t feature_count() const noexcept {
+    return static_cast<std::size_t>(offset_[levels_ + 1]);
+  }
 
   KernelProperties properties() const noexcept;
 
@@ -122,8 +127,13 @@ class MultiscaleBSpline {
   static void pieces(int degree, double t, double* out) noexcept {
     const double s = 1.0 - t;
     switch (degree) {
-      case 0: out[0] = 1.0; return;
-      case 1: out[0] = t; out[1] = s; return;
+      case 0:
+        out[0] = 1.0;
+        return;
+      case 1:
+        out[0] = t;
+        out[1] = s;
+        return;
       case 2:
         out[0] = 0.5 * t * t;
         out[1] = 0.5 + t * s;  // (1 + 2t - 2t^2) / 2
@@ -176,8 +186,8 @@ class MultiscaleBSpline {
   int levels_;
   double length_;
   bool periodic_;
-  std::array<double, max_level + 1> scale_{};       ///< 2^j
-  std::array<double, max_level + 1> weight_{};      ///< 2^{j (1 - 2r) / 2}
+  std::array<double, max_level + 1> scale_{};         ///< 2^j
+  std::array<double, max_level + 1> weight_{};        ///< 2^{j (1 - 2r) / 2}
   std::array<std::int32_t, max_level + 2> offset_{};  ///< first feature index of level j
 };
 

@@ -9,7 +9,8 @@
 //   convention  "2sigma2" | "sigma2", default "2sigma2".
 // Interval domain [0, L]: k = k0. Periodic domain [0, L): k(s, t) = sum_{m in Z} k0(s - t + m L),
 // truncated to |m| <= M where the omitted images are below 1e-16 k0(0) (periodic_images.hpp);
-// M is computed once by the constructor (M = 17 for sigma = 50, L = 25, "2sigma2").
+// M is computed once by the constructor and grows like sigma / L (M = 17 for sigma = 50,
+// L = 25, "2sigma2"; M = 0 for sigma = 1 on the paper's track).
 // Properties: strictly positive definite, analytic (no Sobolev order), global support,
 // stationary. Wide Gaussians (sigma of the order of L or larger) have Gram matrices that are
 // singular to double precision: the kernel is still evaluated correctly, the trial reports it.

@@ -38,10 +38,14 @@ class Wendland {
     if (r >= 1.0) return 0.0;
     const double s = 1.0 - r, s2 = s * s;
     switch (smoothness) {
-      case 0: return s;
-      case 1: return s2 * s * (3.0 * r + 1.0);
-      case 2: return s2 * s2 * s * ((8.0 * r + 5.0) * r + 1.0);
-      default: return s2 * s2 * s2 * s * (((21.0 * r + 19.0) * r + 7.0) * r + 1.0);
+      case 0:
+        return s;
+      case 1:
+        return s2 * s * (3.0 * r + 1.0);
+      case 2:
+        return s2 * s2 * s * ((8.0 * r + 5.0) * r + 1.0);
+      default:
+        return s2 * s2 * s2 * s * (((21.0 * r + 19.0) * r + 7.0) * r + 1.0);
     }
   }
 
