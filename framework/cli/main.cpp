@@ -80,7 +80,7 @@ int command_list(const std::string& kind) {
   if (all || kind == "target" || kind == "targets") list_registry(rkhs::target_registry(), std::cout);
   if (all || kind == "metric" || kind == "metrics") {
     std::cout << "metrics (approximation trials):\n";
-    for (const auto& name : rkhs::approximation_metric_names()) std::cout << "  " << name << "\n";
+    for (const auto& name : rkhs::metric_names("approximation")) std::cout << "  " << name << "\n";
   }
   return exit_ok;
 }
@@ -95,13 +95,11 @@ class Journal {
     for (const auto& m : metrics) out_ << "," << m;
     out_ << "\n" << std::flush;
   }
-  void record(const rkhs::TrialSpec& trial, const rkhs::TrialResult& result,
-              const std::vector<std::string>& metrics) {
-    const auto& names = rkhs::approximation_metric_names();
+  void record(const rkhs::StudyDefinition& study, const rkhs::TrialSpec& trial,
+              const rkhs::TrialResult& result) {
     out_ << trial.index << "," << rkhs::csv_field(trial.key) << "," << (result.ok ? "ok" : "failed")
          << "," << rkhs::csv_field(result.reason);
-    for (const auto& m : metrics)
-      out_ << "," << rkhs::csv_number(result.metrics[std::find(names.begin(), names.end(), m) - names.begin()]);
+    for (const auto& m : study.metrics) out_ << "," << rkhs::csv_number(result.metrics[study.metric_index(m)]);
     out_ << "\n" << std::flush;
   }
   void remove() {
@@ -132,7 +130,7 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   rkhs::RunOptions options;
   options.threads = thread_count;
   options.on_trial_finished = [&](const rkhs::TrialSpec& trial, const rkhs::TrialResult& result) {
-    journal.record(trial, result, study.metrics);
+    journal.record(study, trial, result);
     ++done;
     if (!result.ok) {
       ++failed;

@@ -26,11 +26,6 @@ std::string csv_row(const std::vector<std::string>& fields) {
   return out + "\n";
 }
 
-std::size_t metric_index(const std::string& metric) {
-  const auto& names = approximation_metric_names();
-  return std::find(names.begin(), names.end(), metric) - names.begin();
-}
-
 std::string abscissa_name(const StudyDefinition& study) {
   return study.abscissa == Abscissa::n ? "n" : "h";
 }
@@ -94,30 +89,46 @@ std::string csv_field(const std::string& value) {
 
 std::string csv_number(double value) { return std::isnan(value) ? "" : format_real(value); }
 
+namespace {
+// The plugin axes of a trial in column order; the kernel's parameters are not prefixed.
+std::vector<std::pair<std::string, const PluginChoice*>> plugin_axes(const TrialSpec& trial) {
+  return {{"kernel", &trial.kernel}, {"target", &trial.target}, {"centres", &trial.centres},
+          {"plant", &trial.plant},   {"law", &trial.law},       {"integrator", &trial.integrator}};
+}
+std::string parameter_column(const std::string& axis, const std::string& parameter) {
+  if (axis == "kernel") return parameter;
+  std::string column = axis;  // (operator+ here trips GCC 12's -Wrestrict false positive)
+  column += '_';
+  column += parameter;
+  return column;
+}
+}  // namespace
+
 std::vector<std::string> axis_columns(const std::vector<TrialSpec>& trials) {
-  std::vector<std::string> kernel{"kernel"}, target{"target"}, centres{"centres"};
-  auto add = [](std::vector<std::string>& columns, const std::string& column) {
-    if (std::find(columns.begin(), columns.end(), column) == columns.end()) columns.push_back(column);
-  };
-  for (const auto& trial : trials) {
-    for (const auto& [name, value] : trial.kernel.parameters.values()) add(kernel, name);
-    for (const auto& [name, value] : trial.target.parameters.values()) add(target, "target_" + name);
-    for (const auto& [name, value] : trial.centres.parameters.values()) add(centres, "centres_" + name);
+  std::vector<std::string> out;
+  if (trials.empty()) return out;
+  for (const auto& [axis, first] : plugin_axes(trials.front())) {
+    if (first->name.empty()) continue;  // an axis this kind of study does not have
+    std::vector<std::string> columns{axis};
+    for (const auto& trial : trials)
+      for (const auto& [other, choice] : plugin_axes(trial))
+        if (other == axis)
+          for (const auto& [name, value] : choice->parameters.values())
+            if (auto column = parameter_column(axis, name);
+                std::find(columns.begin(), columns.end(), column) == columns.end())
+              columns.push_back(column);
+    out.insert(out.end(), columns.begin(), columns.end());
   }
-  kernel.insert(kernel.end(), target.begin(), target.end());
-  kernel.insert(kernel.end(), centres.begin(), centres.end());
-  return kernel;
+  return out;
 }
 
 std::vector<std::string> axis_values(const std::vector<std::string>& columns, const TrialSpec& trial) {
-  std::map<std::string, std::string> values{{"kernel", trial.kernel.name},
-                                            {"target", trial.target.name},
-                                            {"centres", trial.centres.name}};
-  for (const auto& [name, value] : trial.kernel.parameters.values()) values[name] = format_value(value);
-  for (const auto& [name, value] : trial.target.parameters.values())
-    values["target_" + name] = format_value(value);
-  for (const auto& [name, value] : trial.centres.parameters.values())
-    values["centres_" + name] = format_value(value);
+  std::map<std::string, std::string> values;
+  for (const auto& [axis, choice] : plugin_axes(trial)) {
+    values[axis] = choice->name;
+    for (const auto& [name, value] : choice->parameters.values())
+      values[parameter_column(axis, name)] = format_value(value);
+  }
   std::vector<std::string> out;
   for (const auto& column : columns) out.push_back(values.contains(column) ? values[column] : "");
   return out;
@@ -135,7 +146,7 @@ std::string trials_csv(const RunRecord& run) {
     auto row = axis_values(columns, trial);
     row.push_back(std::to_string(trial.n));
     for (const auto& metric : run.study.metrics)
-      row.push_back(csv_number(result.metrics[metric_index(metric)]));
+      row.push_back(csv_number(result.metrics[run.study.metric_index(metric)]));
     row.push_back(result.ok ? "ok" : "failed");
     row.push_back(result.reason);
     row.push_back(result.solve_method);
@@ -224,7 +235,7 @@ std::string summary_json(const RunRecord& run) {
     const auto& result = run.results[trial.index];
     std::vector<std::string> metrics, flags;
     for (const auto& metric : study.metrics)
-      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[metric_index(metric)]));
+      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[study.metric_index(metric)]));
     for (const auto& flag : result.flags) flags.push_back(json_string(flag));
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "

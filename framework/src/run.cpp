@@ -35,7 +35,7 @@ double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
 
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
   TrialResult result;
-  result.metrics.assign(approximation_metric_names().size(),
+  result.metrics.assign(study.all_metrics().size(),
                         std::numeric_limits<double>::quiet_NaN());
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -53,7 +53,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
     result.metrics = std::move(measured.metrics);
     result.solve_method = std::move(measured.solve_method);
     result.flags = std::move(measured.flags);
-    const auto& names = approximation_metric_names();
+    const auto& names = study.all_metrics();
     for (std::size_t i = 0; i < names.size(); ++i)
       if (std::isnan(result.metrics[i]))
         if (names[i] != "separation_distance" || trial.n > 1)

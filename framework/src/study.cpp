@@ -352,7 +352,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                 fmt::format("must be an integer >= 2, found {}", format_real(points)));
   study.evaluation_points = static_cast<std::size_t>(points);
 
-  const auto& all_metrics = approximation_metric_names();
+  const auto& all_metrics = metric_names(study.kind);
   if (const auto* metrics = header->get("metrics")) {
     const auto* array = metrics->as_array();
     if (!array || array->empty())
@@ -448,24 +448,54 @@ StudyDefinition load_study(const std::filesystem::path& file) {
   return parse_study(text.str(), file.string());
 }
 
+const std::vector<std::string>& metric_names(std::string_view kind) {
+  if (kind == "approximation") return approximation_metric_names();
+  throw std::invalid_argument(fmt::format("unknown study kind '{}'", kind));
+}
+
+const std::vector<std::string>& StudyDefinition::all_metrics() const { return metric_names(kind); }
+
+std::size_t StudyDefinition::metric_index(std::string_view metric) const {
+  const auto& names = all_metrics();
+  const auto it = std::find(names.begin(), names.end(), metric);
+  if (it == names.end()) throw std::out_of_range(fmt::format("unknown metric '{}'", metric));
+  return static_cast<std::size_t>(it - names.begin());
+}
+
 std::vector<TrialSpec> StudyDefinition::trials() const {
+  // Axes a study kind does not have contribute one empty choice (and nothing to the keys).
+  const std::vector<PluginChoice> none{PluginChoice{}};
+  auto or_none = [&](const std::vector<PluginChoice>& axis) -> const std::vector<PluginChoice>& {
+    return axis.empty() ? none : axis;
+  };
   std::vector<TrialSpec> out;
   for (const auto& kernel : kernels)
     for (const auto& target : targets)
       for (const auto& placement : centres)
-        for (std::size_t n : n_values) {
-          TrialSpec trial;
-          trial.index = out.size();
-          trial.kernel = kernel;
-          trial.target = target;
-          trial.centres = placement;
-          trial.n = n;
-          trial.group_key = fmt::format("kernel={} | target={} | centres={}", kernel.label(),
-                                        target.label(), placement.label());
-          trial.key = fmt::format("{} | n={}", trial.group_key, n);
-          trial.seed = hash64(trial.key);
-          out.push_back(std::move(trial));
-        }
+        for (const auto& plant : or_none(plants))
+          for (const auto& law : or_none(laws))
+            for (const auto& integrator : or_none(integrators))
+              for (std::size_t n : n_values) {
+                TrialSpec trial;
+                trial.index = out.size();
+                trial.kernel = kernel;
+                trial.target = target;
+                trial.centres = placement;
+                trial.plant = plant;
+                trial.law = law;
+                trial.integrator = integrator;
+                trial.n = n;
+                trial.group_key = fmt::format("kernel={} | target={} | centres={}", kernel.label(),
+                                              target.label(), placement.label());
+                using Named = std::pair<const char*, const PluginChoice*>;
+                for (const auto& [axis, choice] :
+                     {Named{"plant", &plant}, Named{"law", &law}, Named{"integrator", &integrator}})
+                  if (!choice->name.empty())
+                    trial.group_key += fmt::format(" | {}={}", axis, choice->label());
+                trial.key = fmt::format("{} | n={}", trial.group_key, n);
+                trial.seed = hash64(trial.key);
+                out.push_back(std::move(trial));
+              }
   return out;
 }
 

@@ -21,15 +21,15 @@ std::string_view excluding_flag(std::string_view metric) {
 std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
                                         const std::vector<TrialResult>& results) {
-  const auto& names = approximation_metric_names();
   std::vector<std::string> group_keys;
   std::map<std::string, std::vector<std::size_t>> members;
   for (const auto& trial : trials) {
     if (!members.contains(trial.group_key)) group_keys.push_back(trial.group_key);
     members[trial.group_key].push_back(trial.index);
   }
-  const std::size_t fill_index =
-      std::find(names.begin(), names.end(), "fill_distance") - names.begin();
+  const auto& names = study.all_metrics();
+  const bool has_fill = std::find(names.begin(), names.end(), "fill_distance") != names.end();
+  const std::size_t fill_index = has_fill ? study.metric_index("fill_distance") : 0;
 
   std::vector<MetricSeries> out;
   for (std::size_t g = 0; g < group_keys.size(); ++g) {
@@ -37,7 +37,7 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
     std::sort(indices.begin(), indices.end(),
               [&](auto a, auto b) { return trials[a].n < trials[b].n; });
     for (const auto& metric : study.metrics) {
-      const std::size_t m = std::find(names.begin(), names.end(), metric) - names.begin();
+      const std::size_t m = study.metric_index(metric);
       const auto flag = excluding_flag(metric);
       MetricSeries series;
       series.metric = metric;

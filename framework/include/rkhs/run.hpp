@@ -15,7 +15,7 @@ namespace rkhs {
 struct TrialResult {
   bool ok = false;
   std::string reason;             ///< why the trial failed (empty when ok)
-  std::vector<double> metrics;    ///< aligned with approximation_metric_names(); NaN if not measured
+  std::vector<double> metrics;    ///< aligned with study.all_metrics(); NaN if not measured
   std::string solve_method;       ///< how the Gram matrix was solved
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
   double seconds = 0;             ///< wall time (not part of the deterministic results)

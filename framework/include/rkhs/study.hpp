@@ -36,6 +36,9 @@ struct TrialSpec {
   PluginChoice kernel;
   PluginChoice target;
   PluginChoice centres;
+  PluginChoice plant;       ///< adaptive trials only (empty name otherwise)
+  PluginChoice law;         ///< adaptive trials only
+  PluginChoice integrator;  ///< adaptive trials only
   std::size_t n = 0;
   std::string group_key;  ///< every axis but n: trials of a group form one convergence series
   std::string key;        ///< every axis: identifies the trial
@@ -59,14 +62,25 @@ struct StudyDefinition {
   std::vector<std::size_t> n_values;  ///< increasing, distinct
   std::size_t evaluation_points = 4096;
   std::vector<PluginChoice> kernels, targets, centres;
+  std::vector<PluginChoice> plants, laws, integrators;  ///< adaptive studies only
   std::vector<std::string> metrics;  ///< the metrics written and fitted, in output order
   Abscissa abscissa = Abscissa::n;
   SolverOptions solver;
   StudyLimits limits;
 
-  /// The Cartesian product kernels x targets x centres x n, n varying fastest.
+  /// The Cartesian product kernels x targets x centres [x plants x laws x integrators] x n,
+  /// n varying fastest.
   std::vector<TrialSpec> trials() const;
+
+  /// Every metric a trial of this study's kind measures (TrialResult::metrics is aligned with
+  /// it), and the position of one of them (throws std::out_of_range for an unknown name).
+  const std::vector<std::string>& all_metrics() const;
+  std::size_t metric_index(std::string_view metric) const;
 };
+
+/// Every metric a trial of `kind` measures, in output order. Throws std::invalid_argument for
+/// an unknown kind.
+const std::vector<std::string>& metric_names(std::string_view kind);
 
 /// Reads and validates a study file. Throws StudyError (file, line, column, key, found,
 /// allowed, and a suggestion for misspelt names) for any problem.
