@@ -22,8 +22,12 @@ std::string join(const std::vector<std::string>& items, std::string_view separat
 
 std::string csv_row(const std::vector<std::string>& fields) {
   std::string out;
-  for (std::size_t i = 0; i < fields.size(); ++i) out += (i ? "," : "") + csv_field(fields[i]);
-  return out + "\n";
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (i) out += ',';
+    out += csv_field(fields[i]);
+  }
+  out += '\n';
+  return out;
 }
 
 std::string abscissa_name(const StudyDefinition& study) {
@@ -64,8 +68,8 @@ std::string json_value(const ParameterValue& value) {
 std::string json_parameters(const ParameterSet& parameters) {
   std::vector<std::string> items;
   for (const auto& [name, value] : parameters.values())
-    items.push_back(json_string(name) + ": " + json_value(value));
-  return "{" + join(items, ", ") + "}";
+    items.push_back(fmt::format("{}: {}", json_string(name), json_value(value)));
+  return fmt::format("{{{}}}", join(items, ", "));
 }
 
 std::string json_plugin(const PluginChoice& choice) {
