@@ -18,6 +18,8 @@
 #include "rkhs/centres.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/output.hpp"
+#include "rkhs/plugin_loader.hpp"
+#include "rkhs/plugin_verification.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/run.hpp"
 #include "rkhs/study.hpp"
@@ -49,7 +51,7 @@ std::string describe_parameter(const rkhs::ParameterSpec& spec) {
     detail += "; one of";
     for (std::size_t i = 0; i < spec.allowed.size(); ++i)
       detail += (i ? ", " : " ") + rkhs::format_real(spec.allowed[i]);
-  } else if (spec.type != rkhs::ParameterType::boolean) {
+  } else if (spec.type == rkhs::ParameterType::real || spec.type == rkhs::ParameterType::integer) {
     const bool lo = spec.min > -1e308, hi = spec.max < 1e308;
     auto bound = [&](double v) {
       return spec.type == rkhs::ParameterType::integer
@@ -82,7 +84,20 @@ int command_list(const std::string& kind) {
     std::cout << "metrics (approximation trials):\n";
     for (const auto& name : rkhs::metric_names("approximation")) std::cout << "  " << name << "\n";
   }
+  if (const auto plugins = rkhs::loaded_plugins(); all && !plugins.empty()) {
+    std::cout << "\nplugin modules:\n";
+    for (const auto& p : plugins)
+      std::cout << fmt::format("  {:<10} {} (built against rkhs-study {})\n", p.name,
+                               p.file.string(), p.rkhs_study_version);
+  }
   return exit_ok;
+}
+
+// Exit 0 when every check passed, 1 when some failed (the report says which).
+int command_verify_plugin(const std::string& file) {
+  const auto verification = rkhs::verify_plugin(file);
+  std::cout << rkhs::format_verification(verification);
+  return verification.passed() ? exit_ok : exit_failed_trials;
 }
 
 // Appends each finished trial to a journal, flushed at once, so an interrupted run keeps what
@@ -193,6 +208,17 @@ int main(int argc, char** argv) {
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
 
+  // Plugin modules: --plugin (repeatable) here, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]`.
+  std::vector<std::string> plugin_files;
+  std::string plugin_to_verify;
+  for (auto* command : {run, list, validate})
+    command->add_option("--plugin", plugin_files, "load a plugin module (.so); repeatable")
+        ->allow_extra_args(false);
+  auto* verify = app.add_subcommand(
+      "verify-plugin", "load a plugin module and check its kernels: the kernel contract, and the "
+                       "declared smoothness against the measured power-function rate");
+  verify->add_option("plugin", plugin_to_verify, "plugin module (.so)")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -210,6 +236,9 @@ int main(int argc, char** argv) {
   }
 
   try {
+    rkhs::load_plugins_from_environment();
+    for (const auto& file : plugin_files) rkhs::load_plugin(file);
+    if (*verify) return command_verify_plugin(plugin_to_verify);
     if (*run) return command_run(study_file, out_dir, threads, quiet);
     if (*list) return command_list(kind);
     if (*validate) return command_validate(study_file);

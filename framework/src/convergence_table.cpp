@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "rkhs/asymptotic.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -24,9 +26,10 @@ int rate_decimals(double rate) {
 }
 
 std::string fit_footer(const std::optional<RateFit>& fit, std::span<const TableRow> rows,
-                       std::string_view abscissa_name) {
+                       std::string_view abscissa_name, std::string_view no_fit_reason) {
   if (!fit) {
     if (rows.empty()) return "fitted rate: not available (no points)";
+    if (!no_fit_reason.empty()) return fmt::format("fitted rate: not available ({})", no_fit_reason);
     const auto usable = std::count_if(rows.begin(), rows.end(), [](const TableRow& r) {
       return std::isfinite(r.value) && r.value > 0.0;
     });
@@ -55,13 +58,16 @@ std::string fit_footer(const std::optional<RateFit>& fit, std::span<const TableR
 std::string format_convergence_table(std::string_view metric, std::string_view group,
                                      std::string_view abscissa_name, std::span<const TableRow> rows,
                                      const std::optional<RateFit>& fit,
-                                     std::string_view flag_legend) {
+                                     std::string_view flag_legend, RateModel pairwise_model,
+                                     std::string_view no_fit_reason) {
   std::vector<double> x, y;
   for (const auto& row : rows) {
     x.push_back(row.abscissa);
     y.push_back(row.value);
   }
-  const std::vector<double> rates = pairwise_rates(x, y);
+  const std::vector<double> rates = pairwise_model == RateModel::power_law
+                                        ? pairwise_rates(x, y)
+                                        : pairwise_exponential_rates(x, y);
   const bool any_flagged =
       std::any_of(rows.begin(), rows.end(), [](const TableRow& r) { return r.flagged; });
 
@@ -75,7 +81,9 @@ std::string format_convergence_table(std::string_view metric, std::string_view g
     cells.push_back(
         {format_abscissa(rows[i].abscissa),
          fmt::format("{:.3e}", rows[i].value) + (rows[i].flagged ? std::string("*") : marker_slot),
-         has_rate ? fmt::format("{:.2f}", rates[i - 1]) : std::string("-")});
+         has_rate ? fmt::format("{:.{}f}", rates[i - 1], pairwise_model == RateModel::power_law
+                                                                ? 2 : rate_decimals(rates[i - 1]))
+                  : std::string("-")});
   }
   std::array<std::size_t, 3> width{};
   for (const auto& line : cells)
@@ -85,7 +93,7 @@ std::string format_convergence_table(std::string_view metric, std::string_view g
   for (const auto& line : cells)
     out += fmt::format("{:>{}}  {:>{}}  {:>{}}\n", line[0], width[0], line[1], width[1], line[2],
                        width[2]);
-  out += fit_footer(fit, rows, abscissa_name) + '\n';
+  out += fit_footer(fit, rows, abscissa_name, no_fit_reason) + '\n';
   if (fit && !fit->note.empty()) out += fmt::format("note: {}\n", fit->note);
   if (any_flagged) out += fmt::format("* {}\n", flag_legend);
   return out;

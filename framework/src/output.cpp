@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -32,6 +33,10 @@ std::string csv_row(const std::vector<std::string>& fields) {
 
 std::string abscissa_name(const StudyDefinition& study) {
   return study.abscissa == Abscissa::n ? "n" : "h";
+}
+
+std::string model_id(RateModel model) {
+  return model == RateModel::power_law ? "power_law" : "exponential";
 }
 
 // Minimal JSON writing: strings escaped, non-finite numbers as null (with the value kept as
@@ -163,46 +168,68 @@ std::string trials_csv(const RunRecord& run) {
 std::string rates_csv(const RunRecord& run) {
   const auto columns = axis_columns(run.trials);
   std::vector<std::string> header = columns;
-  for (const char* extra : {"metric", "abscissa", "kind", "n_from", "n_to", "points", "rate",
-                            "std_error", "ci_low", "ci_high", "r_squared", "note"})
+  for (const char* extra : {"metric", "abscissa", "kind", "model", "n_from", "n_to", "points",
+                            "rate", "std_error", "ci_low", "ci_high", "r_squared", "delta_aic",
+                            "note"})
     header.push_back(extra);
   std::string out = csv_row(header);
   for (const auto& series : run.rates) {
     if (series.trials.empty()) continue;
     const auto axes = axis_values(columns, run.trials[series.trials.front()]);
-    auto row_start = [&](const char* kind, std::size_t from, std::size_t to) {
+    auto row_start = [&](const char* kind, RateModel model, std::size_t from, std::size_t to) {
       auto row = axes;
       row.push_back(series.metric);
-      row.push_back(abscissa_name(run.study));
+      row.push_back(model == RateModel::exponential ? std::string("n") : abscissa_name(run.study));
       row.push_back(kind);
+      row.push_back(model_id(model));
       row.push_back(std::to_string(from));
       row.push_back(std::to_string(to));
       return row;
     };
     const auto& n_of = [&](std::size_t k) { return run.trials[series.trials[k]].n; };
-    {
+    // The reported fit ("fit") and the other model's ("alternative_fit"), each on its window.
+    const auto reported = series.analysis.reported;
+    const auto other = reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law;
+    for (const auto model : {reported, other}) {
+      const auto& analysis = series.analysis.analysis(model);
+      const auto& fit = analysis.fit;
       std::size_t from = n_of(0), to = n_of(series.trials.size() - 1);
-      if (series.fit && !series.fit->used.empty()) {
-        from = n_of(series.fit->used.front());
-        to = n_of(series.fit->used.back());
+      if (fit && !fit->used.empty()) {
+        from = n_of(fit->used.front());
+        to = n_of(fit->used.back());
       }
-      auto row = row_start("fit", from, to);
+      auto row = row_start(model == reported ? "fit" : "alternative_fit", model, from, to);
       const double nan = std::numeric_limits<double>::quiet_NaN();
-      const auto& fit = series.fit;
       row.push_back(std::to_string(fit ? fit->points : 0));
       for (double v : {fit ? fit->rate : nan, fit ? fit->std_error : nan, fit ? fit->ci_low : nan,
-                       fit ? fit->ci_high : nan, fit ? fit->r_squared : nan})
+                       fit ? fit->ci_high : nan, fit ? fit->r_squared : nan, analysis.advantage})
         row.push_back(csv_number(v));
-      row.push_back(series.note);
+      std::vector<std::string> notes;
+      if (model == reported) {
+        if (!series.note.empty()) notes.push_back(series.note);
+        if (!series.analysis.note.empty()) notes.push_back(series.analysis.note);
+      } else {
+        if (!analysis.window.note.empty()) notes.push_back(analysis.window.note);
+        if (fit && !fit->note.empty()) notes.push_back(fit->note);
+      }
+      row.push_back(join(notes, "; "));
       out += csv_row(row);
     }
+    const auto& window = series.analysis.reported_analysis().window;
+    auto outside = [&](std::size_t k) {
+      return std::find(window.head.begin(), window.head.end(), k) != window.head.end() ||
+             std::find(window.floor.begin(), window.floor.end(), k) != window.floor.end();
+    };
     for (std::size_t k = 0; k < series.pairwise.size(); ++k) {
-      auto row = row_start("pairwise", n_of(k), n_of(k + 1));
+      auto row = row_start("pairwise", reported, n_of(k), n_of(k + 1));
       row.push_back("2");
       row.push_back(csv_number(series.pairwise[k]));
-      for (int i = 0; i < 4; ++i) row.push_back("");
+      for (int i = 0; i < 5; ++i) row.push_back("");
       const bool doubtful = series.flagged[k] || series.flagged[k + 1];
-      row.push_back(doubtful ? "flagged value (not used in the fit)" : "");
+      row.push_back(doubtful ? "flagged value (not used in the fit)"
+                             : outside(k) || outside(k + 1)
+                                   ? "outside the asymptotic window (not used in the fit)"
+                                   : "");
       out += csv_row(row);
     }
   }
@@ -251,23 +278,94 @@ std::string summary_json(const RunRecord& run) {
         join(metrics, ", "), trial.index + 1 < run.trials.size() ? "," : "");
   }
   out += "  ],\n  \"rates\": [\n";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t s = 0; s < run.rates.size(); ++s) {
     const auto& series = run.rates[s];
-    const auto& fit = series.fit;
-    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const auto n_list = [&](const std::vector<std::size_t>& positions) {
+      std::vector<std::string> items;
+      for (auto k : positions) items.push_back(std::to_string(run.trials[series.trials[k]].n));
+      return fmt::format("[{}]", join(items, ", "));
+    };
+    // A model's fit on its window: the fields common to the reported and the alternative fit.
+    const auto model_fields = [&](const ModelAnalysis& analysis) {
+      const auto& fit = analysis.fit;
+      return fmt::format(
+          "\"model\": {}, \"rate\": {}, \"std_error\": {}, \"ci_low\": {}, \"ci_high\": {}, "
+          "\"r_squared\": {}, \"points\": {}, \"window\": {}, \"head\": {}, \"floor\": {}, "
+          "\"delta_aic\": {}",
+          json_string(model_id(analysis.model)), json_number(fit ? fit->rate : nan),
+          json_number(fit ? fit->std_error : nan), json_number(fit ? fit->ci_low : nan),
+          json_number(fit ? fit->ci_high : nan), json_number(fit ? fit->r_squared : nan),
+          fit ? fit->points : 0, n_list(analysis.window.points), n_list(analysis.window.head),
+          n_list(analysis.window.floor), json_number(analysis.advantage));
+    };
+    const auto reported = series.analysis.reported;
+    const auto& alternative = series.analysis.analysis(
+        reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law);
+    std::vector<std::size_t> flagged;
+    for (std::size_t k = 0; k < series.flagged.size(); ++k)
+      if (series.flagged[k]) flagged.push_back(k);
     std::vector<std::string> pairwise;
     for (double r : series.pairwise) pairwise.push_back(json_number(r));
     out += fmt::format(
-        "    {{\"group\": {}, \"metric\": {}, \"model\": \"power_law\", \"rate\": {}, "
-        "\"std_error\": {}, \"ci_low\": {}, \"ci_high\": {}, \"r_squared\": {}, \"points\": {}, "
-        "\"pairwise\": [{}], \"note\": {}}}{}\n",
+        "    {{\"group\": {}, \"metric\": {}, {}, \"preferred\": {}, \"decisive\": {}, "
+        "\"model_note\": {}, \"flagged\": {}, \"pairwise\": [{}], \"note\": {}, "
+        "\"alternative\": {{{}}}}}{}\n",
         json_string(group_label(run.trials[series.trials.front()])), json_string(series.metric),
-        json_number(fit ? fit->rate : nan), json_number(fit ? fit->std_error : nan),
-        json_number(fit ? fit->ci_low : nan), json_number(fit ? fit->ci_high : nan),
-        json_number(fit ? fit->r_squared : nan), fit ? fit->points : 0, join(pairwise, ", "),
-        json_string(series.note), s + 1 < run.rates.size() ? "," : "");
+        model_fields(series.analysis.reported_analysis()),
+        series.analysis.preferred ? json_string(model_id(*series.analysis.preferred)) : "null",
+        series.analysis.decisive() ? "true" : "false", json_string(series.analysis.note),
+        n_list(flagged), join(pairwise, ", "), json_string(series.note), model_fields(alternative),
+        s + 1 < run.rates.size() ? "," : "");
   }
   out += "  ]\n}\n";
+  return out;
+}
+
+std::string estimates_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  for (const char* extra : {"n", "lap", "s", "road", "estimate"}) header.push_back(extra);
+  std::string out = csv_row(header);
+  const auto grid = run.study.domain.uniform_points(run.study.adaptive.snapshot_points);
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    if (!result.ok) continue;
+    const auto axes = axis_values(columns, trial);
+    for (const auto& snapshot : result.snapshots) {
+      for (std::size_t m = 0; m < snapshot.estimate.size() && m < grid.size(); ++m) {
+        auto row = axes;
+        row.push_back(std::to_string(trial.n));
+        row.push_back(format_real(snapshot.lap));
+        row.push_back(format_real(grid[m]));
+        row.push_back(csv_number(result.road[m]));
+        row.push_back(csv_number(snapshot.estimate[m]));
+        out += csv_row(row);
+      }
+    }
+  }
+  return out;
+}
+
+std::string timeseries_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  for (const char* extra : {"n", "t", "lap", "state_error", "lyapunov"}) header.push_back(extra);
+  std::string out = csv_row(header);
+  const double lap_time = run.study.domain.length / run.study.adaptive.speed;
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    const auto axes = axis_values(columns, trial);
+    for (const auto& sample : result.samples) {
+      auto row = axes;
+      row.push_back(std::to_string(trial.n));
+      row.push_back(format_real(sample.t));
+      row.push_back(format_real(sample.t / lap_time));
+      row.push_back(csv_number(sample.state_error));
+      row.push_back(csv_number(sample.lyapunov));
+      out += csv_row(row);
+    }
+  }
   return out;
 }
 
@@ -276,11 +374,23 @@ std::string console_tables(const RunRecord& run) {
   for (const auto& metric : run.study.metrics) {
     for (const auto& series : run.rates) {
       if (series.metric != metric || series.trials.empty()) continue;
+      // An exponential fit is in n whatever the study's abscissa: the table's axis follows it.
+      const auto model = series.analysis.reported;
+      const bool in_n = model == RateModel::exponential || run.study.abscissa == Abscissa::n;
       std::vector<TableRow> rows;
       for (std::size_t k = 0; k < series.trials.size(); ++k)
-        rows.push_back({series.abscissa[k], series.values[k], static_cast<bool>(series.flagged[k])});
-      out += format_convergence_table(metric, group_label(run.trials[series.trials.front()]),
-                                      abscissa_name(run.study), rows, series.fit);
+        rows.push_back({in_n ? series.n[k] : series.abscissa[k], series.values[k],
+                        static_cast<bool>(series.flagged[k])});
+      out += format_convergence_table(
+          metric, group_label(run.trials[series.trials.front()]),
+          in_n ? std::string("n") : abscissa_name(run.study), rows, series.fit,
+          "value flagged: at the round-off floor or from a singular Gram matrix", model,
+          series.no_fit_reason);
+      if (const auto& window = series.analysis.reported_analysis().window.points; !window.empty()) {
+        out += fmt::format("  window: n = {}, {} of {} points{}{}\n", label_range(series.n, window),
+                           window.size(), series.trials.size(),
+                           series.analysis.note.empty() ? "" : "; ", series.analysis.note);
+      }
       if (!series.note.empty()) out += "  note: " + series.note + "\n";
       out += "\n";
     }
@@ -305,6 +415,10 @@ void write_outputs(const RunRecord& run, const std::filesystem::path& directory)
   write_file_atomically(directory / "trials.csv", trials_csv(run));
   write_file_atomically(directory / "rates.csv", rates_csv(run));
   write_file_atomically(directory / "summary.json", summary_json(run));
+  if (run.study.kind == "adaptive") {
+    write_file_atomically(directory / "estimates.csv", estimates_csv(run));
+    write_file_atomically(directory / "timeseries.csv", timeseries_csv(run));
+  }
 }
 
 }  // namespace rkhs

@@ -58,12 +58,22 @@ ParameterSpec boolean_parameter(std::string name, bool default_value, std::strin
   return spec;
 }
 
+ParameterSpec text_parameter(std::string name, std::string default_value, std::string doc) {
+  ParameterSpec spec;
+  spec.name = std::move(name);
+  spec.type = ParameterType::text;
+  spec.default_value = std::move(default_value);
+  spec.doc = std::move(doc);
+  return spec;
+}
+
 std::string_view type_name(ParameterType type) {
   switch (type) {
     case ParameterType::real: return "a number";
     case ParameterType::integer: return "an integer";
     case ParameterType::choice: return "a string";
     case ParameterType::boolean: return "true or false";
+    case ParameterType::text: return "a string";
   }
   return "?";
 }
@@ -138,7 +148,8 @@ std::string check_value(const ParameterSpec& spec, const ParameterValue& value) 
       }
       return "";
     }
-    case ParameterType::boolean: return "";
+    case ParameterType::boolean:
+    case ParameterType::text: return "";
   }
   return "";
 }
@@ -154,7 +165,8 @@ bool coerce(const ParameterSpec& spec, ParameterValue& value) {
       if (auto* d = std::get_if<double>(&value); d && std::floor(*d) == *d && std::abs(*d) < 9e15)
         value = static_cast<std::int64_t>(*d);
       return std::holds_alternative<std::int64_t>(value);
-    case ParameterType::choice: return std::holds_alternative<std::string>(value);
+    case ParameterType::choice:
+    case ParameterType::text: return std::holds_alternative<std::string>(value);
     case ParameterType::boolean: return std::holds_alternative<bool>(value);
   }
   return false;

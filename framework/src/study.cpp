@@ -14,8 +14,12 @@
 #include "rkhs/approximation.hpp"
 #include "rkhs/centres.hpp"
 #include "rkhs/kernel.hpp"
+#include "rkhs/lyapunov.hpp"
+#include "rkhs/plant.hpp"
+#include "rkhs/plugin_loader.hpp"
 #include "rkhs/random.hpp"
 #include "rkhs/target.hpp"
+#include "expectation_parser.hpp"
 
 namespace rkhs {
 
@@ -220,9 +224,14 @@ std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml:
     std::vector<std::pair<ParameterValue, toml::source_region>> values;
   };
   std::vector<Axis> axes;
+  std::vector<std::string> tiers;
   for (auto&& [key, node] : entry) {
     const std::string parameter(key.str());
     if (parameter == "name") continue;
+    if (parameter == "tier") {  // the tiers this entry belongs to (docs/verification.md)
+      tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
+      continue;
+    }
     if (std::find(known.begin(), known.end(), parameter) == known.end())
       report.fail(key.source(), prefix + parameter,
                   fmt::format("unknown parameter of {} '{}' {}", registry.kind(), name,
@@ -258,7 +267,7 @@ std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml:
     std::map<std::string, ParameterValue> given;
     for (std::size_t a = 0; a < axes.size(); ++a) given[axes[a].name] = axes[a].values[at[a]].first;
     try {
-      out.push_back({name, ParameterSet::resolve(specs, given)});
+      out.push_back({name, ParameterSet::resolve(specs, given), tiers});
     } catch (const ParameterError& e) {
       toml::source_region where = entry.source();
       for (std::size_t a = 0; a < axes.size(); ++a)
@@ -283,7 +292,7 @@ std::vector<PluginChoice> parse_plugins(const Reporter& report, const toml::tabl
                   fmt::format("missing: add at least one [[{}]] table with a name (known: {})",
                               section, list_names(registry.names())));
     const auto& specs = registry.find(*default_name)->info.parameters;
-    return {PluginChoice{*default_name, ParameterSet::resolve(specs, {})}};
+    return {PluginChoice{*default_name, ParameterSet::resolve(specs, {}), {}}};
   }
   std::vector<PluginChoice> out;
   auto add_entry = [&](const toml::node& item) {
@@ -305,6 +314,79 @@ std::vector<PluginChoice> parse_plugins(const Reporter& report, const toml::tabl
   return out;
 }
 
+AdaptiveSettings parse_adaptive(const Reporter& report, const toml::table& root) {
+  AdaptiveSettings settings;
+  const auto* table = optional_table(report, root, "adaptive");
+  if (!table)
+    report.fail({}, "adaptive", "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
+  check_keys(report, *table, "adaptive.",
+             {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
+              "samples_per_lap"});
+  settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
+  if (table->contains("laps") && table->contains("final_time"))
+    report.fail(table->source(), "adaptive", "give 'laps' or 'final_time', not both");
+  settings.laps = get_number(report, *table, "laps", "adaptive.", 10, 0);
+  settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, -1e-300);
+  settings.q = get_string(report, *table, "q", "adaptive.", std::string("identity"));
+  try {
+    parse_matrix(settings.q, 1);
+  } catch (const std::exception& e) {
+    report.fail(table->get("q")->source(), "adaptive.q", e.what());
+  }
+  const auto road = get_string(report, *table, "road", "adaptive.", std::string("target"));
+  if (road != "target" && road != "projection")
+    report.fail(table->get("road")->source(), "adaptive.road",
+                fmt::format("found \"{}\", expected \"target\" (f) or \"projection\" (Pi_n f, "
+                            "a road in H_n)", road));
+  settings.projected_road = road == "projection";
+  if (const auto* laps = table->get("snapshot_laps")) {
+    const auto* array = laps->as_array();
+    if (!array)
+      report.fail(laps->source(), "adaptive.snapshot_laps",
+                  fmt::format("expected an array of lap numbers, found {}", describe(*laps)));
+    for (const auto& item : *array) {
+      if (!item.is_number() || item.value<double>().value() < 0)
+        report.fail(item.source(), "adaptive.snapshot_laps",
+                    fmt::format("expected a lap number >= 0, found {}", show(item)));
+      settings.snapshot_laps.push_back(item.value<double>().value());
+    }
+  }
+  auto count = [&](std::string_view key, std::size_t fallback) {
+    const double value = get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
+    if (value != std::floor(value) || value > 1e7)
+      report.fail(table->get(key)->source(), fmt::format("adaptive.{}", key),
+                  fmt::format("must be a whole number >= 1, found {}", format_real(value)));
+    return static_cast<std::size_t>(value);
+  };
+  settings.snapshot_points = count("snapshot_points", 0);
+  settings.samples_per_lap = count("samples_per_lap", settings.samples_per_lap);
+  return settings;
+}
+
+// `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
+// before any plugin name in the file is looked up.
+void load_study_plugins(const Reporter& report, const toml::table& root) {
+  const auto* node = root.get("plugins");
+  if (!node) return;
+  const auto* array = node->as_array();
+  if (!array)
+    report.fail(node->source(), "plugins",
+                fmt::format("expected an array of plugin files, found {}", describe(*node)));
+  const auto directory = std::filesystem::path(report.source()).parent_path();
+  for (const auto& item : *array) {
+    if (!item.is_string())
+      report.fail(item.source(), "plugins",
+                  fmt::format("expected a plugin file name, found {}", describe(item)));
+    std::filesystem::path file(item.as_string()->get());
+    if (file.is_relative()) file = directory / file;
+    try {
+      load_plugin(file);
+    } catch (const PluginError& e) {
+      report.fail(item.source(), "plugins", e.what());
+    }
+  }
+}
+
 bool valid_study_name(const std::string& name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
@@ -322,7 +404,9 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     report.fail(error.source(), "", fmt::format("invalid TOML: {}", error.description()));
   }
   check_keys(report, root, "",
-             {"study", "domain", "grid", "kernel", "target", "centres", "solver", "limits"});
+             {"study", "domain", "grid", "kernel", "target", "centres", "solver", "limits",
+              "adaptive", "plant", "law", "integrator", "plugins", "expect"});
+  load_study_plugins(report, root);
 
   StudyDefinition study;
   study.source = source_name;
@@ -337,9 +421,14 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                             "the output folder)", study.name));
   study.description = get_string(report, *header, "description", "study.", std::string{});
   study.kind = get_string(report, *header, "kind", "study.", std::string("approximation"));
-  if (study.kind != "approximation")
+  if (study.kind != "approximation" && study.kind != "adaptive")
     report.fail(header->get("kind")->source(), "study.kind",
-                fmt::format("unknown study kind '{}' (known: approximation)", study.kind));
+                fmt::format("unknown study kind '{}' (known: approximation, adaptive)", study.kind));
+  if (study.kind != "adaptive")
+    for (const char* section : {"adaptive", "plant", "law", "integrator"})
+      if (const auto* node = root.get(section))
+        report.fail(node->source(), section,
+                    "only for adaptive studies: add kind = \"adaptive\" to [study]");
   const auto abscissa = get_string(report, *header, "abscissa", "study.", std::string("n"));
   if (abscissa == "n") study.abscissa = Abscissa::n;
   else if (abscissa == "h" || abscissa == "fill_distance") study.abscissa = Abscissa::fill_distance;
@@ -398,6 +487,14 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   study.kernels = parse_plugins(report, root, "kernel", kernel_registry(), std::nullopt);
   study.targets = parse_plugins(report, root, "target", target_registry(), std::string("sine"));
   study.centres = parse_plugins(report, root, "centres", centre_registry(), std::string("uniform"));
+  if (study.kind == "adaptive") {
+    study.plants = parse_plugins(report, root, "plant", plant_registry(), std::string("quarter_car"));
+    study.laws = parse_plugins(report, root, "law", law_registry(), std::string("rkhs"));
+    study.integrators =
+        parse_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4"));
+    study.adaptive = parse_adaptive(report, root);
+    if (study.adaptive.snapshot_points == 0) study.adaptive.snapshot_points = study.evaluation_points;
+  }
 
   if (const auto* solver = optional_table(report, root, "solver")) {
     check_keys(report, *solver, "solver.", {"singular", "regularisation"});
@@ -437,6 +534,16 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   check_instances(study.targets, "target", [&](const PluginChoice& c) {
     target_registry().find(c.name)->factory(c.parameters, study.domain);
   });
+  check_instances(study.plants, "plant", [&](const PluginChoice& c) {
+    const auto plant = plant_registry().find(c.name)->factory(c.parameters);
+    const auto d = plant->A().rows();
+    const auto Q = parse_matrix(study.adaptive.q, d);
+    if (Q.rows() != d || Q.cols() != d)
+      throw std::invalid_argument(fmt::format("adaptive.q is {} x {}, this plant needs {} x {}",
+                                              Q.rows(), Q.cols(), d, d));
+    solve_lyapunov(plant->A(), Q);
+  });
+  study.expectations = detail::parse_expectations(root, study);
   return study;
 }
 
@@ -450,6 +557,7 @@ StudyDefinition load_study(const std::filesystem::path& file) {
 
 const std::vector<std::string>& metric_names(std::string_view kind) {
   if (kind == "approximation") return approximation_metric_names();
+  if (kind == "adaptive") return adaptive_metric_names();
   throw std::invalid_argument(fmt::format("unknown study kind '{}'", kind));
 }
 

@@ -43,9 +43,8 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
       series.metric = metric;
       series.group = g;
       series.trials = indices;
-      std::vector<double> fit_x, fit_y;
-      std::vector<std::size_t> fit_positions;
-      std::size_t failed = 0, flagged = 0;
+      std::vector<bool> usable;
+      std::size_t failed = 0, flagged = 0, first_flagged = indices.size();
       for (std::size_t k = 0; k < indices.size(); ++k) {
         const auto& result = results[indices[k]];
         const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)
@@ -55,28 +54,48 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
             !flag.empty() &&
             std::find(result.flags.begin(), result.flags.end(), flag) != result.flags.end();
         series.abscissa.push_back(x);
+        series.n.push_back(static_cast<double>(trials[indices[k]].n));
         series.values.push_back(y);
         series.flagged.push_back(excluded);
+        usable.push_back(result.ok && !excluded);
         if (!result.ok) ++failed;
-        else if (excluded) ++flagged;
-        else {
-          fit_x.push_back(x);
-          fit_y.push_back(y);
-          fit_positions.push_back(k);
+        else if (excluded) {
+          ++flagged;
+          first_flagged = std::min(first_flagged, k);
         }
       }
-      series.pairwise = pairwise_rates(series.abscissa, series.values);
+      series.analysis = analyse_series(series.abscissa, series.n, series.values, usable);
+      const auto& reported = series.analysis.reported_analysis();
+      series.pairwise = reported.pairwise;
+      series.fit = reported.fit;
+
       std::vector<std::string> notes;
       if (failed) notes.push_back(fmt::format("{} failed trial{} excluded", failed, failed > 1 ? "s" : ""));
-      if (flagged) notes.push_back(fmt::format("{} value{} excluded ({})", flagged,
-                                               flagged > 1 ? "s" : "", flag));
-      series.fit = fit_power_law(fit_x, fit_y);
+      // Flagged values that run to the end of the series are a floor the trials measured.
+      bool flagged_tail = flagged > 0;
+      for (std::size_t k = first_flagged; flagged_tail && k < indices.size(); ++k)
+        flagged_tail = series.flagged[k] || !results[indices[k]].ok;
+      if (flagged_tail)
+        notes.push_back(fmt::format("floor from n = {}: {} value{} flagged ({})",
+                                    trials[indices[first_flagged]].n, flagged,
+                                    flagged > 1 ? "s" : "", flag));
+      else if (flagged)
+        notes.push_back(fmt::format("{} value{} excluded ({})", flagged, flagged > 1 ? "s" : "", flag));
+      if (!reported.window.note.empty()) notes.push_back(reported.window.note);
       if (series.fit) {
-        for (auto& u : series.fit->used) u = fit_positions[u];
         if (!series.fit->note.empty()) notes.push_back(series.fit->note);
       } else {
-        notes.push_back(fmt::format("no fit: {} usable point{}", fit_x.size(),
-                                    fit_x.size() == 1 ? "" : "s"));
+        std::size_t usable_points = 0;
+        for (std::size_t k = 0; k < indices.size(); ++k)
+          usable_points += usable[k] && std::isfinite(series.values[k]) && series.values[k] > 0.0;
+        series.no_fit_reason =
+            fmt::format("{} of {} points usable{}; a fit needs at least 2", usable_points,
+                        indices.size(),
+                        failed + flagged > 0 ? fmt::format(" after excluding {} failed or flagged",
+                                                           failed + flagged)
+                                             : std::string());
+        notes.push_back(fmt::format("no fit: {} usable point{}", usable_points,
+                                    usable_points == 1 ? "" : "s"));
       }
       for (std::size_t i = 0; i < notes.size(); ++i) series.note += (i ? "; " : "") + notes[i];
       out.push_back(std::move(series));

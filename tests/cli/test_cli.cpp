@@ -73,8 +73,10 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
   CHECK_THAT(trials, Catch::Contains(",status,reason,solve,flags\n"));
   CHECK(std::count(trials.begin(), trials.end(), '\n') == 7);
   const auto rates = read(dir / "out" / "rates.csv");
-  CHECK_THAT(rates, Catch::Contains("metric,abscissa,kind,n_from,n_to,points,rate,std_error,ci_low,ci_high,r_squared,note"));
-  CHECK_THAT(rates, Catch::Contains("power_function_sup,n,fit,8,32,3,"));
+  CHECK_THAT(rates, Catch::Contains("metric,abscissa,kind,model,n_from,n_to,points,rate,std_error,"
+                                    "ci_low,ci_high,r_squared,delta_aic,note"));
+  CHECK_THAT(rates, Catch::Contains("power_function_sup,n,fit,power_law,8,32,3,"));
+  CHECK_THAT(rates, Catch::Contains("power_function_sup,n,alternative_fit,exponential,8,32,3,"));
   CHECK_FALSE(fs::exists(dir / "out" / "journal.csv"));
   const int json_ok = std::system(("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
                                    "assert d[\"counts\"][\"trials\"]==6 and len(d[\"rates\"])>0' " +

@@ -36,8 +36,5 @@ bool register_centre_placement() noexcept {
 
 }  // namespace rkhs
 
-#define RKHS_REGISTER_CENTRES(Type)                                       \
-  namespace {                                                             \
-  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_centres_registered_) = \
-      ::rkhs::register_centre_placement<Type>();                          \
-  }
+#define RKHS_REGISTER_CENTRES(Type) \
+  RKHS_REGISTRAR(rkhs_centres_registered_, ::rkhs::register_centre_placement<Type>())

@@ -34,15 +34,18 @@ struct TableRow {
 /// - Columns, right-aligned and separated by two spaces: the abscissa (header `abscissa_name`;
 ///   integral values print as integers, others with 4 significant digits), the value (header
 ///   `metric`; scientific with 4 significant digits, followed by '*' when flagged), and the
-///   pairwise power-law rate from pairwise_rates (2 decimals; '-' in the first row and where the
+///   pairwise rate of `pairwise_model` (pairwise_rates for the power law,
+///   pairwise_exponential_rates for the exponential model, so that the column matches the
+///   footer's model; 2 decimals, 3 significant digits below 1; '-' in the first row and where the
 ///   rate is undefined). Rows print in the order given; rates compare neighbouring rows.
 /// - Footer: the fitted rate from `fit`, which the caller computed from these rows (or a subset
 ///   of them, e.g. without flagged ones): "fitted rate: r ± se (95% CI [lo, hi], R² = q, m
 ///   points)", with "fitted rate (exponential in <abscissa_name>)" for RateModel::exponential.
 ///   The rate, its standard error and CI carry 2 decimals, more when |rate| < 1 (3 significant
 ///   digits, at most 6 decimals). A two-point fit prints its slope only. When `fit` is empty
-///   the footer explains why no rate is available. A non-empty RateFit::note follows as
-///   "note: ...".
+///   the footer explains why no rate is available: `no_fit_reason` when given (the caller knows
+///   what it excluded before fitting), otherwise a count of the rows with a finite, positive
+///   value. A non-empty RateFit::note follows as "note: ...".
 /// - When any row is flagged, a last line "* <flag_legend>".
 ///
 /// Never throws except std::bad_alloc. Column widths count bytes, so non-ASCII metric or axis
@@ -51,6 +54,7 @@ std::string format_convergence_table(
     std::string_view metric, std::string_view group, std::string_view abscissa_name,
     std::span<const TableRow> rows, const std::optional<RateFit>& fit,
     std::string_view flag_legend =
-        "value flagged: at the round-off floor or from a singular Gram matrix");
+        "value flagged: at the round-off floor or from a singular Gram matrix",
+    RateModel pairwise_model = RateModel::power_law, std::string_view no_fit_reason = {});
 
 }  // namespace rkhs

@@ -71,6 +71,23 @@ concept FeatureMapKernel = KernelFunction<K> && requires(const K& k, double x, S
   { k.feature_count() } -> std::convertible_to<std::size_t>;
 };
 
+/// The n kernel sections phi_i = k(c_i, .) at fixed centres, evaluated at one point at a time:
+/// the inner loop of an ODE right-hand side. One virtual call evaluates all n sections with the
+/// concrete kernel inlined; nothing is allocated after construction. Not thread-safe (it owns
+/// scratch buffers): one basis per trial.
+class KernelBasis {
+ public:
+  virtual ~KernelBasis() = default;
+  virtual std::size_t size() const noexcept = 0;
+  /// phi[i] = k(c_i, s) for i < size().
+  virtual void evaluate(double s, double* phi) const = 0;
+  /// Fixes a linear map T (rows x size()) for evaluate_mapped. For feature-map kernels T Phi_c
+  /// is precomputed, so a mapped evaluation costs O(rows x features at s), not O(rows x n).
+  virtual void set_map(const Eigen::MatrixXd& map) = 0;
+  /// out = T phi(s), out.size() == T.rows().
+  virtual void evaluate_mapped(double s, double* out) const = 0;
+};
+
 /// A kernel instance behind a virtual interface: the registry boundary. Each method runs a
 /// whole loop on the concrete kernel type.
 class AnyKernel {
@@ -93,6 +110,11 @@ class AnyKernel {
   virtual Eigen::VectorXd diagonal(std::span<const double> points) const = 0;
   /// Number of features of a finite feature map, 0 when the kernel has none.
   virtual std::size_t feature_count() const noexcept = 0;
+  /// The sections k(c_i, .) at `centres`, for evaluation along a path.
+  virtual std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const = 0;
+  /// Points in [0, L) where kernel sections are not smooth (finest B-spline knots; the seam 0
+  /// for a kernel that is not periodic on a periodic domain), sorted. Empty when smooth.
+  virtual std::vector<double> kink_points() const = 0;
 };
 
 using KernelRegistry = Registry<AnyKernel, const Domain&>;

@@ -123,6 +123,61 @@ Eigen::MatrixXd assemble_gram(const K& kernel, const Domain& domain,
   return gram;
 }
 
+/// KernelBasis of a kernel without a feature map: n inlined evaluations per point.
+template <KernelFunction K>
+class DirectBasis final : public KernelBasis {
+ public:
+  DirectBasis(const K& kernel, std::span<const double> centres)
+      : kernel_(kernel), centres_(centres.begin(), centres.end()), phi_(centres.size()) {}
+  std::size_t size() const noexcept override { return centres_.size(); }
+  void evaluate(double s, double* phi) const override {
+    for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
+  }
+  void set_map(const Eigen::MatrixXd& map) override { map_ = map; }
+  void evaluate_mapped(double s, double* out) const override {
+    evaluate(s, phi_.data());
+    Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
+        map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), static_cast<Eigen::Index>(phi_.size()));
+  }
+
+ private:
+  const K& kernel_;
+  std::vector<double> centres_;
+  mutable std::vector<double> phi_;
+  Eigen::MatrixXd map_;
+};
+
+/// KernelBasis through a sparse feature map: phi(s) = Phi_c f(s), with Phi_c (n x F) the
+/// centres' features and f(s) the (few) features active at s.
+template <FeatureMapKernel K>
+class FeatureBasis final : public KernelBasis {
+ public:
+  FeatureBasis(const K& kernel, std::span<const double> centres)
+      : kernel_(kernel),
+        centre_features_(Eigen::MatrixXd(detail::feature_matrix(kernel, centres))) {
+    kernel_.features(0.0, active_);  // grows the scratch buffer once
+  }
+  std::size_t size() const noexcept override {
+    return static_cast<std::size_t>(centre_features_.rows());
+  }
+  void evaluate(double s, double* phi) const override { apply(centre_features_, s, phi); }
+  void set_map(const Eigen::MatrixXd& map) override { mapped_features_ = map * centre_features_; }
+  void evaluate_mapped(double s, double* out) const override { apply(mapped_features_, s, out); }
+
+ private:
+  void apply(const Eigen::MatrixXd& columns, double s, double* out) const {
+    kernel_.features(s, active_);
+    Eigen::Map<Eigen::VectorXd> result(out, columns.rows());
+    result.setZero();
+    for (std::size_t f = 0; f < active_.size(); ++f)
+      result.noalias() += active_.value[f] * columns.col(active_.index[f]);
+  }
+  const K& kernel_;
+  Eigen::MatrixXd centre_features_;
+  Eigen::MatrixXd mapped_features_;
+  mutable SparseFeatures active_;
+};
+
 /// The AnyKernel adaptor of a concrete kernel type.
 template <KernelFunction K>
 class KernelModel final : public AnyKernel {
@@ -159,6 +214,18 @@ class KernelModel final : public AnyKernel {
     if constexpr (FeatureMapKernel<K>) return kernel_.feature_count();
     else return 0;
   }
+  std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const override {
+    if constexpr (FeatureMapKernel<K>) return std::make_unique<FeatureBasis<K>>(kernel_, centres);
+    else return std::make_unique<DirectBasis<K>>(kernel_, centres);
+  }
+  std::vector<double> kink_points() const override {
+    std::vector<double> kinks;
+    if constexpr (requires { kernel_.kink_points(); }) kinks = kernel_.kink_points();
+    if (domain_.periodic && !properties_.periodic) kinks.push_back(0.0);
+    std::sort(kinks.begin(), kinks.end());
+    kinks.erase(std::unique(kinks.begin(), kinks.end()), kinks.end());
+    return kinks;
+  }
 
  private:
   K kernel_;
@@ -183,8 +250,6 @@ bool register_kernel() noexcept {
 }  // namespace rkhs
 
 /// Registers a kernel type at start-up. Use once, at namespace scope, in the kernel's .cpp file.
-#define RKHS_REGISTER_KERNEL(Type)                                                   \
-  namespace {                                                                        \
-  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_kernel_registered_) =            \
-      ::rkhs::register_kernel<Type>();                                               \
-  }
+/// In a plugin module (RKHS_BUILDING_PLUGIN) the registration waits for the loader's ABI check.
+#define RKHS_REGISTER_KERNEL(Type) \
+  RKHS_REGISTRAR(rkhs_kernel_registered_, ::rkhs::register_kernel<Type>())

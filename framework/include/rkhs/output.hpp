@@ -33,10 +33,16 @@ std::vector<std::string> axis_values(const std::vector<std::string>& columns, co
 std::string trials_csv(const RunRecord& run);
 std::string rates_csv(const RunRecord& run);
 std::string summary_json(const RunRecord& run);
+/// Adaptive studies: fhat and f on the snapshot grid at the chosen laps (one row per trial, lap
+/// and point: the data of the paper's "road surface estimates" figures).
+std::string estimates_csv(const RunRecord& run);
+/// Adaptive studies: |x - xhat| and V at the output samples of every trial.
+std::string timeseries_csv(const RunRecord& run);
 /// One ConvergenceTable per metric and group.
 std::string console_tables(const RunRecord& run);
 
-/// Writes trials.csv, rates.csv and summary.json into `directory` (created if needed).
+/// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and
+/// timeseries.csv) into `directory` (created if needed).
 void write_outputs(const RunRecord& run, const std::filesystem::path& directory);
 
 /// Writes `content` to `file` atomically (temporary file, then rename).

@@ -12,7 +12,8 @@
 
 namespace rkhs {
 
-enum class ParameterType { real, integer, choice, boolean };
+/// `text` is a free-form string (e.g. a matrix "-1 0; 0 -2"), `choice` one of `choices`.
+enum class ParameterType { real, integer, choice, boolean, text };
 
 /// A value as written in a study file. Integers stay integers so that `degree = 2` and
 /// `sigma = 2` print as the user wrote them.
@@ -49,6 +50,7 @@ ParameterSpec integer_parameter(std::string name, std::int64_t default_value, st
 ParameterSpec choice_parameter(std::string name, std::string default_value, std::string doc,
                                std::vector<std::string> choices);
 ParameterSpec boolean_parameter(std::string name, bool default_value, std::string doc);
+ParameterSpec text_parameter(std::string name, std::string default_value, std::string doc);
 
 /// A parameter value that does not satisfy its declaration. `what()` is a full sentence;
 /// `parameter()` names the offending parameter so a parser can point at its key.
@@ -75,7 +77,8 @@ class ParameterSet {
 
   double real(std::string_view name) const;  ///< real or integer parameter as double
   std::int64_t integer(std::string_view name) const;
-  const std::string& choice(std::string_view name) const;
+  const std::string& choice(std::string_view name) const;  ///< choice or text parameter
+  const std::string& text(std::string_view name) const { return choice(name); }
   bool boolean(std::string_view name) const;
   /// True when the study file gave this parameter (false: the default was used).
   bool given(std::string_view name) const;

@@ -97,6 +97,20 @@ class Registry {
     std::lock_guard lock(mutex_);
     return errors_;
   }
+  std::size_t error_count() const {
+    std::lock_guard lock(mutex_);
+    return errors_.size();
+  }
+  /// Removes and returns the errors recorded after the first `kept`: the plugin loader reports
+  /// them as the failure of the module it was loading (which it then unloads), so they do not
+  /// linger as start-up errors.
+  std::vector<std::string> take_errors_after(std::size_t kept) {
+    std::lock_guard lock(mutex_);
+    if (kept >= errors_.size()) return {};
+    std::vector<std::string> taken(errors_.begin() + static_cast<std::ptrdiff_t>(kept), errors_.end());
+    errors_.resize(kept);
+    return taken;
+  }
 
   /// After this, `add` is refused: trials read the registry from several threads.
   void freeze() noexcept {
@@ -131,3 +145,7 @@ class Registry {
 #define RKHS_CONCAT(a, b) RKHS_CONCAT_IMPL(a, b)
 /// A unique identifier per use within a translation unit.
 #define RKHS_UNIQUE_NAME(prefix) RKHS_CONCAT(prefix, __COUNTER__)
+
+// RKHS_REGISTRAR(prefix, call): what every RKHS_REGISTER_* macro expands to (immediate in the
+// framework, deferred until the ABI check in a plugin module).
+#include "rkhs/registrar.hpp"

@@ -19,6 +19,10 @@ struct TrialResult {
   std::string solve_method;       ///< how the Gram matrix was solved
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
   double seconds = 0;             ///< wall time (not part of the deterministic results)
+  // Adaptive trials only:
+  std::vector<TimeSample> samples;  ///< |x - xhat| and V at the output samples
+  std::vector<double> road;         ///< f on the snapshot grid
+  std::vector<Snapshot> snapshots;  ///< fhat on the snapshot grid at the chosen laps
 };
 
 struct RunOptions {

@@ -10,7 +10,9 @@
 #include <string_view>
 #include <vector>
 
+#include "rkhs/adaptive.hpp"
 #include "rkhs/domain.hpp"
+#include "rkhs/expectation.hpp"
 #include "rkhs/gram_solver.hpp"
 #include "rkhs/parameters.hpp"
 
@@ -26,6 +28,9 @@ class StudyError : public std::runtime_error {
 struct PluginChoice {
   std::string name;
   ParameterSet parameters;
+  /// `tier = "quick"` (or a list) in the entry: the tiers it belongs to; empty when unmarked.
+  /// Not part of the label or the trial key.
+  std::vector<std::string> tiers;
   /// "name p1=v1 p2=v2": the plugin part of a trial key.
   std::string label() const;
 };
@@ -67,6 +72,8 @@ struct StudyDefinition {
   Abscissa abscissa = Abscissa::n;
   SolverOptions solver;
   StudyLimits limits;
+  AdaptiveSettings adaptive;  ///< kind = "adaptive" only
+  std::vector<Expectation> expectations;  ///< [[expect]] tables (rkhs/expectation.hpp)
 
   /// The Cartesian product kernels x targets x centres [x plants x laws x integrators] x n,
   /// n varying fastest.

@@ -41,8 +41,5 @@ bool register_target() noexcept {
 
 }  // namespace rkhs
 
-#define RKHS_REGISTER_TARGET(Type)                                       \
-  namespace {                                                            \
-  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_target_registered_) = \
-      ::rkhs::register_target<Type>();                                   \
-  }
+#define RKHS_REGISTER_TARGET(Type) \
+  RKHS_REGISTRAR(rkhs_target_registered_, ::rkhs::register_target<Type>())

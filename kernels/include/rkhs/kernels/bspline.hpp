@@ -37,6 +37,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "rkhs/domain.hpp"
 #include "rkhs/kernel.hpp"
@@ -116,6 +117,16 @@ class MultiscaleBSpline {
   }
 
   KernelProperties properties() const noexcept;
+
+  /// Arc lengths in [0, L) where the kernel sections are not smooth: the knots of the finest
+  /// level, s = k L / (n0 2^J). An integrator restarts there (model section 8).
+  std::vector<double> kink_points() const {
+    const std::int64_t cells = std::int64_t{n0_} << levels_;
+    std::vector<double> out(static_cast<std::size_t>(cells));
+    for (std::int64_t k = 0; k < cells; ++k)
+      out[static_cast<std::size_t>(k)] = length_ * static_cast<double>(k) / static_cast<double>(cells);
+    return out;
+  }
 
   int degree() const noexcept { return degree_; }
   double r() const noexcept { return r_; }

@@ -1,0 +1,65 @@
+#pragma once
+// Loading plugin modules at run time (`--plugin PATH`, `plugins = [...]` in a study file,
+// RKHS_STUDY_PLUGIN_PATH). How a module is checked before it may register anything is explained
+// in plugin.hpp.
+//
+// A module is loaded at most once per process: loading the same file again (by any path that
+// resolves to it) returns the first load. A module that fails any check is unloaded and leaves
+// the registries as they were; its registration errors are reported by the PluginError, not by
+// registration_errors(). Modules that loaded stay loaded (the registries hold their factories;
+// only tests unload them, unload_plugin). Load plugins before the registries are frozen (freeze_registries()): a
+// registration into a frozen registry is refused, and so is the module.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace rkhs {
+
+/// A plugin module that could not be loaded. what() starts with the file's path and says why:
+///   "<path>: plugin file not found"
+///   "<path>: not an rkhs-study plugin (not a loadable shared library: <dlerror>)"
+///   "<path>: not an rkhs-study plugin (it exports no rkhs_plugin_abi_version; ...)"
+///   "<path>: built against plugin ABI 7 (rkhs-study 0.0.1), this rkhs-study 0.1.0 has plugin ABI
+///   1; ..."
+///   "<path>: duplicate plugin name 'x' (already loaded from <other path>)"
+///   "<path>: kernel plugin 'gaussian': duplicate name"                       (a registry error)
+///   "<path>: kernel plugin 'k': parameter 'c': default must be > 0"          (invalid metadata)
+///   "<path>: registered nothing (...)", "<path>: registered plugins while loading, ..."
+class PluginError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A module that loaded.
+struct LoadedPlugin {
+  std::filesystem::path file;      ///< canonical path
+  std::string name;                ///< RKHS_PLUGIN_MODULE(name)
+  std::string rkhs_study_version;  ///< the rkhs-study it was built against
+  int abi_version = 0;
+  std::vector<std::string> kernels, centres, targets;  ///< what it registered, sorted
+};
+
+/// Loads a plugin module (see the file comment). Throws PluginError.
+LoadedPlugin load_plugin(const std::filesystem::path& file);
+
+/// Every module loaded so far, in load order.
+std::vector<LoadedPlugin> loaded_plugins();
+
+/// Removes what the module loaded from `file` registered and unloads it, so that a test leaves
+/// the registries as it found them. Every object the module's factories created must have been
+/// destroyed. Returns false when no module was loaded from `file`. Not for use during a run.
+bool unload_plugin(const std::filesystem::path& file);
+
+/// The plugin files named by a RKHS_STUDY_PLUGIN_PATH value: entries separated by ':', each a
+/// plugin file or a directory (every *.so directly in it, sorted by name); empty entries are
+/// skipped. Throws PluginError for an entry that does not exist.
+std::vector<std::filesystem::path> plugin_path_files(std::string_view value);
+
+/// Loads every plugin named by the environment variable RKHS_STUDY_PLUGIN_PATH (nothing when it
+/// is unset). Throws PluginError, prefixed "RKHS_STUDY_PLUGIN_PATH: ".
+void load_plugins_from_environment();
+
+}  // namespace rkhs

@@ -1,0 +1,104 @@
+// The coupled plant / estimator / learning-law system: exact Jacobian, dF/dt, Lyapunov solver.
+#include <catch2/catch.hpp>
+
+#include <numbers>
+
+#include "rkhs/adaptive.hpp"
+#include "rkhs/lyapunov.hpp"
+#include "rkhs/plant.hpp"
+
+using namespace rkhs;
+
+namespace {
+
+std::unique_ptr<AnyKernel> kernel(const std::string& name, std::map<std::string, ParameterValue> p,
+                                  const Domain& domain) {
+  const auto* entry = kernel_registry().find(name);
+  REQUIRE(entry);
+  return entry->factory(ParameterSet::resolve(entry->info.parameters, p), domain);
+}
+
+std::unique_ptr<Plant> quarter_car() {
+  const auto* entry = plant_registry().find("quarter_car");
+  return entry->factory(ParameterSet::resolve(entry->info.parameters, {}));
+}
+
+}  // namespace
+
+TEST_CASE("Lyapunov solver: residual, symmetry, definiteness", "[adaptive]") {
+  const auto plant = quarter_car();
+  for (const std::string q : {"identity", "diag(1e-4, 1, 1e-4, 1)"}) {
+    const Eigen::MatrixXd Q = parse_matrix(q, 4);
+    const auto solution = solve_lyapunov(plant->A(), Q);
+    const Eigen::MatrixXd& P = solution.P;
+    INFO("Q = " << q);
+    CHECK((P - P.transpose()).norm() == 0.0);
+    CHECK(solution.min_eigenvalue > 0);
+    // Backward error at the level of round-off (A has entries of 1.6e5, so the residual
+    // relative to Q alone is about 1e-9 and says nothing).
+    const double backward = (plant->A().transpose() * P + P * plant->A() + Q).norm() /
+                            (2 * plant->A().norm() * P.norm() + Q.norm());
+    CHECK(backward < 1e-14);
+    CHECK(solution.relative_residual == Approx(backward));
+  }
+  // A 2 x 2 closed form: A = diag(-1, -2), Q = I gives P = diag(1/2, 1/4).
+  const auto diagonal = solve_lyapunov(parse_matrix("-1 0; 0 -2"), Eigen::MatrixXd::Identity(2, 2));
+  CHECK(diagonal.P(0, 0) == Approx(0.5).epsilon(1e-14));
+  CHECK(diagonal.P(1, 1) == Approx(0.25).epsilon(1e-14));
+  CHECK(std::abs(diagonal.P(0, 1)) < 1e-15);
+  CHECK_THROWS_WITH(solve_lyapunov(parse_matrix("1 0; 0 -2"), Eigen::MatrixXd::Identity(2, 2)),
+                    Catch::StartsWith("A is not Hurwitz: eigenvalue 1+0i"));
+  CHECK_THROWS_WITH(solve_lyapunov(parse_matrix("-1 0; 0 -2"), parse_matrix("1 2; 2 1")),
+                    "Q must be positive definite");
+}
+
+TEST_CASE("matrix syntax of study files", "[adaptive]") {
+  CHECK(parse_matrix("-1 0; 0 -2") == (Eigen::MatrixXd(2, 2) << -1, 0, 0, -2).finished());
+  CHECK(parse_matrix("1; 0") == (Eigen::MatrixXd(2, 1) << 1, 0).finished());
+  CHECK(parse_matrix("diag(1, 2)") == (Eigen::MatrixXd(2, 2) << 1, 0, 0, 2).finished());
+  CHECK(parse_matrix("identity", 3) == Eigen::MatrixXd::Identity(3, 3));
+  CHECK_THROWS_WITH(parse_matrix("1 2; 3"), "in matrix \"1 2; 3\": row 2 has 1 entries, row 1 has 2");
+  CHECK_THROWS_WITH(parse_matrix("1 x"), "in matrix \"1 x\": 'x' is not a number");
+}
+
+TEST_CASE("the Jacobian of the coupled system matches finite differences", "[adaptive]") {
+  const Domain track{2 * std::numbers::pi * 4, true};
+  const auto plant = quarter_car();
+  const auto P = solve_lyapunov(plant->A(), Eigen::MatrixXd::Identity(4, 4)).P;
+  for (const std::string name : {"gaussian", "bspline"}) {
+    const auto k = kernel(name, {}, track);
+    std::vector<double> centres;
+    for (int i = 0; i < 7; ++i) centres.push_back(track.length * i / 7.0);
+    const auto basis = k->basis(centres);
+    const Eigen::MatrixXd map = Eigen::MatrixXd::Identity(7, 7) * 3.0;
+    const std::function<double(double)> road = [&](double s) { return 2 * std::sin(2 * std::numbers::pi * s / track.length); };
+    AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, track, 0.7);
+    const auto m = system.dimension();
+    REQUIRE(m == 15);
+    Eigen::VectorXd z(m);
+    for (Eigen::Index i = 0; i < m; ++i) z(i) = std::sin(1.0 + i);
+    const double t = 3.3;  // s = 2.31: not a knot of the B-spline kernel
+    system.set_segment(3.0, 3.6);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
+    Eigen::VectorXd dfdt(m), f0(m), fp(m), fm(m);
+    system.jacobian(z.data(), J.data(), t, dfdt.data());
+    system.rhs(z.data(), f0.data(), t);
+    // The system is linear in z: a difference quotient is exact up to round-off.
+    for (Eigen::Index j = 0; j < m; ++j) {
+      Eigen::VectorXd zp = z, zm = z;
+      const double h = 1e-3;
+      zp(j) += h;
+      zm(j) -= h;
+      system.rhs(zp.data(), fp.data(), t);
+      system.rhs(zm.data(), fm.data(), t);
+      const Eigen::VectorXd column = (fp - fm) / (2 * h);
+      INFO(name << " column " << j);
+      CHECK((column - J.col(j)).norm() <= 1e-8 * (1 + J.col(j).norm()));
+    }
+    const double h = 1e-5;
+    system.rhs(z.data(), fp.data(), t + h);
+    system.rhs(z.data(), fm.data(), t - h);
+    CHECK(((fp - fm) / (2 * h) - dfdt).norm() <= 1e-5 * (1 + dfdt.norm()));
+    CHECK(dfdt.norm() > 0);
+  }
+}
