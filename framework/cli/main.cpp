@@ -1,9 +1,12 @@
-// The rkhs-study command: run study definitions, list plugins, validate study files.
-// Exit codes: 0 success; 1 the study ran but some trials failed (their reasons are recorded);
-// 2 bad input (command line, study file) or a broken plugin registration.
+// The rkhs-study command: run study definitions, list plugins, validate study files, check a
+// study's expectations.
+// Exit codes: 0 success; 1 the study ran but some trials failed (their reasons are recorded),
+// or (check) an expectation failed; 2 bad input (command line, study file) or a broken plugin
+// registration; 3 (check) no expectation failed but some are inconclusive.
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -16,6 +19,7 @@
 #include "rkhs/approximation.hpp"
 #include "rkhs/build_info.hpp"
 #include "rkhs/centres.hpp"
+#include "rkhs/data_root.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/output.hpp"
 #include "rkhs/plugin_loader.hpp"
@@ -25,6 +29,9 @@
 #include "rkhs/study.hpp"
 #include "rkhs/study_rates.hpp"
 #include "rkhs/target.hpp"
+#include "rkhs/junit.hpp"
+#include "rkhs/tiers.hpp"
+#include "rkhs/verification.hpp"
 
 namespace {
 
@@ -174,6 +181,52 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   return failed ? exit_failed_trials : exit_ok;
 }
 
+// `check`: runs the study (or one tier of it) and judges its [[expect]] tables
+// (docs/verification.md). The exit code is the verdicts': 0 all pass, 1 a failure, 3 only
+// inconclusive ones besides passes (1 with --strict).
+struct CheckArguments {
+  std::string study_file, tier, junit_file, out_dir;
+  bool strict = false;
+};
+
+int command_check(const CheckArguments& arguments, int threads, bool quiet) {
+  auto study = rkhs::load_study(arguments.study_file);
+  if (!arguments.tier.empty()) study = rkhs::restrict_to_tier(std::move(study), arguments.tier);
+  const auto trials = study.trials();
+  const int thread_count = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const auto tier_text = arguments.tier.empty() ? std::string() : " (tier " + arguments.tier + ")";
+  if (!quiet)
+    std::cerr << fmt::format("rkhs-study check: {}{}: {} trials, {} threads\n", study.name,
+                             tier_text, trials.size(), thread_count);
+  const std::string started = utc_now();
+  const auto start = std::chrono::steady_clock::now();
+  rkhs::RunOptions options;
+  options.threads = thread_count;
+  rkhs::freeze_registries();
+  const auto results = rkhs::run_trials(study, trials, options);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto rates = rkhs::compute_rates(study, trials, results);
+  std::size_t failed = 0;
+  for (const auto& result : results) failed += result.ok ? 0 : 1;
+  if (!arguments.out_dir.empty()) {
+    const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started};
+    rkhs::write_outputs(record, arguments.out_dir);
+  }
+  const auto outcomes = rkhs::verify_expectations(study, trials, results, rates);
+  std::cout << fmt::format("{}{}: {} trials, {} ok, {} failed in {:.2f} s\n", study.name, tier_text,
+                           trials.size(), trials.size() - failed, failed, seconds);
+  if (failed)
+    std::cout << fmt::format("note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n",
+                             failed, failed > 1 ? "s" : "");
+  std::cout << rkhs::format_verification(outcomes, arguments.strict);
+  if (!arguments.junit_file.empty())
+    rkhs::write_file_atomically(arguments.junit_file,
+                                rkhs::junit_xml({study, outcomes, arguments.strict, seconds,
+                                                 arguments.tier, started}));
+  return rkhs::check_exit_code(rkhs::count_verdicts(outcomes), arguments.strict);
+}
+
 int command_validate(const std::string& study_file) {
   const auto study = rkhs::load_study(study_file);
   const auto trials = study.trials();
@@ -181,6 +234,10 @@ int command_validate(const std::string& study_file) {
                            "of n = {} trials\n",
                            study_file, study.kernels.size(), study.targets.size(),
                            study.centres.size(), study.n_values.size(), trials.size());
+  if (const auto tiers = rkhs::study_tiers(study); !study.expectations.empty() || !tiers.empty())
+    std::cout << fmt::format("  {} expectation{}; tiers: {}\n", study.expectations.size(),
+                             study.expectations.size() == 1 ? "" : "s",
+                             tiers.empty() ? std::string("none") : fmt::format("{}", fmt::join(tiers, ", ")));
   return exit_ok;
 }
 
@@ -208,12 +265,35 @@ int main(int argc, char** argv) {
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
 
+  CheckArguments check_arguments;
+  auto* check = app.add_subcommand(
+      "check", "run a study and judge its [[expect]] tables: exit 0 all pass, 1 a failure, "
+               "3 inconclusive, 2 bad input");
+  check->add_option("study", check_arguments.study_file, "study definition (TOML)")
+      ->required()->check(CLI::ExistingFile);
+  check->add_option("--tier", check_arguments.tier,
+                    "run only the entries and expectations of this tier (e.g. quick)");
+  check->add_flag("--strict", check_arguments.strict, "count inconclusive verdicts as failures");
+  check->add_option("--junit", check_arguments.junit_file,
+                    "write JUnit XML: one test case per expectation and group");
+  check->add_option("--out", check_arguments.out_dir,
+                    "also write trials.csv, rates.csv and summary.json here (default: none)");
+  check->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  check->add_flag("--quiet,-q", quiet, "no progress line");
+
   // Plugin modules: --plugin (repeatable) here, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]`.
   std::vector<std::string> plugin_files;
   std::string plugin_to_verify;
-  for (auto* command : {run, list, validate})
+  for (auto* command : {run, list, validate, check})
     command->add_option("--plugin", plugin_files, "load a plugin module (.so); repeatable")
         ->allow_extra_args(false);
+  // The data root that data files in study files are relative to (rkhs/data_root.hpp).
+  std::string data_dir;
+  for (auto* command : {run, validate, check})
+    command->add_option("--data-dir", data_dir,
+                        "data files named in the study are relative to DIR (default: "
+                        "RKHS_STUDY_DATA, else studies/data/)")
+        ->check(CLI::ExistingDirectory);
   auto* verify = app.add_subcommand(
       "verify-plugin", "load a plugin module and check its kernels: the kernel contract, and the "
                        "declared smoothness against the measured power-function rate");
@@ -238,10 +318,12 @@ int main(int argc, char** argv) {
   try {
     rkhs::load_plugins_from_environment();
     for (const auto& file : plugin_files) rkhs::load_plugin(file);
+    if (!data_dir.empty()) rkhs::set_data_root(data_dir);
     if (*verify) return command_verify_plugin(plugin_to_verify);
     if (*run) return command_run(study_file, out_dir, threads, quiet);
     if (*list) return command_list(kind);
     if (*validate) return command_validate(study_file);
+    if (*check) return command_check(check_arguments, threads, quiet);
   } catch (const rkhs::StudyError& e) {
     std::cerr << e.what() << "\n";
     return exit_bad_input;

@@ -136,7 +136,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed);
   const double final_time = settings.final_time_or_laps(domain.length);
   if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
-  const auto points = breakpoints(settings, domain, final_time, kernel.kink_points(),
+  auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)
+  if (!settings.projected_road)
+    for (double kink : target.kink_points()) kinks.push_back(kink);
+  const auto points = breakpoints(settings, domain, final_time, kinks,
                                   integrator.restarts_at_kinks());
   std::vector<double> times(points.size());
   std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });

@@ -119,9 +119,12 @@ class ExpectationReader {
       const std::string name(key.str());
       if (std::find(allowed.begin(), allowed.end(), name) == allowed.end())
         fail(study_.source, key.source(), "expect." + name,
-             "unknown key: an expectation has metric, name, tier, theory, rate, tolerance, model, "
-             "bound, and selects groups by the axis columns of trials.csv " +
-                 known_list(name, allowed));
+             fmt::format("unknown key (an expectation takes {}, and this study's axis columns "
+                         "as group selectors: {}{})",
+                         join(reserved_), join(columns_),
+                         closest_name(name, allowed).empty()
+                             ? std::string()
+                             : fmt::format("; did you mean '{}'?", closest_name(name, allowed))));
     }
   }
 

@@ -91,6 +91,16 @@ IntegrationStats drive_adaptive(Controlled& stepper, System system, AdaptiveSyst
   return stats;
 }
 
+/// The coefficients of odeint's rosenbrock4 (Hairer and Wanner's RODAS4) with the sign of
+/// d4 = gamma_4 corrected: Boost 1.81 has d4 = +0.0362, RODAS4 has -0.0362 (Hairer's rodas.f,
+/// Sandu's KPP). The term only matters when F depends on t, as it does here through s(t), and
+/// the wrong sign cuts the method to first order on forced problems (an exactly representable
+/// slow solution of y' = -400 y + g(t) gets a local error of 1.5e-7 at h = 1e-3 instead of
+/// round-off; tests/adaptive keeps this measured).
+struct CorrectedRosenbrockCoefficients : odeint::default_rosenbrock_coefficients<double> {
+  const double d4 = -0.3620000000000023e-01;
+};
+
 class Rosenbrock4 final : public Integrator {
  public:
   static PluginInfo info() {
@@ -106,7 +116,8 @@ class Rosenbrock4 final : public Integrator {
   IntegrationStats integrate(AdaptiveSystem& system, Eigen::VectorXd& z,
                              std::span<const double> breakpoints,
                              const std::function<void(std::size_t, const double*)>& observe) const override {
-    auto stepper = odeint::make_controlled(atol_, rtol_, odeint::rosenbrock4<double>());
+    using Stepper = odeint::rosenbrock4<double, CorrectedRosenbrockCoefficients>;
+    odeint::rosenbrock4_controller<Stepper> stepper(atol_, rtol_);
     return drive_adaptive(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), system, z,
                           breakpoints, observe, max_steps_, initial_step_, false);
   }
@@ -119,11 +130,8 @@ class Rosenbrock4 final : public Integrator {
 };
 
 /// RODAS4 (Hairer and Wanner, Solving ODEs II, Sec. IV.7): a 6-stage, order 4(3), L-stable
-/// and stiffly accurate Rosenbrock method. Stiff accuracy matters here: the plant is a stiff
-/// linear system driven by a slowly varying road, and methods that are not stiffly accurate
-/// (odeint's rosenbrock4 among them) suffer order reduction on such forced problems
-/// (Prothero-Robinson), which holds their steps near 1 / |lambda_max| whatever the tolerance.
-/// Stage i solves (I / (h gamma) - J) k_i = F(t + alpha_i h, z + sum_j a_ij k_j)
+/// and stiffly accurate Rosenbrock method, the method of odeint's rosenbrock4 (with the
+/// corrected d4), here with dense Eigen storage and a blocked LU factorisation. Stage i solves (I / (h gamma) - J) k_i = F(t + alpha_i h, z + sum_j a_ij k_j)
 ///   + sum_j c_ij k_j / h + h gamma_i dF/dt; the step is z + sum_j m_j k_j, its error k_6.
 class Rodas4Stepper {
  public:
@@ -208,8 +216,8 @@ class Rodas4 final : public Integrator {
  public:
   static PluginInfo info() {
     return {"rodas4",
-            "RODAS4: 4(3) L-stable, stiffly accurate Rosenbrock method with the exact Jacobian "
-            "(the default for these stiff, slowly forced systems)",
+            "RODAS4, the method of rosenbrock4, with Eigen's blocked LU (about 3x faster at "
+            "n = 100)",
             adaptive_parameters(),
             {{"implicit", "yes, one LU factorisation per step"}}};
   }

@@ -270,12 +270,15 @@ std::string summary_json(const RunRecord& run) {
     for (const auto& flag : result.flags) flags.push_back(json_string(flag));
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
-        "\"n\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, \"flags\": [{}], "
-        "\"metrics\": {{{}}}}}{}\n",
+        "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
+        "\"flags\": [{}], \"seconds\": {}, \"metrics\": {{{}}}}}{}\n",
         trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
-        json_plugin(trial.centres), trial.n, json_string(result.ok ? "ok" : "failed"),
+        json_plugin(trial.centres), trial.n,
+        result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
+        json_string(result.ok ? "ok" : "failed"),
         json_string(result.reason), json_string(result.solve_method), join(flags, ", "),
-        join(metrics, ", "), trial.index + 1 < run.trials.size() ? "," : "");
+        json_number(std::round(result.seconds * 1e4) / 1e4), join(metrics, ", "),
+        trial.index + 1 < run.trials.size() ? "," : "");
   }
   out += "  ],\n  \"rates\": [\n";
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -76,7 +76,7 @@ const BuiltinNames& builtin_plugin_names() {
   static const BuiltinNames names{
       .kernels = {"bspline", "gaussian", "matern", "wendland"},
       .centres = {"random", "uniform"},
-      .targets = {"sine"},
+      .targets = {"csv", "iso8608", "sine"},
   };
   return names;
 }

@@ -52,6 +52,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
     const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study.domain);
     const auto target =
         target_registry().find(trial.target.name)->factory(trial.target.parameters, study.domain);
+    result.data_provenance = target->data_provenance();
     const auto placement = centre_registry().find(trial.centres.name)->factory(trial.centres.parameters);
     const auto centres = placement->place(trial.n, study.domain, trial.seed);
     if (study.kind == "adaptive") {

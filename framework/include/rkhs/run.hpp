@@ -19,6 +19,7 @@ struct TrialResult {
   std::string solve_method;       ///< how the Gram matrix was solved
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
   double seconds = 0;             ///< wall time (not part of the deterministic results)
+  std::string data_provenance;    ///< the target's external data ("sha256:..."), empty if none
   // Adaptive trials only:
   std::vector<TimeSample> samples;  ///< |x - xhat| and V at the output samples
   std::vector<double> road;         ///< f on the snapshot grid

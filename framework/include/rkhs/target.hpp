@@ -23,6 +23,10 @@ class TargetFunction {
   }
   /// Provenance of external data (e.g. "sha256:..." of a profile file); empty for closed forms.
   virtual std::string data_provenance() const { return {}; }
+  /// Arc lengths in [0, L) where f is continuous but not smooth (e.g. the samples of a
+  /// piecewise-linear profile, or the seam of a closed profile). An adaptive integrator that
+  /// restarts at kinks (Integrator::restarts_at_kinks) also stops there. Default: none.
+  virtual std::vector<double> kink_points() const { return {}; }
 };
 
 using TargetRegistry = Registry<TargetFunction, const Domain&>;
