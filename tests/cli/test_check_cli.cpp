@@ -174,6 +174,15 @@ rate = 5.0
   CHECK_THAT(outcome.output, Catch::Contains("2 passed, 0 failed, 0 inconclusive"));
   CHECK(fs::exists(dir / "out" / "rates.csv"));
   CHECK_FALSE(fs::exists(dir / "out" / "journal.csv"));
+  // summary.json reports each fit's model, asymptotic window and the other model's fit.
+  const int json_ok = std::system(
+      ("/usr/bin/python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); "
+       "r = [x for x in d[\"rates\"] if x[\"metric\"] == \"power_function_sup\"][0]; "
+       "assert r[\"model\"] == \"power_law\" and r[\"window\"] == [10, 20, 30, 40, 50, 60], r; "
+       "assert r[\"preferred\"] == \"power_law\" and r[\"decisive\"], r; "
+       "assert r[\"alternative\"][\"model\"] == \"exponential\" and r[\"head\"] == [], r' " +
+       (dir / "out" / "summary.json").string()).c_str());
+  CHECK(json_ok == 0);
 }
 
 TEST_CASE("check --junit writes one test case per expectation and group", "[cli][check]") {

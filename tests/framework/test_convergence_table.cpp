@@ -121,3 +121,29 @@ TEST_CASE("convergence table footers when the fit is exponential, exact or impos
           "fitted rate: not available (no points)\n");
   }
 }
+
+TEST_CASE("the pairwise column follows the footer's model; callers explain a missing fit",
+          "[rates]") {
+  Series s;
+  for (double n : {4.0, 8.0, 12.0}) s.add(n, std::exp(-0.3 * n));
+  const auto fit = rkhs::fit_exponential(s.x, s.y);
+  CHECK(rkhs::format_convergence_table("l2_error", "gaussian", "n", s.rows, fit, "flagged",
+                                       rkhs::RateModel::exponential) ==
+        "l2_error, group gaussian\n"
+        " n   l2_error    rate\n"
+        " 4  3.012e-01       -\n"
+        " 8  9.072e-02  -0.300\n"
+        "12  2.732e-02  -0.300\n"
+        "fitted rate (exponential in n): -0.300 ± 0.000 (95% CI [-0.300, -0.300], R² = 1.000, "
+        "3 points)\n");
+
+  // Every value flagged: the rows have positive values, but none was usable for the fit.
+  Series flagged;
+  flagged.add(10, 4.2e-8, true);
+  flagged.add(20, 6.7e-8, true);
+  const auto table = rkhs::format_convergence_table(
+      "power_function_sup", "g", "n", flagged.rows, std::nullopt, "at the floor",
+      rkhs::RateModel::power_law, "0 of 2 points usable after excluding 2 failed or flagged");
+  CHECK(table.find("fitted rate: not available (0 of 2 points usable after excluding 2 failed or "
+                   "flagged)\n") != std::string::npos);
+}

@@ -134,7 +134,7 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   SECTION("unknown top-level key") {
     const auto e = error_of(std::string(minimal) + "[kernels]\nx = 1\n");
     CHECK(e == "s.toml:10:2: kernels: unknown key (known: study, domain, grid, kernel, target, "
-               "centres, solver, limits, adaptive, plant, law, integrator, plugins; did you mean "
+               "centres, solver, limits, adaptive, plant, law, integrator, plugins, expect; did you mean "
                "'kernel'?)");
   }
   SECTION("invalid TOML") {
