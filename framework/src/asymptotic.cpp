@@ -265,9 +265,11 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
   if (power_advantage > 0.0 && !(exponential_advantage > 0.0 && exponential_per_point > power_per_point)) {
     out.preferred = RateModel::power_law;
     out.evidence = power_advantage;
+    out.evidence_points = out.power_law.window.points.size();
   } else if (exponential_advantage > 0.0) {
     out.preferred = RateModel::exponential;
     out.evidence = exponential_advantage;
+    out.evidence_points = out.exponential.window.points.size();
   }
   out.reported = out.preferred == RateModel::exponential && out.decisive() ? RateModel::exponential
                                                                           : RateModel::power_law;
@@ -275,9 +277,12 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     const auto& window = out.analysis(*out.preferred).window.points;
     const auto other = *out.preferred == RateModel::power_law ? RateModel::exponential
                                                               : RateModel::power_law;
+    const auto why_not = out.evidence < decisive_evidence ? ", not decisive (ΔAIC < 2)"
+                         : out.evidence_points < 4    ? ", not decisive (a decision needs 4 points)"
+                                                      : "";
     out.note = fmt::format("{} preferred (ΔAIC = {:.1f} over the {} on n = {}){}",
                            model_name(*out.preferred), out.evidence, model_name(other),
-                           label_range(n, window), out.decisive() ? "" : ", not decisive (ΔAIC < 2)");
+                           label_range(n, window), out.decisive() ? "" : why_not);
   } else if (std::isnan(power_advantage) || std::isnan(exponential_advantage)) {
     out.note = "models not compared (fewer than 3 points in a window)";
   } else {

@@ -81,9 +81,7 @@ Judgement judge_interval(const std::optional<RateFit>& fit, const RateInterval& 
 // A model expectation (also the first half of an analytic theory).
 Judgement judge_model(const SeriesAnalysis& analysis, RateModel required) {
   if (!analysis.preferred) return {Verdict::inconclusive, analysis.note};
-  if (!analysis.decisive())
-    return {Verdict::inconclusive,
-            fmt::format("{} (a decision needs ΔAIC >= 2)", analysis.note)};
+  if (!analysis.decisive()) return {Verdict::inconclusive, analysis.note};
   if (*analysis.preferred == required)
     return {Verdict::pass, fmt::format("the {} fits better (ΔAIC = {:.1f})", model_text(required),
                                        analysis.evidence)};

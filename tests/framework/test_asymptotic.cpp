@@ -115,6 +115,18 @@ TEST_CASE("an exponential series selects the exponential model", "[asymptotic]")
   CHECK_THAT(a.note, Catch::StartsWith("exponential model preferred (ΔAIC = "));
 }
 
+TEST_CASE("three points can prefer a model but never decide", "[asymptotic]") {
+  const auto s = make_series(arithmetic(10, 30, 10), [](double n) { return std::exp(-1.2 * n); });
+  const auto a = s.analyse();
+  REQUIRE(a.preferred);
+  CHECK(*a.preferred == rkhs::RateModel::exponential);
+  CHECK(a.evidence > 2.0);
+  CHECK(a.evidence_points == 3);
+  CHECK_FALSE(a.decisive());
+  CHECK(a.reported == rkhs::RateModel::power_law);
+  CHECK_THAT(a.note, Catch::EndsWith(", not decisive (a decision needs 4 points)"));
+}
+
 TEST_CASE("an exponential series with an unflagged floor: floor detected, model kept", "[asymptotic]") {
   const auto s = make_series(arithmetic(4, 40, 4),
                              [](double n) { return 2.5 * std::exp(-0.3 * n) + 1e-4; });

@@ -21,7 +21,8 @@
 // window better than the other model fits that same window, measured by
 // ΔAIC = m ln(SSE_other / SSE_model) (both models have two parameters, so this is the AIC
 // difference); when both models win on their own windows the larger per-point advantage wins.
-// The evidence is decisive when ΔAIC >= 2.
+// The evidence is decisive when ΔAIC >= 2 on at least 4 points (with 3, each model's SSE has
+// one degree of freedom and their ratio is mostly chance).
 
 #include <optional>
 #include <span>
@@ -68,6 +69,8 @@ struct SeriesAnalysis {
   /// ΔAIC of the preferred model over the other on the preferred model's window (>= 0);
   /// NaN when `preferred` is empty.
   double evidence = 0.0;
+  /// Points of the preferred model's window, on which `evidence` was measured (0 when none).
+  std::size_t evidence_points = 0;
   /// The model whose fit is reported: exponential when it is preferred decisively, otherwise
   /// the power law (the convention of rates against ln n or ln h).
   RateModel reported = RateModel::power_law;
@@ -75,7 +78,9 @@ struct SeriesAnalysis {
   /// law on n = 10..60)".
   std::string note;
 
-  bool decisive() const { return preferred.has_value() && evidence >= 2.0; }
+  bool decisive() const {
+    return preferred.has_value() && evidence >= 2.0 && evidence_points >= 4;
+  }
   const ModelAnalysis& analysis(RateModel model) const {
     return model == RateModel::power_law ? power_law : exponential;
   }

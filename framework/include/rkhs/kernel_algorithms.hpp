@@ -133,8 +133,19 @@ class DirectBasis final : public KernelBasis {
   void evaluate(double s, double* phi) const override {
     for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
   }
-  void set_map(const Eigen::MatrixXd& map) override { map_ = map; }
+  void set_map(const Eigen::MatrixXd& map) override {
+    // A multiple of the identity (the gradient law) is applied as a scalar: O(n), not O(n^2).
+    const bool scalar = map.rows() == map.cols() && map.rows() > 0 &&
+                        map.isApprox(map(0, 0) * Eigen::MatrixXd::Identity(map.rows(), map.cols()), 0.0);
+    scale_ = scalar ? map(0, 0) : 0.0;
+    map_ = scalar ? Eigen::MatrixXd() : map;
+  }
   void evaluate_mapped(double s, double* out) const override {
+    if (map_.size() == 0) {
+      evaluate(s, out);
+      for (std::size_t i = 0; i < centres_.size(); ++i) out[i] *= scale_;
+      return;
+    }
     evaluate(s, phi_.data());
     Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
         map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), static_cast<Eigen::Index>(phi_.size()));
@@ -144,7 +155,8 @@ class DirectBasis final : public KernelBasis {
   const K& kernel_;
   std::vector<double> centres_;
   mutable std::vector<double> phi_;
-  Eigen::MatrixXd map_;
+  Eigen::MatrixXd map_;  // empty when the map is scale_ times the identity
+  double scale_ = 0.0;
 };
 
 /// KernelBasis through a sparse feature map: phi(s) = Phi_c f(s), with Phi_c (n x F) the
