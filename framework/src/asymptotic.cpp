@@ -131,8 +131,12 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
   const bool monotone = increasing || decreasing;
 
   std::size_t lo = 0, hi = m == 0 ? 0 : m - 1;
+  // What the notes say: the excluded rates, the smallest threshold they exceeded and the bulk
+  // rate they were measured against (of the pass that excluded them).
   std::vector<double> head_rates, floor_rates;
   double head_threshold = std::numeric_limits<double>::infinity(), floor_threshold = head_threshold;
+  double head_bulk = not_a_number, floor_bulk = not_a_number;
+  bool floor_collapsed = false;
   auto bulk_of = [&](std::size_t a, std::size_t b) {  // R and s on points a..b
     const std::vector<double> window_rates(rates.begin() + static_cast<std::ptrdiff_t>(a),
                                            rates.begin() + static_cast<std::ptrdiff_t>(b));
@@ -152,13 +156,29 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
            sign * (bulk - rates[new_hi - 1]) > threshold(new_hi - 1)) {
       floor_rates.insert(floor_rates.begin(), rates[new_hi - 1]);
       floor_threshold = std::min(floor_threshold, threshold(new_hi - 1));
+      floor_bulk = bulk;
       --new_hi;
+    }
+    // A floor can also hide behind a large noise estimate (a sharp corner between fast decay
+    // and a flat tail inflates the second differences): two or more trailing rates that have
+    // collapsed below 10 % of the bulk rate are a floor whatever the noise.
+    if (new_hi == hi && sign != 0.0) {
+      std::size_t run = 0;
+      while (run < hi - lo && std::fabs(rates[hi - 1 - run]) <= relative_threshold * std::fabs(bulk)) ++run;
+      run = std::min(run, hi - lo + 1 - minimum_window);
+      if (run >= 2) {
+        for (std::size_t k = 0; k < run; ++k) floor_rates.insert(floor_rates.begin(), rates[hi - 1 - k]);
+        floor_bulk = bulk;
+        floor_collapsed = true;
+        new_hi = hi - run;
+      }
     }
     std::size_t new_lo = lo;
     while (new_hi - new_lo + 1 > minimum_window &&
            std::fabs(rates[new_lo] - bulk) > threshold(new_lo)) {
       head_rates.push_back(rates[new_lo]);
       head_threshold = std::min(head_threshold, threshold(new_lo));
+      head_bulk = bulk;
       ++new_lo;
     }
     if (new_lo == lo && new_hi == hi) break;
@@ -180,13 +200,14 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
     notes.push_back(fmt::format(
         "head n = {} excluded (pairwise rate{} {} differ{} from the bulk rate {} by more than {})",
         label_range(labels, window.head), head_rates.size() > 1 ? "s" : "", rate_list(head_rates),
-        head_rates.size() > 1 ? "" : "s", rate_text(window.bulk_rate), rate_text(head_threshold)));
+        head_rates.size() > 1 ? "" : "s", rate_text(head_bulk), rate_text(head_threshold)));
   if (!window.floor.empty())
     notes.push_back(fmt::format(
-        "floor from n = {} excluded (pairwise rate{} {} stalled against the bulk rate {} by more "
-        "than {})",
+        "floor from n = {} excluded (pairwise rate{} {} stalled against the bulk rate {}{})",
         format_real(labels[window.floor.front()]), floor_rates.size() > 1 ? "s" : "",
-        rate_list(floor_rates), rate_text(window.bulk_rate), rate_text(floor_threshold)));
+        rate_list(floor_rates), rate_text(floor_bulk),
+        floor_collapsed ? fmt::format(": below {} % of it", 100 * relative_threshold)
+                        : fmt::format(" by more than {}", rate_text(floor_threshold))));
   for (std::size_t i = 0; i < notes.size(); ++i) window.note += (i ? "; " : "") + notes[i];
   return window;
 }

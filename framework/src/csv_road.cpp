@@ -107,11 +107,13 @@ std::vector<double> natural_spline(const std::vector<double>& u, const std::vect
 class CsvRoad final : public TargetFunction {
  public:
   static PluginInfo info() {
+    auto file = text_parameter("file", "",
+                               "CSV file, relative to the data root (--data-dir, RKHS_STUDY_DATA, "
+                               "default studies/data/) or absolute");
+    file.default_doc = "none: required";
     return {"csv",
             "measured road profile (arc length, elevation) from a CSV file below the data root",
-            {text_parameter("file", "",
-                            "CSV file, relative to the data root (--data-dir, RKHS_STUDY_DATA, "
-                            "default studies/data/) or absolute"),
+            {file,
              text_parameter("arc_length_column", "1",
                             "arc-length column: a header name or a number counted from 1"),
              text_parameter("elevation_column", "2",
@@ -130,9 +132,9 @@ class CsvRoad final : public TargetFunction {
              choice_parameter("interpolation", "linear",
                               "between samples: linear, or cubic (natural C2 spline)",
                               {"linear", "cubic"}),
-             boolean_parameter("restart_at_samples", false,
-                               "report every sample as a kink so an adaptive integrator restarts "
-                               "there (linear interpolation; costly for dense data)")},
+             boolean_parameter("restart_at_samples", true,
+                               "report every sample as a kink, so that an adaptive integrator "
+                               "restarts there (linear interpolation only)")},
             {{"provenance", "sha256 of the file, recorded with every trial"}}};
   }
 

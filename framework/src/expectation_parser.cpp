@@ -259,8 +259,13 @@ class ExpectationReader {
         fail(src, key.source(), fmt::format("expect.bound.{}", key.str()),
              "unknown key (known: by, times, constant)");
     const auto* by = table->get("by");
-    if (!by) fail(src, node.source(), "expect.bound.by", "missing: the metric that bounds expect.metric");
-    e.bound.by = metric_at(*by, "expect.bound.by");
+    if (!by && table->contains("times"))
+      fail(src, node.source(), "expect.bound.by", "missing: 'times' multiplies 'by'");
+    if (!by && !table->contains("constant"))
+      fail(src, node.source(), "expect.bound",
+           "give by = \"metric\" (metric <= constant * by [* times]) or constant = ... "
+           "(metric <= constant)");
+    if (by) e.bound.by = metric_at(*by, "expect.bound.by");
     if (const auto* times = table->get("times")) e.bound.times = metric_at(*times, "expect.bound.times");
     if (const auto* constant = table->get("constant")) {
       e.bound.constant = number_at(*constant, "expect.bound.constant");

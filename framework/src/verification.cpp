@@ -321,23 +321,28 @@ class Verifier {
 
   void judge_bound(const Expectation& e, const MetricSeries& series, ExpectationOutcome& o) const {
     const auto metric_index = study_.metric_index(e.metric);
-    const auto by_index = study_.metric_index(e.bound.by);
-    const bool has_times = !e.bound.times.empty();
+    const bool has_by = !e.bound.by.empty(), has_times = !e.bound.times.empty();
+    const auto by_index = has_by ? study_.metric_index(e.bound.by) : 0;
     const auto times_index = has_times ? study_.metric_index(e.bound.times) : 0;
     auto flagged = [](const TrialResult& r, const std::string& metric) {
       const auto flag = excluding_flag(metric);
-      return !flag.empty() && std::find(r.flags.begin(), r.flags.end(), flag) != r.flags.end();
+      return !metric.empty() && !flag.empty() &&
+             std::find(r.flags.begin(), r.flags.end(), flag) != r.flags.end();
     };
-    o.expected = fmt::format("{} <= {}{}{} at every n", e.metric,
-                             e.bound.constant == 1.0 ? "" : format_real(e.bound.constant) + " * ",
-                             e.bound.by, has_times ? " * " + e.bound.times : std::string());
+    std::string rhs = has_by && e.bound.constant == 1.0 ? std::string() : format_real(e.bound.constant);
+    for (const auto* factor : {&e.bound.by, &e.bound.times}) {
+      if (factor->empty()) continue;
+      if (!rhs.empty()) rhs += " * ";
+      rhs += *factor;
+    }
+    o.expected = fmt::format("{} <= {} at every n", e.metric, rhs);
     double low = std::numeric_limits<double>::infinity(), high = -low;
     std::size_t used = 0, at_max = 0, skipped = 0;
     std::size_t failed_trials = 0, flagged_values = 0, unusable_values = 0;
     for (auto t : series.trials) {
       const auto& r = results_[t];
       const double value = r.metrics[metric_index];
-      const double bound = e.bound.constant * r.metrics[by_index] *
+      const double bound = e.bound.constant * (has_by ? r.metrics[by_index] : 1.0) *
                            (has_times ? r.metrics[times_index] : 1.0);
       const bool any_flag = flagged(r, e.metric) || flagged(r, e.bound.by) ||
                             (has_times && flagged(r, e.bound.times));

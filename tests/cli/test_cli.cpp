@@ -7,6 +7,8 @@
 #include <sstream>
 #include <sys/wait.h>
 
+#include "../shared_data_support.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -123,9 +125,11 @@ TEST_CASE("list shows plugins with parameters and docs; --help works", "[cli]") 
 }
 
 TEST_CASE("the project's studies are valid", "[cli]") {
+  // Measured roads (studies/belgian_block*.toml) read ../shared/data through the data root.
+  const auto data = rkhs::testing::require_shared_data();
   for (const auto& entry : fs::directory_iterator(fs::path(RKHS_STUDY_SOURCE_DIR) / "studies")) {
     if (entry.path().extension() != ".toml") continue;
-    const auto outcome = run("validate " + entry.path().string());
+    const auto outcome = run("validate --data-dir " + data.string() + " " + entry.path().string());
     INFO(outcome.output);
     CHECK(outcome.exit_code == 0);
   }

@@ -141,6 +141,26 @@ TEST_CASE("an exponential series with an unflagged floor: floor detected, model 
   CHECK_THAT(w.note, Catch::StartsWith("floor from n = "));
 }
 
+TEST_CASE("the Gaussian's power function without flags: its floor found from the pairwise rates",
+          "[asymptotic]") {
+  // gram_and_power's values: exp(-c n^2) decay, then round-off from n = 70 (which study_rates
+  // excludes by its flag first; here the pairwise rates alone must find the floor).
+  Series s;
+  s.n = arithmetic(10, 100, 10);
+  s.y = {7.771e-01, 1.947e-01, 2.340e-02, 1.337e-03, 3.595e-05,
+         4.522e-07, 6.829e-08, 6.495e-08, 6.664e-08, 6.580e-08};
+  s.usable.assign(10, true);
+  const auto a = s.analyse();
+  CHECK(a.exponential.window.floor == range(7, 10));  // n = 80, 90, 100
+  CHECK(a.power_law.window.floor == range(7, 10));
+  CHECK_THAT(a.exponential.window.note,
+             Catch::StartsWith("floor from n = 80 excluded (pairwise rates -0.00501, 0.00257, "
+                               "-0.00127 stalled against the bulk rate -0.189: below 10 % of it)"));
+  REQUIRE(a.preferred);
+  CHECK(*a.preferred == rkhs::RateModel::exponential);
+  CHECK(a.reported == rkhs::RateModel::exponential);
+}
+
 TEST_CASE("a NaN trial and unusable points are left out; the rest is fitted", "[asymptotic]") {
   auto s = make_series(arithmetic(10, 100, 10), [](double n) { return std::pow(n, -1.5); });
   s.y[3] = quiet_nan;      // a failed trial

@@ -194,6 +194,8 @@ TEST_CASE("[[expect]] mistakes are errors with file:line:column", "[verification
              Catch::Contains("expect.bound.by: metric 'l2_error' is not measured"));
   CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = { times = \"power_function_sup\" }\n")),
              Catch::Contains("expect.bound.by: missing"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = {}\n")),
+             Catch::Contains("expect.bound: give by = \"metric\""));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ntheory = true\ntier = \"\"\n")),
              Catch::Contains("expect.tier: expected a tier name"));
   CHECK_THAT(error_of(base + "[[expect]]\nmetric = \"power_function_sup\"\ntheory = \"yes\"\n"),
@@ -393,9 +395,16 @@ bound = { by = "power_function_sup", times = "interpolant_native_norm" }
 metric = "sup_error"
 kernel = "gaussian"
 bound = { by = "power_function_sup", constant = 0.001 }
+[[expect]]
+metric = "interpolant_native_norm"
+degree = 1
+bound = { constant = 3.0 }
 )", textbook);
   const auto outcomes = holds.verify();
-  REQUIRE(outcomes.size() == 4);
+  REQUIRE(outcomes.size() == 5);
+  CHECK(outcomes[4].verdict == Verdict::pass);  // 3 <= 3: a constant bound
+  CHECK(outcomes[4].expected == "interpolant_native_norm <= 3 at every n");
+  CHECK(outcomes[4].effectivity_max == Approx(1.0));
   for (std::size_t i = 0; i < 3; ++i) {
     CHECK(outcomes[i].verdict == Verdict::pass);
     CHECK(outcomes[i].effectivity_max == Approx(0.01 / 3.0));

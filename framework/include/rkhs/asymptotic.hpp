@@ -10,9 +10,9 @@
 //   s   = robust scale of the second differences of v   the noise in ln y,
 //   T_i = max(0.1 |R|, 4 sqrt(2) s / |u_{i+1} - u_i|)    what a rate may differ from R by.
 //
-// A floor is a trailing run of rates that have stalled, sign(R) (R - r_i) > T_i (round-off,
-// a singular Gram matrix, an integration tolerance); the head is a leading run with
-// |r_i - R| > T_i. Both are removed, R and s recomputed on what remains, until nothing changes;
+// A floor is a trailing run of rates that have stalled, sign(R) (R - r_i) > T_i, or at least
+// two trailing rates that collapsed to |r_i| <= 0.1 |R| (round-off, a singular Gram matrix, an
+// integration tolerance); the head is a leading run with |r_i - R| > T_i. Both are removed, R and s recomputed on what remains, until nothing changes;
 // a window keeps at least 3 points. The noise term makes the rule scale with the scatter of the
 // series, so noisy series are not trimmed by chance (the CI keeps its coverage) while exact
 // series are trimmed as soon as a rate is off by 10 %.

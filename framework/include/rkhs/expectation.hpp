@@ -44,10 +44,11 @@ struct RateInterval {
   double high = std::numeric_limits<double>::infinity();
 };
 
-/// metric(n) <= constant * by(n) * times(n) at every usable n (times optional).
+/// metric(n) <= constant * by(n) * times(n) at every usable n (by and times optional; without
+/// them the bound is the constant).
 struct BoundSpec {
-  std::string by;
-  std::string times;  ///< "" when absent
+  std::string by;     ///< "" when absent
+  std::string times;  ///< "" when absent (needs by)
   double constant = 1.0;
 };
 
