@@ -2,7 +2,6 @@
 // Where tests find the shared data (../shared/data beside the repository, or RKHS_STUDY_DATA).
 // A test that needs it and cannot find it fails and says where it looked; it never skips.
 #include <catch2/catch.hpp>
-
 #include <cstdlib>
 #include <filesystem>
 

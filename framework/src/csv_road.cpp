@@ -62,21 +62,27 @@ ColumnChoice column_choice(const ParameterSet& p, const std::string& parameter,
                            const std::string& role, bool header) {
   ColumnChoice choice{parameter, role, p.text(parameter), std::nullopt};
   const auto& g = choice.given;
-  if (g.empty()) throw ParameterError(parameter, fmt::format("{} is empty: give a column name or number", parameter));
+  if (g.empty())
+    throw ParameterError(parameter,
+                         fmt::format("{} is empty: give a column name or number", parameter));
   if (std::all_of(g.begin(), g.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     std::size_t number = 0;
     std::from_chars(g.data(), g.data() + g.size(), number);
     if (number < 1)
-      throw ParameterError(parameter, fmt::format("{} = \"{}\": columns are numbered from 1", parameter, g));
+      throw ParameterError(parameter,
+                           fmt::format("{} = \"{}\": columns are numbered from 1", parameter, g));
     choice.number = number;
   } else if (!header) {
     throw ParameterError(parameter, fmt::format("{} = \"{}\" is a column name, but header = false: "
-                                                "give a column number (from 1)", parameter, g));
+                                                "give a column number (from 1)",
+                                                parameter, g));
   }
   return choice;
 }
 
-double unit_scale(const std::string& units) { return units == "mm" ? 1e-3 : 1.0; }
+double unit_scale(const std::string& units) {
+  return units == "mm" ? 1e-3 : 1.0;
+}
 
 /// Natural cubic spline second derivatives through (u_i, z_i).
 std::vector<double> natural_spline(const std::vector<double>& u, const std::vector<double>& z) {
@@ -111,35 +117,38 @@ class CsvRoad final : public TargetFunction {
                                "CSV file, relative to the data root (--data-dir, RKHS_STUDY_DATA, "
                                "default studies/data/) or absolute");
     file.default_doc = "none: required";
-    return {"csv",
-            "measured road profile (arc length, elevation) from a CSV file below the data root",
-            {file,
-             text_parameter("arc_length_column", "1",
-                            "arc-length column: a header name or a number counted from 1"),
-             text_parameter("elevation_column", "2",
-                            "elevation column: a header name or a number counted from 1"),
-             boolean_parameter("header", true, "the first line (after comments) names the columns"),
-             choice_parameter("delimiter", ",", "field separator", {",", ";", "tab"}),
-             choice_parameter("arc_length_units", "m", "units of the arc-length column", {"m", "mm"}),
-             choice_parameter("elevation_units", "m", "units of the elevation column", {"m", "mm"}),
-             real_parameter("start", 0.0,
-                            "subrange: s = 0 lies this many metres after the first sample; the "
-                            "track uses [first + start, first + start + L]", 0.0),
-             choice_parameter("detrend", "none",
-                              "none; linear: subtract the chord between the section's end "
-                              "points (closes the loop, f(0) = f(L) = 0); mean: subtract the mean",
-                              {"none", "linear", "mean"}),
-             choice_parameter("interpolation", "linear",
-                              "between samples: linear, or cubic (natural C2 spline)",
-                              {"linear", "cubic"}),
-             boolean_parameter("restart_at_samples", true,
-                               "report every sample as a kink, so that an adaptive integrator "
-                               "restarts there (linear interpolation only)")},
-            {{"provenance", "sha256 of the file, recorded with every trial"}}};
+    return {
+        "csv",
+        "measured road profile (arc length, elevation) from a CSV file below the data root",
+        {file,
+         text_parameter("arc_length_column", "1",
+                        "arc-length column: a header name or a number counted from 1"),
+         text_parameter("elevation_column", "2",
+                        "elevation column: a header name or a number counted from 1"),
+         boolean_parameter("header", true, "the first line (after comments) names the columns"),
+         choice_parameter("delimiter", ",", "field separator", {",", ";", "tab"}),
+         choice_parameter("arc_length_units", "m", "units of the arc-length column", {"m", "mm"}),
+         choice_parameter("elevation_units", "m", "units of the elevation column", {"m", "mm"}),
+         real_parameter("start", 0.0,
+                        "subrange: s = 0 lies this many metres after the first sample; the "
+                        "track uses [first + start, first + start + L]",
+                        0.0),
+         choice_parameter("detrend", "none",
+                          "none; linear: subtract the chord between the section's end "
+                          "points (closes the loop, f(0) = f(L) = 0); mean: subtract the mean",
+                          {"none", "linear", "mean"}),
+         choice_parameter("interpolation", "linear",
+                          "between samples: linear, or cubic (natural C2 spline)",
+                          {"linear", "cubic"}),
+         boolean_parameter("restart_at_samples", true,
+                           "report every sample as a kink, so that an adaptive integrator "
+                           "restarts there (linear interpolation only)")},
+        {{"provenance", "sha256 of the file, recorded with every trial"}}};
   }
 
   CsvRoad(const ParameterSet& p, const Domain& domain)
-      : length_(domain.length), periodic_(domain.periodic),
+      : length_(domain.length),
+        periodic_(domain.periodic),
         cubic_(p.choice("interpolation") == "cubic") {
     const bool header = p.boolean("header");
     const auto arc = column_choice(p, "arc_length_column", "arc length", header);
@@ -157,10 +166,10 @@ class CsvRoad final : public TargetFunction {
     const double end = origin_ + length_;
     if (end > u_.back() + 1e-9 * std::max(1.0, std::abs(end))) {
       const std::string section =
-          p.real("start") > 0 ? fmt::format(" (start = {} m: the track runs from arc length {} m to {} m)",
-                                            format_real(p.real("start")), format_real(origin_),
-                                            format_real(end))
-                              : "";
+          p.real("start") > 0
+              ? fmt::format(" (start = {} m: the track runs from arc length {} m to {} m)",
+                            format_real(p.real("start")), format_real(origin_), format_real(end))
+              : "";
       throw std::invalid_argument(fmt::format(
           "{}:{}:{}: the profile is shorter than the track: it covers arc length {} m to {} m, "
           "the track needs {} m{}",
@@ -226,10 +235,10 @@ class CsvRoad final : public TargetFunction {
           auto locate = [&](const ColumnChoice& choice, std::size_t& index) {
             if (choice.number) {
               if (*choice.number > fields.size())
-                throw std::invalid_argument(fmt::format(
-                    "{}:{}:{}: no column {} ({}): the header has {} column{}", file_, line_number,
-                    line.size() + 1, *choice.number, choice.role, fields.size(),
-                    fields.size() == 1 ? "" : "s"));
+                throw std::invalid_argument(
+                    fmt::format("{}:{}:{}: no column {} ({}): the header has {} column{}", file_,
+                                line_number, line.size() + 1, *choice.number, choice.role,
+                                fields.size(), fields.size() == 1 ? "" : "s"));
               return;
             }
             const auto it = std::find(names.begin(), names.end(), choice.given);
@@ -237,10 +246,10 @@ class CsvRoad final : public TargetFunction {
               std::string known;
               for (const auto& name : names) known += (known.empty() ? "" : ", ") + name;
               const auto guess = closest_name(choice.given, names);
-              throw std::invalid_argument(fmt::format(
-                  "{}:{}:1: no column '{}' ({}) in the header (columns: {}{})", file_, line_number,
-                  choice.given, choice.role, known,
-                  guess.empty() ? "" : fmt::format("; did you mean '{}'?", guess)));
+              throw std::invalid_argument(
+                  fmt::format("{}:{}:1: no column '{}' ({}) in the header (columns: {}{})", file_,
+                              line_number, choice.given, choice.role, known,
+                              guess.empty() ? "" : fmt::format("; did you mean '{}'?", guess)));
             }
             index = static_cast<std::size_t>(it - names.begin());
           };
@@ -250,16 +259,17 @@ class CsvRoad final : public TargetFunction {
         }
         auto number = [&](std::size_t index, const ColumnChoice& choice) {
           if (index >= fields.size())
-            throw std::invalid_argument(fmt::format(
-                "{}:{}:{}: no {} (column {}): the line has {} field{}", file_, line_number,
-                line.size() + 1, choice.role, index + 1, fields.size(),
-                fields.size() == 1 ? "" : "s"));
+            throw std::invalid_argument(
+                fmt::format("{}:{}:{}: no {} (column {}): the line has {} field{}", file_,
+                            line_number, line.size() + 1, choice.role, index + 1, fields.size(),
+                            fields.size() == 1 ? "" : "s"));
           const auto& field = fields[index];
           auto fail = [&](const std::string& what) {
             return std::invalid_argument(
                 fmt::format("{}:{}:{}: {}", file_, line_number, field.column, what));
           };
-          if (field.text.empty()) throw fail(fmt::format("{}: empty field, expected a number", choice.role));
+          if (field.text.empty())
+            throw fail(fmt::format("{}: empty field, expected a number", choice.role));
           double value = 0;
           const char* begin = field.text.data();
           const char* end = begin + field.text.size();
@@ -267,7 +277,8 @@ class CsvRoad final : public TargetFunction {
           const auto [stop, error] = std::from_chars(begin, end, value);
           if (error != std::errc() || stop != end)
             throw fail(fmt::format("{}: '{}' is not a number", choice.role, field.text));
-          if (std::isnan(value)) throw fail(fmt::format("{} is NaN (every sample needs a value)", choice.role));
+          if (std::isnan(value))
+            throw fail(fmt::format("{} is NaN (every sample needs a value)", choice.role));
           if (std::isinf(value)) throw fail(fmt::format("{} is infinite", choice.role));
           return std::pair{value, field.column};
         };
@@ -276,9 +287,9 @@ class CsvRoad final : public TargetFunction {
         const double position = u * arc_scale;
         if (!u_.empty() && !(position > u_.back())) {
           const auto fail = [&](const std::string& what) {
-            return std::invalid_argument(fmt::format(
-                "{}:{}:{}: arc length {} {} (arc length must be strictly increasing)", file_,
-                line_number, u_column, format_real(u), what));
+            return std::invalid_argument(
+                fmt::format("{}:{}:{}: arc length {} {} (arc length must be strictly increasing)",
+                            file_, line_number, u_column, format_real(u), what));
           };
           if (position == u_.back()) throw fail(fmt::format("repeats line {}", lines_.back()));
           throw fail(fmt::format("is less than {} on line {}", format_real(u_.back() / arc_scale),
@@ -290,11 +301,12 @@ class CsvRoad final : public TargetFunction {
         arc_columns_.push_back(u_column);
       }
       if (need_header)
-        throw std::invalid_argument(fmt::format("{}:1:1: the file is empty (expected a header line)", file_));
+        throw std::invalid_argument(
+            fmt::format("{}:1:1: the file is empty (expected a header line)", file_));
       if (u_.size() < 2)
-        throw std::invalid_argument(fmt::format(
-            "{}:{}:1: {} sample{}: a profile needs at least 2", file_,
-            std::max(1u, reader.get_file_line()), u_.size(), u_.size() == 1 ? "" : "s"));
+        throw std::invalid_argument(fmt::format("{}:{}:1: {} sample{}: a profile needs at least 2",
+                                                file_, std::max(1u, reader.get_file_line()),
+                                                u_.size(), u_.size() == 1 ? "" : "s"));
     } catch (const io::error::base& e) {
       throw std::invalid_argument(fmt::format("{}: {}", file_, e.what()));
     }

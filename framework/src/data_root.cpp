@@ -24,8 +24,10 @@ Setting& setting() {
 void set_data_root(const std::filesystem::path& directory) {
   auto& s = setting();
   std::lock_guard lock(s.mutex);
-  if (directory.empty()) s.directory.reset();
-  else s.directory = std::filesystem::absolute(directory).lexically_normal();
+  if (directory.empty())
+    s.directory.reset();
+  else
+    s.directory = std::filesystem::absolute(directory).lexically_normal();
 }
 
 DataRoot data_root() {
@@ -45,16 +47,15 @@ std::filesystem::path resolve_data_file(const std::string& name) {
   std::error_code error;
   if (given.is_absolute()) {
     if (std::filesystem::is_regular_file(given, error)) return given;
-    throw std::invalid_argument(fmt::format("data file '{}' not found (looked at {})", name,
-                                            given.string()));
+    throw std::invalid_argument(
+        fmt::format("data file '{}' not found (looked at {})", name, given.string()));
   }
   const auto root = data_root();
   const auto path = (root.directory / given).lexically_normal();
   if (std::filesystem::is_regular_file(path, error)) return path;
-  const std::string origin =
-      root.origin == "default"
-          ? "the default data root studies/data/ below the current directory"
-          : fmt::format("the data root from {}", root.origin);
+  const std::string origin = root.origin == "default"
+                                 ? "the default data root studies/data/ below the current directory"
+                                 : fmt::format("the data root from {}", root.origin);
   throw std::invalid_argument(fmt::format(
       "data file '{}' not found (looked at {}, in {}{}; set the data root with --data-dir DIR or "
       "RKHS_STUDY_DATA)",

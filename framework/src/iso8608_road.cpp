@@ -14,7 +14,8 @@ namespace rkhs {
 
 double iso8608_class_level(char road_class) {
   if (road_class < 'A' || road_class > 'H')
-    throw std::invalid_argument(fmt::format("ISO 8608 class '{}' does not exist (A to H)", road_class));
+    throw std::invalid_argument(
+        fmt::format("ISO 8608 class '{}' does not exist (A to H)", road_class));
   return 16e-6 * std::pow(4.0, road_class - 'A');
 }
 
@@ -34,16 +35,18 @@ double Harmonics::evaluate(double s, double length) const {
 
 Harmonics iso8608_harmonics(const Iso8608Settings& settings, double length) {
   const double dn = 1.0 / length;
-  const auto first = static_cast<std::size_t>(std::max(1.0, std::ceil(settings.n_min * length - 1e-9)));
+  const auto first =
+      static_cast<std::size_t>(std::max(1.0, std::ceil(settings.n_min * length - 1e-9)));
   const auto last = static_cast<std::size_t>(std::floor(settings.n_max * length + 1e-9));
   if (last < first)
-    throw std::invalid_argument(fmt::format(
-        "no harmonic k / L (L = {} m) lies in [n_min, n_max] = [{}, {}] cycles/m", format_real(length),
-        format_real(settings.n_min), format_real(settings.n_max)));
+    throw std::invalid_argument(
+        fmt::format("no harmonic k / L (L = {} m) lies in [n_min, n_max] = [{}, {}] cycles/m",
+                    format_real(length), format_real(settings.n_min), format_real(settings.n_max)));
   Harmonics out;
   Random random(hash_combine(hash64("iso8608"), settings.seed));
   for (std::size_t k = first; k <= last; ++k) {
-    const double variance = iso8608_psd(static_cast<double>(k) * dn, settings.level, settings.waviness) * dn;
+    const double variance =
+        iso8608_psd(static_cast<double>(k) * dn, settings.level, settings.waviness) * dn;
     out.k.push_back(k);
     if (settings.random_amplitudes) {
       out.cosine.push_back(std::sqrt(variance) * random.normal());
@@ -75,10 +78,8 @@ class Iso8608Road final : public TargetFunction {
             "harmonics n_k = k/L (periodic on the track) from a seed",
             {choice_parameter("class", "C", "ISO 8608 road class, A (very good) to H (very poor)",
                               {"A", "B", "C", "D", "E", "F", "G", "H"}),
-             level,
-             positive_parameter("waviness", 2.0, "w, the PSD's slope on log-log axes"),
-             n_min,
-             positive_parameter("n_max", 10.0, "highest spatial frequency, cycles/m"),
+             level, positive_parameter("waviness", 2.0, "w, the PSD's slope on log-log axes"),
+             n_min, positive_parameter("n_max", 10.0, "highest spatial frequency, cycles/m"),
              choice_parameter("amplitudes", "deterministic",
                               "deterministic: sqrt(2 Gd dn) with random phases; random: Gaussian "
                               "coefficients (a Gaussian process sample)",
@@ -90,27 +91,30 @@ class Iso8608Road final : public TargetFunction {
 
   Iso8608Road(const ParameterSet& p, const Domain& domain) : length_(domain.length) {
     Iso8608Settings settings;
-    settings.level = p.real("gd_n0") > 0 ? p.real("gd_n0") : iso8608_class_level(p.choice("class")[0]);
+    settings.level =
+        p.real("gd_n0") > 0 ? p.real("gd_n0") : iso8608_class_level(p.choice("class")[0]);
     settings.waviness = p.real("waviness");
     settings.n_min = p.real("n_min");
     settings.n_max = p.real("n_max");
     settings.random_amplitudes = p.choice("amplitudes") == "random";
     settings.seed = static_cast<std::uint64_t>(p.integer("seed"));
     if (settings.n_max < settings.n_min)
-      throw ParameterError("n_max", fmt::format("n_max ({}) is below n_min ({})",
-                                                format_real(settings.n_max), format_real(settings.n_min)));
+      throw ParameterError(
+          "n_max", fmt::format("n_max ({}) is below n_min ({})", format_real(settings.n_max),
+                               format_real(settings.n_min)));
     try {
       harmonics_ = iso8608_harmonics(settings, length_);
     } catch (const std::invalid_argument& e) {
       throw ParameterError("n_max", e.what());
     }
     if (harmonics_.k.size() > 100000)
-      throw ParameterError("n_max", fmt::format("{} harmonics (n_max L) is more than 100000",
-                                                harmonics_.k.size()));
+      throw ParameterError(
+          "n_max", fmt::format("{} harmonics (n_max L) is more than 100000", harmonics_.k.size()));
   }
 
   void evaluate(std::span<const double> points, std::span<double> out) const override {
-    for (std::size_t m = 0; m < points.size(); ++m) out[m] = harmonics_.evaluate(points[m], length_);
+    for (std::size_t m = 0; m < points.size(); ++m)
+      out[m] = harmonics_.evaluate(points[m], length_);
   }
 
  private:

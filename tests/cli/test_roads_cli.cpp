@@ -1,12 +1,12 @@
 // Measured roads through the command: --data-dir and RKHS_STUDY_DATA, CSV errors reaching the
 // user with both positions (study file and CSV file), the data's SHA-256 in summary.json.
-#include <catch2/catch.hpp>
+#include <sys/wait.h>
 
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 #include "rkhs/sha256.hpp"
 
@@ -65,7 +65,8 @@ detrend = "linear"
 
 }  // namespace
 
-TEST_CASE("a CSV error reaches the user with the study's and the file's positions", "[cli][csv_road]") {
+TEST_CASE("a CSV error reaches the user with the study's and the file's positions",
+          "[cli][csv_road]") {
   const auto dir = scratch("error");
   std::ofstream(dir / "study.toml") << road_study;
   std::ofstream(dir / "data" / "roads" / "profile.csv") << "u,z\n0,0\n0.5,0.1\n1.0,oops\n2.0,0\n";
@@ -73,14 +74,17 @@ TEST_CASE("a CSV error reaches the user with the study's and the file's position
                                   (dir / "study.toml").string());
   INFO(outcome.output);
   CHECK(outcome.exit_code == 2);
-  CHECK_THAT(outcome.output, Catch::StartsWith((dir / "study.toml").string() + ":12:1: target: csv "));
+  CHECK_THAT(outcome.output,
+             Catch::StartsWith((dir / "study.toml").string() + ":12:1: target: csv "));
   CHECK_THAT(outcome.output,
              Catch::Contains(": " + (dir / "data" / "roads" / "profile.csv").string() +
                              ":4:5: elevation: 'oops' is not a number\n"));
 }
 
-TEST_CASE("data files are found through --data-dir or RKHS_STUDY_DATA, else the error says where it looked",
-          "[cli][csv_road]") {
+TEST_CASE(
+    "data files are found through --data-dir or RKHS_STUDY_DATA, else the error says where it "
+    "looked",
+    "[cli][csv_road]") {
   const auto dir = scratch("root");
   std::ofstream(dir / "study.toml") << road_study;
   const std::string study = (dir / "study.toml").string();
@@ -88,39 +92,54 @@ TEST_CASE("data files are found through --data-dir or RKHS_STUDY_DATA, else the 
   const auto missing = rkhs_study("validate " + study);
   INFO(missing.output);
   CHECK(missing.exit_code == 2);
-  CHECK_THAT(missing.output,
-             Catch::Contains("data file 'roads/profile.csv' not found (looked at " +
-                             (fs::current_path() / "studies" / "data" / "roads" / "profile.csv").string() +
-                             ", in the default data root studies/data/ below the current directory"));
+  CHECK_THAT(
+      missing.output,
+      Catch::Contains("data file 'roads/profile.csv' not found (looked at " +
+                      (fs::current_path() / "studies" / "data" / "roads" / "profile.csv").string() +
+                      ", in the default data root studies/data/ below the current directory"));
   // Found through either setting once the file exists.
   std::ofstream(dir / "data" / "roads" / "profile.csv") << "u,z\n0,0\n1,0.1\n2,0\n";
   const auto by_option = rkhs_study("validate --data-dir " + (dir / "data").string() + " " + study);
   INFO(by_option.output);
   CHECK(by_option.exit_code == 0);
-  const auto by_environment = rkhs_study("validate " + study, "RKHS_STUDY_DATA=" + (dir / "data").string());
+  const auto by_environment =
+      rkhs_study("validate " + study, "RKHS_STUDY_DATA=" + (dir / "data").string());
   INFO(by_environment.output);
   CHECK(by_environment.exit_code == 0);
   // --data-dir wins over the environment.
   const auto both = rkhs_study("validate --data-dir " + (dir / "data").string() + " " + study,
                                "RKHS_STUDY_DATA=/nonexistent");
   CHECK(both.exit_code == 0);
-  const auto bad_option = rkhs_study("validate --data-dir " + (dir / "absent").string() + " " + study);
+  const auto bad_option =
+      rkhs_study("validate --data-dir " + (dir / "absent").string() + " " + study);
   CHECK(bad_option.exit_code == 2);
   CHECK_THAT(bad_option.output, Catch::Contains("--data-dir"));
 }
 
-TEST_CASE("the data file's SHA-256 is recorded with every trial in summary.json", "[cli][csv_road]") {
+TEST_CASE("the data file's SHA-256 is recorded with every trial in summary.json",
+          "[cli][csv_road]") {
   const auto dir = scratch("provenance");
   std::ofstream(dir / "study.toml") << road_study;
   const auto file = dir / "data" / "roads" / "profile.csv";
   std::ofstream(file) << "u,z\n0,0\n0.5,0.1\n1,-0.1\n1.5,0.05\n2,0.02\n";
-  const auto outcome = rkhs_study("run --quiet --threads 1 --data-dir " + (dir / "data").string() +
-                                  " --out " + (dir / "out").string() + " " + (dir / "study.toml").string());
+  const auto outcome =
+      rkhs_study("run --quiet --threads 1 --data-dir " + (dir / "data").string() + " --out " +
+                 (dir / "out").string() + " " + (dir / "study.toml").string());
   INFO(outcome.output);
   REQUIRE(outcome.exit_code == 0);
   const auto summary = read(dir / "out" / "summary.json");
   const std::string data = "\"data\": \"sha256:" + rkhs::sha256_file(file) + "\"";
   std::size_t count = 0;
-  for (auto at = summary.find(data); at != std::string::npos; at = summary.find(data, at + 1)) ++count;
+  for (auto at = summary.find(data); at != std::string::npos; at = summary.find(data, at + 1))
+    ++count;
   CHECK(count == 2);
+  // A closed-form road has no data to record.
+  std::string sine(road_study);
+  sine.replace(sine.find("name = \"csv\""), std::string::npos, "name = \"sine\"\n");
+  std::ofstream(dir / "sine.toml") << sine;
+  const auto closed_form = rkhs_study("run --quiet --threads 1 --out " + (dir / "sine").string() +
+                                      " " + (dir / "sine.toml").string());
+  INFO(closed_form.output);
+  REQUIRE(closed_form.exit_code == 0);
+  CHECK_THAT(read(dir / "sine" / "summary.json"), Catch::Contains("\"n\": 8, \"data\": null,"));
 }

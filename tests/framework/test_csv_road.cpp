@@ -1,7 +1,6 @@
 // The `csv` target: every malformed file is refused with its file:line:column, interpolation
 // is exact on piecewise-linear data, detrending closes the loop, the data root resolves files.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -88,9 +87,13 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
   }
   SECTION("missing column by name, with a suggestion") {
     const auto file = data.write("columns.csv", "u_m,z_m\n0,1\n10,1\n");
-    CHECK(error_of({{"file", std::string("columns.csv")}, {"elevation_column", std::string("z_mm")}}) ==
-          file + ":1:1: no column 'z_mm' (elevation) in the header (columns: u_m, z_m; did you mean 'z_m'?)");
-    CHECK(error_of({{"file", std::string("columns.csv")}, {"arc_length_column", std::string("distance")}}) ==
+    CHECK(error_of(
+              {{"file", std::string("columns.csv")}, {"elevation_column", std::string("z_mm")}}) ==
+          file +
+              ":1:1: no column 'z_mm' (elevation) in the header (columns: u_m, z_m; did you mean "
+              "'z_m'?)");
+    CHECK(error_of({{"file", std::string("columns.csv")},
+                    {"arc_length_column", std::string("distance")}}) ==
           file + ":1:1: no column 'distance' (arc length) in the header (columns: u_m, z_m)");
   }
   SECTION("missing column by number, in the header and in a data line") {
@@ -103,7 +106,8 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
   }
   SECTION("non-numeric value") {
     const auto file = data.write("text.csv", "u,z\n0,1\n0.5,abc\n");
-    CHECK(error_of({{"file", std::string("text.csv")}}) == file + ":3:5: elevation: 'abc' is not a number");
+    CHECK(error_of({{"file", std::string("text.csv")}}) ==
+          file + ":3:5: elevation: 'abc' is not a number");
     const auto trailing = data.write("trailing.csv", "u,z\n0,1\n0.5x,2\n");
     CHECK(error_of({{"file", std::string("trailing.csv")}}) ==
           trailing + ":3:1: arc length: '0.5x' is not a number");
@@ -124,16 +128,21 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
   SECTION("arc length decreasing or duplicated") {
     const auto decreasing = data.write("decreasing.csv", "u,z\n0,1\n0.2,1\n0.1,1\n");
     CHECK(error_of({{"file", std::string("decreasing.csv")}}) ==
-          decreasing + ":4:1: arc length 0.1 is less than 0.2 on line 3 (arc length must be strictly increasing)");
+          decreasing +
+              ":4:1: arc length 0.1 is less than 0.2 on line 3 (arc length must be strictly "
+              "increasing)");
     const auto duplicated = data.write("duplicated.csv", "u,z\n0,1\n0.1,1\n0.1,2\n");
     CHECK(error_of({{"file", std::string("duplicated.csv")}}) ==
-          duplicated + ":4:1: arc length 0.1 repeats line 3 (arc length must be strictly increasing)");
+          duplicated +
+              ":4:1: arc length 0.1 repeats line 3 (arc length must be strictly increasing)");
   }
   SECTION("fewer than 2 samples") {
     const auto one = data.write("one.csv", "u,z\n0,1\n");
-    CHECK(error_of({{"file", std::string("one.csv")}}) == one + ":2:1: 1 sample: a profile needs at least 2");
+    CHECK(error_of({{"file", std::string("one.csv")}}) ==
+          one + ":2:1: 1 sample: a profile needs at least 2");
     const auto none = data.write("none.csv", "");
-    CHECK(error_of({{"file", std::string("none.csv")}}) == none + ":1:1: the file is empty (expected a header line)");
+    CHECK(error_of({{"file", std::string("none.csv")}}) ==
+          none + ":1:1: the file is empty (expected a header line)");
     const auto header_only = data.write("header_only.csv", "u,z\n");
     CHECK(error_of({{"file", std::string("header_only.csv")}}) ==
           header_only + ":1:1: 0 samples: a profile needs at least 2");
@@ -141,31 +150,39 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
   SECTION("profile shorter than the track") {
     const auto file = data.write("short.csv", "u,z\n0,1\n5,2\n9.99,1\n");
     CHECK(error_of({{"file", std::string("short.csv")}}) ==
-          file + ":4:1: the profile is shorter than the track: it covers arc length 0 m to 9.99 m, "
-                 "the track needs 10 m");
+          file +
+              ":4:1: the profile is shorter than the track: it covers arc length 0 m to 9.99 m, "
+              "the track needs 10 m");
     const auto long_enough = data.write("long.csv", "u,z\n0,1\n12,1\n");
-    CHECK(error_of({{"file", std::string("long.csv")}, {"start", 2.5}}) ==
-          long_enough + ":3:1: the profile is shorter than the track: it covers arc length 0 m to 12 m, "
-                        "the track needs 10 m (start = 2.5 m: the track runs from arc length 2.5 m to 12.5 m)");
+    CHECK(
+        error_of({{"file", std::string("long.csv")}, {"start", 2.5}}) ==
+        long_enough +
+            ":3:1: the profile is shorter than the track: it covers arc length 0 m to 12 m, "
+            "the track needs 10 m (start = 2.5 m: the track runs from arc length 2.5 m to 12.5 m)");
   }
   SECTION("a closed track needs a profile that closes") {
     const auto file = data.write("open.csv", "u,z\n0,1\n10,1.5\n");
     CHECK(error_of({{"file", std::string("open.csv")}}, {10.0, true}) ==
-          file + ": the profile does not close on the track: elevation 1 m at s = 0 and 1.5 m at "
-                 "s = L = 10 m; set detrend = \"linear\" (remove the trend between the end points) "
-                 "or make the domain an interval ([domain] periodic = false)");
-    CHECK_NOTHROW(road({{"file", std::string("open.csv")}, {"detrend", std::string("linear")}}, {10.0, true}));
+          file +
+              ": the profile does not close on the track: elevation 1 m at s = 0 and 1.5 m at "
+              "s = L = 10 m; set detrend = \"linear\" (remove the trend between the end points) "
+              "or make the domain an interval ([domain] periodic = false)");
+    CHECK_NOTHROW(road({{"file", std::string("open.csv")}, {"detrend", std::string("linear")}},
+                       {10.0, true}));
     CHECK_NOTHROW(road({{"file", std::string("open.csv")}}, {10.0, false}));
   }
   SECTION("a column name without a header is a parameter error") {
     data.write("plain.csv", "0,1\n10,1\n");
     try {
-      road({{"file", std::string("plain.csv")}, {"header", false}, {named_columns, std::string("u")}});
+      road({{"file", std::string("plain.csv")},
+            {"header", false},
+            {named_columns, std::string("u")}});
       FAIL("no error");
     } catch (const ParameterError& e) {
       CHECK(e.parameter() == "arc_length_column");
       CHECK(std::string(e.what()) ==
-            "arc_length_column = \"u\" is a column name, but header = false: give a column number (from 1)");
+            "arc_length_column = \"u\" is a column name, but header = false: give a column number "
+            "(from 1)");
     }
   }
 }
@@ -179,8 +196,10 @@ TEST_CASE("csv road: linear interpolation is exact on piecewise-linear data", "[
   std::string text = "# a comment line\nposition,height,quality\n";
   for (std::size_t i = 0; i < u.size(); ++i) text += fmt_line(u[i], z[i]);
   data.write("pl.csv", text);
-  const auto f = road({{"file", std::string("pl.csv")}, {"arc_length_column", std::string("position")},
-                       {"elevation_column", std::string("height")}, {"restart_at_samples", false}},
+  const auto f = road({{"file", std::string("pl.csv")},
+                       {"arc_length_column", std::string("position")},
+                       {"elevation_column", std::string("height")},
+                       {"restart_at_samples", false}},
                       {10.0, true});
   for (std::size_t i = 0; i + 1 < u.size(); ++i) {
     CHECK((*f)(u[i]) == z[i]);
@@ -207,17 +226,23 @@ TEST_CASE("csv road: units, column numbers, delimiters and subranges", "[csv_roa
   const DataDirectory data("options");
   // Millimetres, semicolons, no header, columns given by number (elevation first).
   data.write("mm.csv", "5;0\n-3;2500\n7;10000\n");
-  const auto mm = road({{"file", std::string("mm.csv")}, {"header", false}, {"delimiter", std::string(";")},
-                        {"arc_length_column", std::string("2")}, {"elevation_column", std::string("1")},
-                        {"arc_length_units", std::string("mm")}, {"elevation_units", std::string("mm")}});
+  const auto mm = road({{"file", std::string("mm.csv")},
+                        {"header", false},
+                        {"delimiter", std::string(";")},
+                        {"arc_length_column", std::string("2")},
+                        {"elevation_column", std::string("1")},
+                        {"arc_length_units", std::string("mm")},
+                        {"elevation_units", std::string("mm")}});
   CHECK((*mm)(0.0) == Approx(0.005).epsilon(1e-14));
   CHECK((*mm)(2.5) == Approx(-0.003).epsilon(1e-14));
   CHECK((*mm)(5.0) == Approx(-0.003 + 0.01 / 3).epsilon(1e-14));
   CHECK((*mm)(10.0) == Approx(0.007).epsilon(1e-14));
   // Tabs, CRLF line ends, quoted header names, a profile starting at 100 m, a subrange.
   data.write("tabs.csv", "\"u\"\t\"z\"\r\n100\t0\r\n110\t10\r\n120\t0\r\n");
-  const auto sub = road({{"file", std::string("tabs.csv")}, {"delimiter", std::string("tab")},
-                         {"arc_length_column", std::string("u")}, {"elevation_column", std::string("z")},
+  const auto sub = road({{"file", std::string("tabs.csv")},
+                         {"delimiter", std::string("tab")},
+                         {"arc_length_column", std::string("u")},
+                         {"elevation_column", std::string("z")},
                          {"start", 5.0}});
   CHECK((*sub)(0.0) == Approx(5.0));   // arc length 105 m
   CHECK((*sub)(5.0) == Approx(10.0));  // 110 m
@@ -227,11 +252,15 @@ TEST_CASE("csv road: units, column numbers, delimiters and subranges", "[csv_roa
 TEST_CASE("csv road: detrending closes the loop", "[csv_road]") {
   const DataDirectory data("detrend");
   // A rough profile on a slope: 0.3 + 0.05 u + bumps; the ends differ by 0.5 m.
-  data.write("slope.csv", profile([](double u) {
-    return 0.3 + 0.05 * u + 0.01 * std::sin(7 * u) + 0.02 * std::cos(3 * u * u);
-  }, 0.01));
+  data.write("slope.csv", profile(
+                              [](double u) {
+                                return 0.3 + 0.05 * u + 0.01 * std::sin(7 * u) +
+                                       0.02 * std::cos(3 * u * u);
+                              },
+                              0.01));
   const Domain track{10.0, true};
-  const auto f = road({{"file", std::string("slope.csv")}, {"detrend", std::string("linear")}}, track);
+  const auto f =
+      road({{"file", std::string("slope.csv")}, {"detrend", std::string("linear")}}, track);
   // Closed: the values at s = 0 and s -> L meet, both 0 (|f'| < 2 here, so within 2e-9 at
   // 1e-9 from the seam; without detrending the gap is 0.5 m).
   CHECK(std::abs((*f)(0.0)) <= 1e-15);
@@ -246,28 +275,33 @@ TEST_CASE("csv road: detrending closes the loop", "[csv_road]") {
   }
   // `mean` removes the mean (it does not close the loop: an interval domain).
   const Domain interval{10.0, false};
-  const auto centred = road({{"file", std::string("slope.csv")}, {"detrend", std::string("mean")}}, interval);
+  const auto centred =
+      road({{"file", std::string("slope.csv")}, {"detrend", std::string("mean")}}, interval);
   const auto points = interval.uniform_points(100001);
   std::vector<double> values(points.size());
   centred->evaluate(points, values);
   double integral = 0;
-  for (std::size_t m = 0; m + 1 < points.size(); ++m) integral += 0.5 * (values[m] + values[m + 1]) * 1e-4;
+  for (std::size_t m = 0; m + 1 < points.size(); ++m)
+    integral += 0.5 * (values[m] + values[m + 1]) * 1e-4;
   CHECK(std::abs(integral) < 1e-6);
 }
 
 TEST_CASE("csv road: cubic interpolation", "[csv_road]") {
   const DataDirectory data("cubic");
   data.write("line.csv", profile([](double u) { return 0.2 - 0.03 * u; }, 0.37, 10.4));
-  const auto line = road({{"file", std::string("line.csv")}, {"interpolation", std::string("cubic")}});
-  for (double s : {0.0, 0.1, 3.14159, 9.99}) CHECK((*line)(s) == Approx(0.2 - 0.03 * s).margin(1e-14));
+  const auto line =
+      road({{"file", std::string("line.csv")}, {"interpolation", std::string("cubic")}});
+  for (double s : {0.0, 0.1, 3.14159, 9.99})
+    CHECK((*line)(s) == Approx(0.2 - 0.03 * s).margin(1e-14));
   // On smooth data the spline is far closer than linear interpolation, and it interpolates.
   data.write("sine.csv", profile([](double u) { return std::sin(u); }, 0.25));
-  const auto cubic = road({{"file", std::string("sine.csv")}, {"interpolation", std::string("cubic")}});
+  const auto cubic =
+      road({{"file", std::string("sine.csv")}, {"interpolation", std::string("cubic")}});
   const auto linear = road({{"file", std::string("sine.csv")}});
   double cubic_error = 0, linear_error = 0;
   for (double s = 1.0; s < 9.0; s += 0.01) {
-    cubic_error = std::max(cubic_error, std::abs((*cubic)(s) - std::sin(s)));
-    linear_error = std::max(linear_error, std::abs((*linear)(s) - std::sin(s)));
+    cubic_error = std::max(cubic_error, std::abs((*cubic)(s)-std::sin(s)));
+    linear_error = std::max(linear_error, std::abs((*linear)(s)-std::sin(s)));
   }
   CHECK(cubic_error < 1e-4);
   CHECK(linear_error > 5e-3);
@@ -299,10 +333,11 @@ TEST_CASE("data root: --data-dir, then RKHS_STUDY_DATA, then studies/data", "[cs
   CHECK(data_root().directory == (fs::current_path() / "relative" / "dir").lexically_normal());
   set_data_root({});
   CHECK(data_root().origin == "RKHS_STUDY_DATA");
-  CHECK_THROWS_WITH(resolve_data_file("x/y.csv"),
-                    "data file 'x/y.csv' not found (looked at /tmp/from_environment/x/y.csv, in the "
-                    "data root from RKHS_STUDY_DATA, which does not exist; set the data root with "
-                    "--data-dir DIR or RKHS_STUDY_DATA)");
+  CHECK_THROWS_WITH(
+      resolve_data_file("x/y.csv"),
+      "data file 'x/y.csv' not found (looked at /tmp/from_environment/x/y.csv, in the "
+      "data root from RKHS_STUDY_DATA, which does not exist; set the data root with "
+      "--data-dir DIR or RKHS_STUDY_DATA)");
   ::unsetenv("RKHS_STUDY_DATA");
   CHECK_THROWS_WITH(resolve_data_file("/nowhere/z.csv"),
                     "data file '/nowhere/z.csv' not found (looked at /nowhere/z.csv)");

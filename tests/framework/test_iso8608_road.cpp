@@ -1,6 +1,5 @@
 // The `iso8608` target: class levels, the periodogram of a realisation against Gd(n), seeds.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -29,7 +28,8 @@ std::vector<double> periodogram(const TargetFunction& f, const Domain& track, st
   for (std::size_t k = 1; k <= k_max; ++k) {
     std::complex<double> z = 0;
     for (std::size_t m = 0; m < samples; ++m)
-      z += values[m] * std::polar(1.0, -2 * std::numbers::pi * double(k * m % samples) / double(samples));
+      z += values[m] *
+           std::polar(1.0, -2 * std::numbers::pi * double(k * m % samples) / double(samples));
     z /= double(samples);
     out[k] = 2 * std::norm(z) * track.length;
   }
@@ -67,8 +67,11 @@ TEST_CASE("ISO 8608 profile: the periodogram is the class's PSD", "[iso8608]") {
     double sum = 0;
     std::size_t count = 0;
     for (std::int64_t seed = 1; seed <= 20; ++seed) {
-      const auto f = road({{"class", road_class}, {"n_max", 4.0}, {"seed", seed},
-                           {"amplitudes", std::string("random")}}, track);
+      const auto f = road({{"class", road_class},
+                           {"n_max", 4.0},
+                           {"seed", seed},
+                           {"amplitudes", std::string("random")}},
+                          track);
       const auto g = periodogram(*f, track, 100, 1024);
       for (std::size_t k = 1; k <= 100; ++k) {
         const double n = double(k) / 25.0;
@@ -88,8 +91,12 @@ TEST_CASE("ISO 8608 profile: fitted level and waviness recover Gd(n0) and w", "[
   const Domain track{1000.0, true};
   const std::size_t harmonics = 2000;
   for (double waviness : {2.0, 2.5}) {
-    const auto f = road({{"gd_n0", 300e-6}, {"waviness", waviness}, {"n_max", 2.0},
-                         {"amplitudes", std::string("random")}, {"seed", std::int64_t{3}}}, track);
+    const auto f = road({{"gd_n0", 300e-6},
+                         {"waviness", waviness},
+                         {"n_max", 2.0},
+                         {"amplitudes", std::string("random")},
+                         {"seed", std::int64_t{3}}},
+                        track);
     const auto g = periodogram(*f, track, harmonics, 4096);
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     for (std::size_t k = 1; k <= harmonics; ++k) {
@@ -127,8 +134,10 @@ TEST_CASE("ISO 8608 profile: seeds reproduce, the profile is periodic and band-l
   const auto g = periodogram(*band, track, 40, 256);
   for (std::size_t k = 1; k <= 40; ++k) {
     INFO("k = " << k);
-    if (k < 5 || k > 20) CHECK(g[k] < 1e-20);
-    else CHECK(g[k] == Approx(iso8608_psd(double(k) / 10.0, 256e-6, 2.0)).epsilon(1e-9));
+    if (k < 5 || k > 20)
+      CHECK(g[k] < 1e-20);
+    else
+      CHECK(g[k] == Approx(iso8608_psd(double(k) / 10.0, 256e-6, 2.0)).epsilon(1e-9));
   }
   // The variance is the PSD integrated over the band (sum of Gd(n_k) dn).
   double variance = 0, expected = 0;
@@ -136,7 +145,8 @@ TEST_CASE("ISO 8608 profile: seeds reproduce, the profile is periodic and band-l
   std::vector<double> values(dense.size());
   a->evaluate(dense, values);
   for (double v : values) variance += v * v / 4096.0;
-  for (std::size_t k = 1; k <= 100; ++k) expected += iso8608_psd(double(k) / 10.0, 256e-6, 2.0) / 10.0;
+  for (std::size_t k = 1; k <= 100; ++k)
+    expected += iso8608_psd(double(k) / 10.0, 256e-6, 2.0) / 10.0;
   CHECK(variance == Approx(expected).epsilon(1e-9));
   CHECK_THROWS_WITH(road({{"n_min", 0.31}, {"n_max", 0.39}}, track),
                     "no harmonic k / L (L = 10 m) lies in [n_min, n_max] = [0.31, 0.39] cycles/m");

@@ -27,10 +27,10 @@ double iso8608_class_level(char road_class);
 double iso8608_psd(double n, double level, double waviness);
 
 struct Iso8608Settings {
-  double level = 256e-6;      ///< Gd(n0), m^3
-  double waviness = 2.0;      ///< w
-  double n_min = 0.0;         ///< lowest spatial frequency, cycles/m (0: 1 / L)
-  double n_max = 10.0;        ///< highest spatial frequency, cycles/m
+  double level = 256e-6;  ///< Gd(n0), m^3
+  double waviness = 2.0;  ///< w
+  double n_min = 0.0;     ///< lowest spatial frequency, cycles/m (0: 1 / L)
+  double n_max = 10.0;    ///< highest spatial frequency, cycles/m
   bool random_amplitudes = false;
   std::uint64_t seed = 1;
 };
