@@ -1,10 +1,11 @@
+#include "rkhs/adaptive.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "rkhs/adaptive.hpp"
 #include "rkhs/approximation.hpp"
 #include "rkhs/gram_solver.hpp"
 #include "rkhs/lyapunov.hpp"
@@ -13,14 +14,25 @@
 namespace rkhs {
 
 const std::vector<std::string>& adaptive_metric_names() {
-  static const std::vector<std::string> names{
-      "fill_distance",        "separation_distance",   "gram_condition_number",
-      "power_function_sup",   "interpolant_l2_error",  "interpolant_sup_error",
-      "l2_error",             "sup_error",             "gap_to_projection",
-      "coefficient_error",    "final_state_error",     "max_state_error",
-      "lyapunov_max_increase", "lyapunov_ratio",       "steps",
-      "rejected_steps",       "segments",              "rhs_evaluations",
-      "jacobian_evaluations"};
+  static const std::vector<std::string> names{"fill_distance",
+                                              "separation_distance",
+                                              "gram_condition_number",
+                                              "power_function_sup",
+                                              "interpolant_l2_error",
+                                              "interpolant_sup_error",
+                                              "l2_error",
+                                              "sup_error",
+                                              "gap_to_projection",
+                                              "coefficient_error",
+                                              "final_state_error",
+                                              "max_state_error",
+                                              "lyapunov_max_increase",
+                                              "lyapunov_ratio",
+                                              "steps",
+                                              "rejected_steps",
+                                              "segments",
+                                              "rhs_evaluations",
+                                              "jacobian_evaluations"};
   return names;
 }
 
@@ -46,7 +58,8 @@ std::vector<Breakpoint> breakpoints(const AdaptiveSettings& settings, const Doma
   const auto samples = static_cast<std::size_t>(
       std::max(1.0, std::ceil(laps_total * static_cast<double>(settings.samples_per_lap))));
   for (std::size_t k = 1; k <= samples; ++k)
-    points.push_back({final_time * static_cast<double>(k) / static_cast<double>(samples), sample, 0});
+    points.push_back(
+        {final_time * static_cast<double>(k) / static_cast<double>(samples), sample, 0});
   for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i) {
     const double t = settings.snapshot_laps[i] * domain.length / settings.speed;
     if (t <= final_time * (1 + 1e-12)) points.push_back({std::min(t, final_time), snapshot, i});
@@ -79,29 +92,34 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                      std::span<const double> centres, const Plant& plant,
                                      const LearningLaw& law, const Integrator& integrator,
                                      const AdaptiveSettings& settings,
-                                     std::size_t evaluation_points, const SolverOptions& solver_options) {
+                                     std::size_t evaluation_points,
+                                     const SolverOptions& solver_options) {
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(centres.size());
   const auto& names = adaptive_metric_names();
   AdaptiveMeasurement out;
   out.metrics.assign(names.size(), nan);
   auto set = [&](std::string_view name, double value) {
-    out.metrics[static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin())] = value;
+    out.metrics[static_cast<std::size_t>(std::find(names.begin(), names.end(), name) -
+                                         names.begin())] = value;
   };
 
   // The static part: the space H_n and the projection Pi_n of the target.
-  const auto approximation = measure_approximation(kernel, target, centres, evaluation_points, solver_options);
+  const auto approximation =
+      measure_approximation(kernel, target, centres, evaluation_points, solver_options);
   const auto& approximation_names = approximation_metric_names();
   auto approximated = [&](std::string_view name) {
     return approximation.metrics[static_cast<std::size_t>(
-        std::find(approximation_names.begin(), approximation_names.end(), name) - approximation_names.begin())];
+        std::find(approximation_names.begin(), approximation_names.end(), name) -
+        approximation_names.begin())];
   };
-  for (const char* name : {"fill_distance", "separation_distance", "gram_condition_number", "power_function_sup"})
+  for (const char* name :
+       {"fill_distance", "separation_distance", "gram_condition_number", "power_function_sup"})
     set(name, approximated(name));
   out.solve_method = approximation.solve_method;
   for (const auto& flag : approximation.flags)
-    out.flags.push_back(flag == "sup_error_at_floor" || flag == "l2_error_at_floor"
-                            ? "interpolant_" + flag : flag);
+    out.flags.push_back(
+        flag == "sup_error_at_floor" || flag == "l2_error_at_floor" ? "interpolant_" + flag : flag);
 
   const Eigen::MatrixXd gram = kernel.gram(centres);
   const GramSolver solver(gram, solver_options);
@@ -110,14 +128,16 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   const Eigen::VectorXd alpha_star = solver.solve(at_centres);  // Pi_n f = sum alpha*_i phi_i
   const double gamma = law.gain();
   const Eigen::MatrixXd learning_map =
-      law.uses_gram_inverse() ? Eigen::MatrixXd(solver.solve(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n))) / gamma)
-                              : Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) / gamma);
+      law.uses_gram_inverse()
+          ? Eigen::MatrixXd(solver.solve(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n))) / gamma)
+          : Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) / gamma);
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
   const Eigen::Index d = A.rows();
   const Eigen::MatrixXd Q = parse_matrix(settings.q, d);
   if (Q.rows() != d || Q.cols() != d)
-    throw std::invalid_argument(fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
+    throw std::invalid_argument(
+        fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
   const auto lyapunov = solve_lyapunov(A, Q);
   const Eigen::MatrixXd& P = lyapunov.P;
 
@@ -126,12 +146,11 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   const auto road_basis = kernel.basis(centres);
   std::vector<double> road_phi(centres.size());
   const std::function<double(double)> road =
-      settings.projected_road
-          ? std::function<double(double)>([&](double s) {
-              road_basis->evaluate(s, road_phi.data());
-              return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
-            })
-          : std::function<double(double)>([&](double s) { return target(s); });
+      settings.projected_road ? std::function<double(double)>([&](double s) {
+        road_basis->evaluate(s, road_phi.data());
+        return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
+      })
+                              : std::function<double(double)>([&](double s) { return target(s); });
 
   AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed);
   const double final_time = settings.final_time_or_laps(domain.length);
@@ -139,8 +158,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)
   if (!settings.projected_road)
     for (double kink : target.kink_points()) kinks.push_back(kink);
-  const auto points = breakpoints(settings, domain, final_time, kinks,
-                                  integrator.restarts_at_kinks());
+  const auto points =
+      breakpoints(settings, domain, final_time, kinks, integrator.restarts_at_kinks());
   std::vector<double> times(points.size());
   std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
 
@@ -149,7 +168,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   const Eigen::MatrixXd snapshot_cross =
       settings.snapshot_laps.empty() ? Eigen::MatrixXd() : kernel.cross(snapshot_grid, centres);
   out.snapshots.resize(settings.snapshot_laps.size());
-  for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i) out.snapshots[i].lap = settings.snapshot_laps[i];
+  for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
+    out.snapshots[i].lap = settings.snapshot_laps[i];
   auto observe = [&](std::size_t k, const double* z) {
     const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
     if (points[k].roles & sample) {
@@ -161,7 +181,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     }
     if (points[k].roles & snapshot) {
       const Eigen::VectorXd estimate = snapshot_cross * alpha;
-      out.snapshots[points[k].snapshot_index].estimate.assign(estimate.data(), estimate.data() + estimate.size());
+      out.snapshots[points[k].snapshot_index].estimate.assign(estimate.data(),
+                                                              estimate.data() + estimate.size());
     }
   };
   Eigen::VectorXd z = Eigen::VectorXd::Zero(2 * d + n);
@@ -189,7 +210,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   double max_state_error = 0, max_increase = 0;
   for (std::size_t k = 0; k < out.samples.size(); ++k) {
     max_state_error = std::max(max_state_error, out.samples[k].state_error);
-    if (k > 0) max_increase = std::max(max_increase, out.samples[k].lyapunov - out.samples[k - 1].lyapunov);
+    if (k > 0)
+      max_increase = std::max(max_increase, out.samples[k].lyapunov - out.samples[k - 1].lyapunov);
   }
   set("max_state_error", max_state_error);
   if (settings.projected_road) {

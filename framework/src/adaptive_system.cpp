@@ -76,7 +76,8 @@ void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt
   rhs(z, plus_.data(), hi);  // counted: part of the cost of a Jacobian
   rhs(z, minus_.data(), lo);
   for (Eigen::Index i = 0; i < m; ++i)
-    dfdt[i] = (plus_[static_cast<std::size_t>(i)] - minus_[static_cast<std::size_t>(i)]) / (hi - lo);
+    dfdt[i] =
+        (plus_[static_cast<std::size_t>(i)] - minus_[static_cast<std::size_t>(i)]) / (hi - lo);
 }
 
 }  // namespace rkhs

@@ -38,6 +38,24 @@ std::vector<ParameterSpec> adaptive_parameters() {
                             "stop and restart where phi(s(t)) or f(s(t)) has kinks")};
 }
 
+// The settings every adaptive-step integrator reads from its parameters.
+class AdaptiveStepIntegrator : public Integrator {
+ public:
+  explicit AdaptiveStepIntegrator(const ParameterSet& p)
+      : rtol_(p.real("rtol")),
+        atol_(p.real("atol")),
+        max_steps_(p.integer("max_steps")),
+        initial_step_(p.real("initial_step")),
+        restart_(p.boolean("restart_at_kinks")) {}
+  bool restarts_at_kinks() const noexcept override { return restart_; }
+
+ protected:
+  double rtol_, atol_;
+  std::int64_t max_steps_;
+  double initial_step_;
+  bool restart_;
+};
+
 // Steps `try_step` from breakpoint to breakpoint, landing exactly on each.
 template <class Controlled, class System>
 IntegrationStats drive_adaptive(Controlled& stepper, System system, AdaptiveSystem& adaptive,
@@ -78,9 +96,9 @@ IntegrationStats drive_adaptive(Controlled& stepper, System system, AdaptiveSyst
           throw std::runtime_error(fmt::format("step size underflow at t = {:.6g} s", before));
       }
       if (static_cast<std::int64_t>(stats.steps + stats.rejected_steps) > max_steps)
-        throw std::runtime_error(fmt::format(
-            "step budget exhausted (max_steps = {}) at t = {:.6g} s of {:.6g} s", max_steps, t,
-            breakpoints.back()));
+        throw std::runtime_error(
+            fmt::format("step budget exhausted (max_steps = {}) at t = {:.6g} s of {:.6g} s",
+                        max_steps, t, breakpoints.back()));
     }
     for (double v : x)
       if (!std::isfinite(v))
@@ -101,7 +119,7 @@ struct CorrectedRosenbrockCoefficients : odeint::default_rosenbrock_coefficients
   const double d4 = -0.3620000000000023e-01;
 };
 
-class Rosenbrock4 final : public Integrator {
+class Rosenbrock4 final : public AdaptiveStepIntegrator {
  public:
   static PluginInfo info() {
     return {"rosenbrock4",
@@ -109,35 +127,35 @@ class Rosenbrock4 final : public Integrator {
             adaptive_parameters(),
             {{"implicit", "yes, one LU factorisation per step"}}};
   }
-  explicit Rosenbrock4(const ParameterSet& p)
-      : rtol_(p.real("rtol")), atol_(p.real("atol")), max_steps_(p.integer("max_steps")),
-        initial_step_(p.real("initial_step")), restart_(p.boolean("restart_at_kinks")) {}
-  bool restarts_at_kinks() const noexcept override { return restart_; }
-  IntegrationStats integrate(AdaptiveSystem& system, Eigen::VectorXd& z,
-                             std::span<const double> breakpoints,
-                             const std::function<void(std::size_t, const double*)>& observe) const override {
+  explicit Rosenbrock4(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
+  IntegrationStats integrate(
+      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      const std::function<void(std::size_t, const double*)>& observe) const override {
     using Stepper = odeint::rosenbrock4<double, CorrectedRosenbrockCoefficients>;
     odeint::rosenbrock4_controller<Stepper> stepper(atol_, rtol_);
     return drive_adaptive(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), system, z,
                           breakpoints, observe, max_steps_, initial_step_, false);
   }
-
- private:
-  double rtol_, atol_;
-  std::int64_t max_steps_;
-  double initial_step_;
-  bool restart_;
 };
 
 /// RODAS4 (Hairer and Wanner, Solving ODEs II, Sec. IV.7): a 6-stage, order 4(3), L-stable
 /// and stiffly accurate Rosenbrock method, the method of odeint's rosenbrock4 (with the
-/// corrected d4), here with dense Eigen storage and a blocked LU factorisation. Stage i solves (I / (h gamma) - J) k_i = F(t + alpha_i h, z + sum_j a_ij k_j)
+/// corrected d4), here with dense Eigen storage and a blocked LU factorisation. Stage i solves (I /
+/// (h gamma) - J) k_i = F(t + alpha_i h, z + sum_j a_ij k_j)
 ///   + sum_j c_ij k_j / h + h gamma_i dF/dt; the step is z + sum_j m_j k_j, its error k_6.
 class Rodas4Stepper {
  public:
   Rodas4Stepper(AdaptiveSystem& system, double atol, double rtol)
-      : system_(system), atol_(atol), rtol_(rtol), m_(system.dimension()),
-        jacobian_(m_, m_), matrix_(m_, m_), dfdt_(m_), stage_(m_), value_(m_), k_(m_, 6),
+      : system_(system),
+        atol_(atol),
+        rtol_(rtol),
+        m_(system.dimension()),
+        jacobian_(m_, m_),
+        matrix_(m_, m_),
+        dfdt_(m_),
+        stage_(m_),
+        value_(m_),
+        k_(m_, 6),
         next_(m_) {}
 
   template <class Ignored>
@@ -150,18 +168,25 @@ class Rodas4Stepper {
         {0.1544000000000000e+01},
         {0.9466785280815826e+00, 0.2557011698983284e+00},
         {0.3314825187068521e+01, 0.2896124015972201e+01, 0.9986419139977817e+00},
-        {0.1221224509226641e+01, 0.6019134481288629e+01, 0.1253708332932087e+02, -0.6878860361058950e+00},
-        {0.1221224509226641e+01, 0.6019134481288629e+01, 0.1253708332932087e+02, -0.6878860361058950e+00, 1.0}};
+        {0.1221224509226641e+01, 0.6019134481288629e+01, 0.1253708332932087e+02,
+         -0.6878860361058950e+00},
+        {0.1221224509226641e+01, 0.6019134481288629e+01, 0.1253708332932087e+02,
+         -0.6878860361058950e+00, 1.0}};
     static constexpr double c[6][5] = {
         {},
         {-0.5668800000000000e+01},
         {-0.2430093356833875e+01, -0.2063599157091915e+00},
         {-0.1073529058151375e+00, -0.9594562251023355e+01, -0.2047028614809616e+02},
-        {0.7496443313967647e+01, -0.1024680431464352e+02, -0.3399990352819905e+02, 0.1170890893206160e+02},
-        {0.8083246795921522e+01, -0.7981132988064893e+01, -0.3152159432874371e+02, 0.1631930543123136e+02,
-         -0.6058818238834054e+01}};
-    static constexpr double weights[6] = {0.1221224509226641e+01, 0.6019134481288629e+01,
-                                          0.1253708332932087e+02, -0.6878860361058950e+00, 1.0, 1.0};
+        {0.7496443313967647e+01, -0.1024680431464352e+02, -0.3399990352819905e+02,
+         0.1170890893206160e+02},
+        {0.8083246795921522e+01, -0.7981132988064893e+01, -0.3152159432874371e+02,
+         0.1631930543123136e+02, -0.6058818238834054e+01}};
+    static constexpr double weights[6] = {0.1221224509226641e+01,
+                                          0.6019134481288629e+01,
+                                          0.1253708332932087e+02,
+                                          -0.6878860361058950e+00,
+                                          1.0,
+                                          1.0};
     Eigen::Map<Eigen::VectorXd> z(&x.data()[0], m_);
     const double h = dt;
     system_.jacobian(z.data(), jacobian_.data(), t, dfdt_.data());
@@ -212,7 +237,7 @@ class Rodas4Stepper {
   bool rejected_last_ = false;
 };
 
-class Rodas4 final : public Integrator {
+class Rodas4 final : public AdaptiveStepIntegrator {
  public:
   static PluginInfo info() {
     return {"rodas4",
@@ -221,59 +246,46 @@ class Rodas4 final : public Integrator {
             adaptive_parameters(),
             {{"implicit", "yes, one LU factorisation per step"}}};
   }
-  explicit Rodas4(const ParameterSet& p)
-      : rtol_(p.real("rtol")), atol_(p.real("atol")), max_steps_(p.integer("max_steps")),
-        initial_step_(p.real("initial_step")), restart_(p.boolean("restart_at_kinks")) {}
-  bool restarts_at_kinks() const noexcept override { return restart_; }
-  IntegrationStats integrate(AdaptiveSystem& system, Eigen::VectorXd& z,
-                             std::span<const double> breakpoints,
-                             const std::function<void(std::size_t, const double*)>& observe) const override {
+  explicit Rodas4(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
+  IntegrationStats integrate(
+      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      const std::function<void(std::size_t, const double*)>& observe) const override {
     Rodas4Stepper stepper(system, atol_, rtol_);
-    return drive_adaptive(stepper, 0, system, z, breakpoints, observe, max_steps_, initial_step_, false);
+    return drive_adaptive(stepper, 0, system, z, breakpoints, observe, max_steps_, initial_step_,
+                          false);
   }
-
- private:
-  double rtol_, atol_;
-  std::int64_t max_steps_;
-  double initial_step_;
-  bool restart_;
 };
 
 /// An adaptive explicit Runge-Kutta pair; `Describe` supplies the plugin's info().
 template <class Stepper, class Describe>
-class ExplicitAdaptive final : public Integrator {
+class ExplicitAdaptive final : public AdaptiveStepIntegrator {
  public:
   static PluginInfo info() { return Describe::info(); }
-  explicit ExplicitAdaptive(const ParameterSet& p)
-      : rtol_(p.real("rtol")), atol_(p.real("atol")), max_steps_(p.integer("max_steps")),
-        initial_step_(p.real("initial_step")), restart_(p.boolean("restart_at_kinks")) {}
-  bool restarts_at_kinks() const noexcept override { return restart_; }
-  IntegrationStats integrate(AdaptiveSystem& system, Eigen::VectorXd& z,
-                             std::span<const double> breakpoints,
-                             const std::function<void(std::size_t, const double*)>& observe) const override {
+  explicit ExplicitAdaptive(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
+  IntegrationStats integrate(
+      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      const std::function<void(std::size_t, const double*)>& observe) const override {
     auto stepper = odeint::make_controlled(atol_, rtol_, Stepper());
     // Reset per segment: a first-same-as-last derivative must not cross a kink.
     return drive_adaptive(stepper, Rhs{&system}, system, z, breakpoints, observe, max_steps_,
                           initial_step_, true);
   }
-
- private:
-  double rtol_, atol_;
-  std::int64_t max_steps_;
-  double initial_step_;
-  bool restart_;
 };
 
 struct Dopri5 {
   static PluginInfo info() {
-    return {"dopri5", "Dormand-Prince 5(4), adaptive explicit (non-stiff checks, short horizons)",
-            adaptive_parameters(), {{"implicit", "no"}}};
+    return {"dopri5",
+            "Dormand-Prince 5(4), adaptive explicit (non-stiff checks, short horizons)",
+            adaptive_parameters(),
+            {{"implicit", "no"}}};
   }
 };
 struct Fehlberg78 {
   static PluginInfo info() {
-    return {"rk_fehlberg78", "Runge-Kutta-Fehlberg 7(8), adaptive explicit, high order",
-            adaptive_parameters(), {{"implicit", "no"}}};
+    return {"rk_fehlberg78",
+            "Runge-Kutta-Fehlberg 7(8), adaptive explicit, high order",
+            adaptive_parameters(),
+            {{"implicit", "no"}}};
   }
 };
 using Dopri5Integrator = ExplicitAdaptive<odeint::runge_kutta_dopri5<State>, Dopri5>;
@@ -283,7 +295,8 @@ using Fehlberg78Integrator = ExplicitAdaptive<odeint::runge_kutta_fehlberg78<Sta
 class Rk4 final : public Integrator {
  public:
   static PluginInfo info() {
-    return {"rk4", "classical 4th-order Runge-Kutta with a fixed step",
+    return {"rk4",
+            "classical 4th-order Runge-Kutta with a fixed step",
             {positive_parameter("step", 1e-3, "step size, s"),
              integer_parameter("max_steps", 20'000'000, "step budget of a trial", 1, 1LL << 40),
              boolean_parameter("restart_at_kinks", true,
@@ -291,11 +304,13 @@ class Rk4 final : public Integrator {
             {{"implicit", "no"}}};
   }
   explicit Rk4(const ParameterSet& p)
-      : step_(p.real("step")), max_steps_(p.integer("max_steps")), restart_(p.boolean("restart_at_kinks")) {}
+      : step_(p.real("step")),
+        max_steps_(p.integer("max_steps")),
+        restart_(p.boolean("restart_at_kinks")) {}
   bool restarts_at_kinks() const noexcept override { return restart_; }
-  IntegrationStats integrate(AdaptiveSystem& system, Eigen::VectorXd& z,
-                             std::span<const double> breakpoints,
-                             const std::function<void(std::size_t, const double*)>& observe) const override {
+  IntegrationStats integrate(
+      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      const std::function<void(std::size_t, const double*)>& observe) const override {
     IntegrationStats stats;
     odeint::runge_kutta4<State> stepper;
     State x(static_cast<std::size_t>(z.size()));
@@ -311,14 +326,15 @@ class Rk4 final : public Integrator {
         stepper.do_step(Rhs{&system}, x, t, dt);
         t = (dt == end - t) ? end : t + dt;
         if (static_cast<std::int64_t>(++stats.steps) > max_steps_)
-          throw std::runtime_error(fmt::format(
-              "step budget exhausted (max_steps = {}) at t = {:.6g} s", max_steps_, t));
+          throw std::runtime_error(
+              fmt::format("step budget exhausted (max_steps = {}) at t = {:.6g} s", max_steps_, t));
       }
       for (double v : x)
         if (!std::isfinite(v))
           throw std::runtime_error(fmt::format(
               "state became non-finite at t = {:.6g} s (step {} s too large for this stiff "
-              "system?)", t, format_real(step_)));
+              "system?)",
+              t, format_real(step_)));
       observe(k, &x.data()[0]);
     }
     std::copy(x.begin(), x.end(), z.data());

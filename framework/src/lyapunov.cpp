@@ -50,8 +50,9 @@ LyapunovSolution solve_lyapunov(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
       (A.transpose() * P + P * A + Q).norm() / (2 * A.norm() * P.norm() + Q.norm());
   out.min_eigenvalue = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P).eigenvalues()(0);
   if (!(out.min_eigenvalue > 0))
-    throw std::runtime_error(fmt::format(
-        "Lyapunov solution is not positive definite (smallest eigenvalue {:.3e})", out.min_eigenvalue));
+    throw std::runtime_error(
+        fmt::format("Lyapunov solution is not positive definite (smallest eigenvalue {:.3e})",
+                    out.min_eigenvalue));
   out.P = std::move(P);
   return out;
 }

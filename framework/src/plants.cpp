@@ -58,7 +58,8 @@ Eigen::MatrixXd parse_matrix(std::string_view text, Eigen::Index size) {
   if (body.starts_with("diag(") && body.ends_with(")")) {
     const auto values = parse_numbers(body.substr(5, body.size() - 6), text);
     if (values.empty()) throw std::invalid_argument(fmt::format("\"{}\": empty diagonal", text));
-    return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()))
+    return Eigen::Map<const Eigen::VectorXd>(values.data(),
+                                             static_cast<Eigen::Index>(values.size()))
         .asDiagonal();
   }
   std::vector<std::vector<double>> rows;
@@ -69,12 +70,15 @@ Eigen::MatrixXd parse_matrix(std::string_view text, Eigen::Index size) {
     start = stop + 1;
   }
   if (rows.empty() || rows.front().empty())
-    throw std::invalid_argument(fmt::format("\"{}\" is not a matrix (rows separated by ';')", text));
-  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(rows[0].size()));
+    throw std::invalid_argument(
+        fmt::format("\"{}\" is not a matrix (rows separated by ';')", text));
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()),
+                      static_cast<Eigen::Index>(rows[0].size()));
   for (std::size_t r = 0; r < rows.size(); ++r) {
     if (rows[r].size() != rows[0].size())
-      throw std::invalid_argument(fmt::format(
-          "in matrix \"{}\": row {} has {} entries, row 1 has {}", text, r + 1, rows[r].size(), rows[0].size()));
+      throw std::invalid_argument(
+          fmt::format("in matrix \"{}\": row {} has {} entries, row 1 has {}", text, r + 1,
+                      rows[r].size(), rows[0].size()));
     for (std::size_t c = 0; c < rows[r].size(); ++c)
       out(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = rows[r][c];
   }
@@ -103,8 +107,8 @@ class QuarterCar final : public Plant {
                  c2 = p.real("c2");
     const double a20 = (p.boolean("paper_sign") ? -1.0 : 1.0) * c2 / m2;
     A_ << -c2 / m1, -(k1 + k2) / m1, c2 / m1, k2 / m1,  //
-        1, 0, 0, 0,                                      //
-        a20, k2 / m2, -c2 / m2, -k2 / m2,                //
+        1, 0, 0, 0,                                     //
+        a20, k2 / m2, -c2 / m2, -k2 / m2,               //
         0, 0, 1, 0;
     B_ << k1 / m1, 0, 0, 0;
     require_hurwitz(A_);
@@ -131,10 +135,12 @@ class LinearPlant final : public Plant {
     A_ = parse_matrix(p.text("A"));
     const Eigen::MatrixXd b = parse_matrix(p.text("B"));
     if (A_.rows() != A_.cols())
-      throw ParameterError("A", fmt::format("A must be square, found {} x {}", A_.rows(), A_.cols()));
+      throw ParameterError("A",
+                           fmt::format("A must be square, found {} x {}", A_.rows(), A_.cols()));
     if (b.cols() != 1 || b.rows() != A_.rows())
       throw ParameterError("B", fmt::format("B must be {} x 1 (one entry per row, separated by "
-                                            "';'), found {} x {}", A_.rows(), b.rows(), b.cols()));
+                                            "';'), found {} x {}",
+                                            A_.rows(), b.rows(), b.cols()));
     B_ = b.col(0);
     require_hurwitz(A_);
   }
@@ -149,8 +155,10 @@ class LinearPlant final : public Plant {
 class GradientLaw final : public LearningLaw {
  public:
   static PluginInfo info() {
-    return {"gradient", "alpha' = Gamma^-1 phi(s) B^T P (x - xhat) (eq. a3)",
-            {positive_parameter("gamma", 1e-3, "the gain Gamma")}, {}};
+    return {"gradient",
+            "alpha' = Gamma^-1 phi(s) B^T P (x - xhat) (eq. a3)",
+            {positive_parameter("gamma", 1e-3, "the gain Gamma")},
+            {}};
   }
   explicit GradientLaw(const ParameterSet& p) : gain_(p.real("gamma")) {}
   bool uses_gram_inverse() const noexcept override { return false; }
@@ -163,8 +171,10 @@ class GradientLaw final : public LearningLaw {
 class RkhsLaw final : public LearningLaw {
  public:
   static PluginInfo info() {
-    return {"rkhs", "alpha' = Gamma^-1 G^-1 phi(s) B^T P (x - xhat) (eq. 4.2)",
-            {positive_parameter("gamma", 1e-3, "the gain Gamma")}, {}};
+    return {"rkhs",
+            "alpha' = Gamma^-1 G^-1 phi(s) B^T P (x - xhat) (eq. 4.2)",
+            {positive_parameter("gamma", 1e-3, "the gain Gamma")},
+            {}};
   }
   explicit RkhsLaw(const ParameterSet& p) : gain_(p.real("gamma")) {}
   bool uses_gram_inverse() const noexcept override { return true; }

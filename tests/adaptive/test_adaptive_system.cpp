@@ -1,6 +1,5 @@
 // The coupled plant / estimator / learning-law system: exact Jacobian, dF/dt, Lyapunov solver.
 #include <catch2/catch.hpp>
-
 #include <numbers>
 
 #include "rkhs/adaptive.hpp"
@@ -57,7 +56,8 @@ TEST_CASE("matrix syntax of study files", "[adaptive]") {
   CHECK(parse_matrix("1; 0") == (Eigen::MatrixXd(2, 1) << 1, 0).finished());
   CHECK(parse_matrix("diag(1, 2)") == (Eigen::MatrixXd(2, 2) << 1, 0, 0, 2).finished());
   CHECK(parse_matrix("identity", 3) == Eigen::MatrixXd::Identity(3, 3));
-  CHECK_THROWS_WITH(parse_matrix("1 2; 3"), "in matrix \"1 2; 3\": row 2 has 1 entries, row 1 has 2");
+  CHECK_THROWS_WITH(parse_matrix("1 2; 3"),
+                    "in matrix \"1 2; 3\": row 2 has 1 entries, row 1 has 2");
   CHECK_THROWS_WITH(parse_matrix("1 x"), "in matrix \"1 x\": 'x' is not a number");
 }
 
@@ -71,12 +71,14 @@ TEST_CASE("the Jacobian of the coupled system matches finite differences", "[ada
     for (int i = 0; i < 7; ++i) centres.push_back(track.length * i / 7.0);
     const auto basis = k->basis(centres);
     const Eigen::MatrixXd map = Eigen::MatrixXd::Identity(7, 7) * 3.0;
-    const std::function<double(double)> road = [&](double s) { return 2 * std::sin(2 * std::numbers::pi * s / track.length); };
+    const std::function<double(double)> road = [&](double s) {
+      return 2 * std::sin(2 * std::numbers::pi * s / track.length);
+    };
     AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, track, 0.7);
     const auto m = system.dimension();
     REQUIRE(m == 15);
     Eigen::VectorXd z(m);
-    for (Eigen::Index i = 0; i < m; ++i) z(i) = std::sin(1.0 + i);
+    for (Eigen::Index i = 0; i < m; ++i) z(i) = std::sin(1.0 + static_cast<double>(i));
     const double t = 3.3;  // s = 2.31: not a knot of the B-spline kernel
     system.set_segment(3.0, 3.6);
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);

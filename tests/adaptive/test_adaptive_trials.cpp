@@ -1,7 +1,6 @@
 // Adaptive trials end to end: integrators agree, restarts at kinks do not change results, the
 // state error goes to zero, and a road in H_n is learnt (alpha -> alpha*, V non-increasing).
 #include <catch2/catch.hpp>
-
 #include <cmath>
 
 #include "rkhs/run.hpp"
@@ -32,7 +31,9 @@ Outcome run(const std::string& text) {
   return out;
 }
 
-double relative(double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); }
+double relative(double a, double b) {
+  return std::abs(a - b) / std::max(std::abs(b), 1e-300);
+}
 
 }  // namespace
 
@@ -138,8 +139,10 @@ final_time = 20.0
     CHECK(relative(learning.metric(i, "l2_error"), learning.metric(0, "l2_error")) < 1e-6);
     // x - xhat is a small difference of states of order 1: compare it absolutely, at a level
     // set by the tolerances (rtol 1e-9 on states of order 1, accumulated over the run).
-    CHECK(std::abs(learning.metric(i, "final_state_error") - learning.metric(0, "final_state_error")) < 1e-7);
-    UNSCOPED_INFO(learning.trials[i].integrator.name << " " << learning.metric(i, "final_state_error"));
+    CHECK(std::abs(learning.metric(i, "final_state_error") -
+                   learning.metric(0, "final_state_error")) < 1e-7);
+    UNSCOPED_INFO(learning.trials[i].integrator.name << " "
+                                                     << learning.metric(i, "final_state_error"));
   }
   CHECK(learning.metric(0, "final_state_error") > 1e-5);
 }
@@ -177,7 +180,8 @@ laps = 1
     CHECK(out.metric(with, "segments") > 60);
     CHECK(out.metric(without, "segments") < 25);
     CHECK(relative(out.metric(with, "l2_error"), out.metric(without, "l2_error")) < 1e-4);
-    CHECK(relative(out.metric(with, "final_state_error"), out.metric(without, "final_state_error")) < 1e-3);
+    CHECK(relative(out.metric(with, "final_state_error"),
+                   out.metric(without, "final_state_error")) < 1e-3);
   }
 }
 

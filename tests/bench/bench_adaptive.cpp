@@ -30,25 +30,32 @@ void right_hand_side(benchmark::State& state, const std::string& kernel_name, bo
   const auto n = static_cast<std::size_t>(state.range(0));
   const auto kernel = make(kernel_name);
   std::vector<double> centres(n);
-  for (std::size_t i = 0; i < n; ++i) centres[i] = track.length * static_cast<double>(i) / static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i)
+    centres[i] = track.length * static_cast<double>(i) / static_cast<double>(n);
   const auto* plant_entry = rkhs::plant_registry().find("quarter_car");
-  const auto plant = plant_entry->factory(rkhs::ParameterSet::resolve(plant_entry->info.parameters, {}));
+  const auto plant =
+      plant_entry->factory(rkhs::ParameterSet::resolve(plant_entry->info.parameters, {}));
   const auto P = rkhs::solve_lyapunov(plant->A(), Eigen::MatrixXd::Identity(4, 4)).P;
   const rkhs::GramSolver solver(kernel->gram(centres), {});
   const auto size = static_cast<Eigen::Index>(n);
-  const Eigen::MatrixXd map = rkhs_law ? Eigen::MatrixXd(solver.solve(Eigen::MatrixXd(Eigen::MatrixXd::Identity(size, size))) / 2e4)
-                                       : Eigen::MatrixXd(Eigen::MatrixXd::Identity(size, size) / 2e4);
+  const Eigen::MatrixXd map =
+      rkhs_law ? Eigen::MatrixXd(
+                     solver.solve(Eigen::MatrixXd(Eigen::MatrixXd::Identity(size, size))) / 2e4)
+               : Eigen::MatrixXd(Eigen::MatrixXd::Identity(size, size) / 2e4);
   const auto basis = kernel->basis(centres);
   const std::function<double(double)> road = [](double s) { return 2 * std::sin(s / 4); };
   rkhs::AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, track, 1e-4);
   Eigen::VectorXd z = Eigen::VectorXd::Constant(system.dimension(), 0.1), dz(system.dimension());
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(system.dimension(), system.dimension());
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(system.dimension(),
+                                                                           system.dimension());
   Eigen::VectorXd dfdt(system.dimension());
   double t = 1.0;
   system.set_segment(0.0, 1e9);
   for (auto _ : state) {
-    if (jacobian) system.jacobian(z.data(), J.data(), t, dfdt.data());
-    else system.rhs(z.data(), dz.data(), t);
+    if (jacobian)
+      system.jacobian(z.data(), J.data(), t, dfdt.data());
+    else
+      system.rhs(z.data(), dz.data(), t);
     t += 37.0;  // move along the track
     benchmark::DoNotOptimize(dz.data());
     benchmark::DoNotOptimize(J.data());
@@ -57,7 +64,8 @@ void right_hand_side(benchmark::State& state, const std::string& kernel_name, bo
 }
 
 // A whole trial: one lap of the learning configuration.
-void one_lap_trial(benchmark::State& state, const std::string& kernel_name, const std::string& law) {
+void one_lap_trial(benchmark::State& state, const std::string& kernel_name,
+                   const std::string& law) {
   const std::string text = R"(
 [study]
 name = "bench"
@@ -66,10 +74,12 @@ evaluation_points = 1024
 [domain]
 radius = 4.0
 [grid]
-n = [)" + std::to_string(state.range(0)) + R"(]
+n = [)" + std::to_string(state.range(0)) +
+                           R"(]
 [[kernel]]
 name = ")" + kernel_name + R"("
-)" + (kernel_name == "bspline" ? "degree = 2\nJ = 6\n" : "") + R"(
+)" + (kernel_name == "bspline" ? "degree = 2\nJ = 6\n" : "") +
+                           R"(
 [[law]]
 name = ")" + law + R"("
 gamma = 2e4
@@ -92,20 +102,45 @@ laps = 1
 }  // namespace
 
 BENCHMARK_CAPTURE(right_hand_side, gaussian_gradient, std::string("gaussian"), false, false)
-    ->RangeMultiplier(2)->Range(16, 1024)->Complexity();
+    ->RangeMultiplier(2)
+    ->Range(16, 1024)
+    ->Complexity();
 BENCHMARK_CAPTURE(right_hand_side, gaussian_rkhs, std::string("gaussian"), true, false)
-    ->RangeMultiplier(2)->Range(16, 1024)->Complexity();
+    ->RangeMultiplier(2)
+    ->Range(16, 1024)
+    ->Complexity();
 BENCHMARK_CAPTURE(right_hand_side, bspline_gradient, std::string("bspline"), false, false)
-    ->RangeMultiplier(2)->Range(16, 1024)->Complexity();
+    ->RangeMultiplier(2)
+    ->Range(16, 1024)
+    ->Complexity();
 BENCHMARK_CAPTURE(right_hand_side, bspline_rkhs, std::string("bspline"), true, false)
-    ->RangeMultiplier(2)->Range(16, 1024)->Complexity();
+    ->RangeMultiplier(2)
+    ->Range(16, 1024)
+    ->Complexity();
 BENCHMARK_CAPTURE(right_hand_side, bspline_rkhs_jacobian, std::string("bspline"), true, true)
-    ->RangeMultiplier(2)->Range(16, 256)->Complexity();
+    ->RangeMultiplier(2)
+    ->Range(16, 256)
+    ->Complexity();
 BENCHMARK_CAPTURE(one_lap_trial, gaussian_rkhs, std::string("gaussian"), std::string("rkhs"))
-    ->Arg(10)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(50)
+    ->Arg(100)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 BENCHMARK_CAPTURE(one_lap_trial, bspline_gradient, std::string("bspline"), std::string("gradient"))
-    ->Arg(10)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(50)
+    ->Arg(100)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 BENCHMARK_CAPTURE(one_lap_trial, bspline_rkhs, std::string("bspline"), std::string("rkhs"))
-    ->Arg(10)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(50)
+    ->Arg(100)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 BENCHMARK_MAIN();

@@ -1,46 +1,31 @@
 // The rkhs-study command as a user runs it: outputs, exit codes, error messages.
-#include <catch2/catch.hpp>
+#include <sys/wait.h>
 
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 #include "../shared_data_support.hpp"
+#include "cli_support.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using rkhs::test::read_text;
 
-Outcome run(const std::string& arguments) {
-  const std::string command = std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe);
-  std::string output;
-  char buffer[4096];
-  while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+rkhs::test::CommandOutcome run(const std::string& arguments) {
+  return rkhs::test::rkhs_study(arguments);
 }
 
 std::string read(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return read_text(file);
 }
 
 fs::path scratch(const std::string& name) {
-  auto dir = fs::temp_directory_path() / ("rkhs_cli_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
+  return rkhs::test::scratch_directory("cli_test_" + name);
 }
 
 const char* const small_study = R"([study]
@@ -82,12 +67,14 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
   CHECK_FALSE(fs::exists(dir / "out" / "journal.csv"));
   const int json_ok = std::system(("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
                                    "assert d[\"counts\"][\"trials\"]==6 and len(d[\"rates\"])>0' " +
-                                   (dir / "out" / "summary.json").string()).c_str());
+                                   (dir / "out" / "summary.json").string())
+                                      .c_str());
   CHECK(json_ok == 0);
 
   // The same study with one thread writes the same trials.csv, byte for byte.
   REQUIRE(run("run " + (dir / "study.toml").string() + " --quiet --out " + (dir / "one").string() +
-              " --threads 1").exit_code == 0);
+              " --threads 1")
+              .exit_code == 0);
   CHECK(read(dir / "one" / "trials.csv") == trials);
   CHECK(read(dir / "one" / "rates.csv") == rates);
 }

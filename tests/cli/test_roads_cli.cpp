@@ -8,42 +8,29 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_support.hpp"
 #include "rkhs/sha256.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using Outcome = rkhs::test::CommandOutcome;
 
-// `environment` is prefixed to the command (e.g. "RKHS_STUDY_DATA=/x").
+// `environment` is prefixed to the command (e.g. "RKHS_STUDY_DATA=/x"); the caller's own
+// RKHS_STUDY_DATA is removed so that each test says where the data is.
 Outcome rkhs_study(const std::string& arguments, const std::string& environment = "") {
-  const std::string command = "env -u RKHS_STUDY_DATA " + environment + " " +
-                              std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe);
-  std::string output;
-  char buffer[4096];
-  while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+  return rkhs::test::rkhs_study(arguments, "env -u RKHS_STUDY_DATA " + environment);
 }
 
 fs::path scratch(const std::string& name) {
-  auto dir = fs::temp_directory_path() / ("rkhs_roads_cli_" + name);
-  fs::remove_all(dir);
+  auto dir = rkhs::test::scratch_directory("roads_cli_" + name);
   fs::create_directories(dir / "data" / "roads");
   return dir;
 }
 
 std::string read(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return rkhs::test::read_text(file);
 }
 
 const char* const road_study = R"([study]

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_support.hpp"
 #include "plugin_test_support.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/study.hpp"
@@ -16,28 +17,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using Outcome = rkhs::test::CommandOutcome;
 
 Outcome run(const std::string& arguments, const std::string& environment = "") {
-  const std::string command =
-      environment + " " + std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe);
-  std::string output;
-  char buffer[4096];
-  while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+  return rkhs::test::rkhs_study(arguments, environment);
 }
 
 fs::path scratch(const std::string& name) {
-  auto dir = fs::temp_directory_path() / ("rkhs_plugin_cli_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
+  return rkhs::test::scratch_directory("plugin_cli_test_" + name);
 }
 
 const fs::path plugin_dir = RKHS_TEST_PLUGIN_DIR;

@@ -78,9 +78,9 @@ struct IntegrationStats {
 class Integrator {
  public:
   virtual ~Integrator() = default;
-  virtual IntegrationStats integrate(AdaptiveSystem& system, Eigen::VectorXd& z,
-                                     std::span<const double> breakpoints,
-                                     const std::function<void(std::size_t, const double*)>& observe) const = 0;
+  virtual IntegrationStats integrate(
+      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      const std::function<void(std::size_t, const double*)>& observe) const = 0;
   /// Whether to stop and restart at the kinks of phi(s(t)) and f(s(t)).
   virtual bool restarts_at_kinks() const noexcept = 0;
 };
@@ -101,14 +101,14 @@ bool register_integrator() noexcept {
 
 /// Study-wide settings of adaptive trials ([adaptive] in a study file).
 struct AdaptiveSettings {
-  double speed = 1.0;          ///< v, m/s
-  double laps = 10;            ///< T = laps L / v unless final_time > 0
-  double final_time = 0;       ///< s
-  std::string q = "identity";  ///< Q of the Lyapunov equation (parse_matrix syntax)
-  bool projected_road = false; ///< drive the plant with Pi_n f (in H_n) instead of f
-  std::vector<double> snapshot_laps;    ///< laps at which fhat is recorded (estimates.csv)
-  std::size_t snapshot_points = 256;    ///< points of the snapshot grid
-  std::size_t samples_per_lap = 20;     ///< output samples for V and |x - xhat|
+  double speed = 1.0;                 ///< v, m/s
+  double laps = 10;                   ///< T = laps L / v unless final_time > 0
+  double final_time = 0;              ///< s
+  std::string q = "identity";         ///< Q of the Lyapunov equation (parse_matrix syntax)
+  bool projected_road = false;        ///< drive the plant with Pi_n f (in H_n) instead of f
+  std::vector<double> snapshot_laps;  ///< laps at which fhat is recorded (estimates.csv)
+  std::size_t snapshot_points = 256;  ///< points of the snapshot grid
+  std::size_t samples_per_lap = 20;   ///< output samples for V and |x - xhat|
   double final_time_or_laps(double length) const {
     return final_time > 0 ? final_time : laps * length / speed;
   }
@@ -142,12 +142,13 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                      std::span<const double> centres, const class Plant& plant,
                                      const class LearningLaw& law, const Integrator& integrator,
                                      const AdaptiveSettings& settings,
-                                     std::size_t evaluation_points, const struct SolverOptions& solver);
+                                     std::size_t evaluation_points,
+                                     const struct SolverOptions& solver);
 
 }  // namespace rkhs
 
-#define RKHS_REGISTER_INTEGRATOR(Type)                                       \
-  namespace {                                                                \
+#define RKHS_REGISTER_INTEGRATOR(Type)                                        \
+  namespace {                                                                 \
   [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_integrator_registered_) = \
-      ::rkhs::register_integrator<Type>();                                   \
+      ::rkhs::register_integrator<Type>();                                    \
   }

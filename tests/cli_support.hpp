@@ -1,0 +1,51 @@
+#pragma once
+// Running the rkhs-study command from tests, as a user would.
+
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace rkhs::test {
+
+struct CommandOutcome {
+  int exit_code;       ///< -1 when the command did not exit normally
+  std::string output;  ///< stdout and stderr, interleaved
+};
+
+/// Runs the rkhs-study executable of this build with `arguments`. `environment` is put before
+/// the command (e.g. "RKHS_STUDY_DATA=/x" or "env -u RKHS_STUDY_DATA").
+inline CommandOutcome rkhs_study(const std::string& arguments,
+                                 const std::string& environment = "") {
+  const std::string command =
+      environment + " " + std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  REQUIRE(pipe);
+  std::string output;
+  char buffer[4096];
+  while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+/// The whole content of a text file ("" when it cannot be read).
+inline std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// A fresh, empty directory rkhs_<name> under the system's temporary directory.
+inline std::filesystem::path scratch_directory(const std::string& name) {
+  auto dir = std::filesystem::temp_directory_path() / ("rkhs_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace rkhs::test
