@@ -16,6 +16,7 @@
 #include <iostream>
 #include <thread>
 
+#include "rkhs/adaptive.hpp"
 #include "rkhs/approximation.hpp"
 #include "rkhs/build_info.hpp"
 #include "rkhs/centres.hpp"
@@ -24,6 +25,7 @@
 #include "rkhs/output.hpp"
 #include "rkhs/plugin_loader.hpp"
 #include "rkhs/plugin_verification.hpp"
+#include "rkhs/plant.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/run.hpp"
 #include "rkhs/study.hpp"
@@ -87,9 +89,15 @@ int command_list(const std::string& kind) {
   if (all || kind == "kernel" || kind == "kernels") list_registry(rkhs::kernel_registry(), std::cout);
   if (all || kind == "centres") list_registry(rkhs::centre_registry(), std::cout);
   if (all || kind == "target" || kind == "targets") list_registry(rkhs::target_registry(), std::cout);
+  if (all || kind == "plant" || kind == "plants") list_registry(rkhs::plant_registry(), std::cout);
+  if (all || kind == "law" || kind == "laws") list_registry(rkhs::law_registry(), std::cout);
+  if (all || kind == "integrator" || kind == "integrators")
+    list_registry(rkhs::integrator_registry(), std::cout);
   if (all || kind == "metric" || kind == "metrics") {
-    std::cout << "metrics (approximation trials):\n";
-    for (const auto& name : rkhs::metric_names("approximation")) std::cout << "  " << name << "\n";
+    for (const char* study_kind : {"approximation", "adaptive"}) {
+      std::cout << "metrics (" << study_kind << " trials):\n";
+      for (const auto& name : rkhs::metric_names(study_kind)) std::cout << "  " << name << "\n";
+    }
   }
   if (const auto plugins = rkhs::loaded_plugins(); all && !plugins.empty()) {
     std::cout << "\nplugin modules:\n";
@@ -258,9 +266,12 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
   run->add_flag("--quiet,-q", quiet, "print only the final summary line");
 
-  auto* list = app.add_subcommand("list", "list plugins (kernel, centres, target) or metrics, with parameters");
-  list->add_option("kind", kind, "kernel, centres, target or metrics (default: all)")
-      ->check(CLI::IsMember({"kernel", "kernels", "centres", "target", "targets", "metric", "metrics"}));
+  auto* list = app.add_subcommand(
+      "list", "list plugins (kernel, centres, target, plant, law, integrator) or metrics");
+  list->add_option("kind", kind,
+                   "kernel, centres, target, plant, law, integrator or metrics (default: all)")
+      ->check(CLI::IsMember({"kernel", "kernels", "centres", "target", "targets", "plant", "plants",
+                             "law", "laws", "integrator", "integrators", "metric", "metrics"}));
 
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);

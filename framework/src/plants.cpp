@@ -152,37 +152,28 @@ class LinearPlant final : public Plant {
   Eigen::VectorXd B_;
 };
 
-class GradientLaw final : public LearningLaw {
+/// alpha' = Gamma^-1 [G^-1] phi(s) B^T P (x - xhat) with a scalar gain: the gradient law
+/// (eq. a3) without G^-1, the rkhs law (eq. 4.2) with it.
+template <bool UsesGramInverse>
+class ScalarGainLaw final : public LearningLaw {
  public:
   static PluginInfo info() {
-    return {"gradient",
-            "alpha' = Gamma^-1 phi(s) B^T P (x - xhat) (eq. a3)",
-            {positive_parameter("gamma", 1e-3, "the gain Gamma")},
-            {}};
+    if constexpr (UsesGramInverse)
+      return {"rkhs", "alpha' = Gamma^-1 G^-1 phi(s) B^T P (x - xhat) (eq. 4.2)",
+              {positive_parameter("gamma", 1e-3, "the gain Gamma")}, {}};
+    else
+      return {"gradient", "alpha' = Gamma^-1 phi(s) B^T P (x - xhat) (eq. a3)",
+              {positive_parameter("gamma", 1e-3, "the gain Gamma")}, {}};
   }
-  explicit GradientLaw(const ParameterSet& p) : gain_(p.real("gamma")) {}
-  bool uses_gram_inverse() const noexcept override { return false; }
+  explicit ScalarGainLaw(const ParameterSet& p) : gain_(p.real("gamma")) {}
+  bool uses_gram_inverse() const noexcept override { return UsesGramInverse; }
   double gain() const noexcept override { return gain_; }
 
  private:
   double gain_;
 };
-
-class RkhsLaw final : public LearningLaw {
- public:
-  static PluginInfo info() {
-    return {"rkhs",
-            "alpha' = Gamma^-1 G^-1 phi(s) B^T P (x - xhat) (eq. 4.2)",
-            {positive_parameter("gamma", 1e-3, "the gain Gamma")},
-            {}};
-  }
-  explicit RkhsLaw(const ParameterSet& p) : gain_(p.real("gamma")) {}
-  bool uses_gram_inverse() const noexcept override { return true; }
-  double gain() const noexcept override { return gain_; }
-
- private:
-  double gain_;
-};
+using GradientLaw = ScalarGainLaw<false>;
+using RkhsLaw = ScalarGainLaw<true>;
 
 }  // namespace
 }  // namespace rkhs

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 
+#include "rkhs/adaptive.hpp"
 #include "rkhs/centres.hpp"
+#include "rkhs/plant.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/target.hpp"
@@ -67,7 +69,8 @@ std::string closest_name(std::string_view name, const std::vector<std::string>& 
 std::vector<std::string> registration_errors() {
   std::vector<std::string> all;
   for (auto errors : {kernel_registry().errors(), centre_registry().errors(),
-                      target_registry().errors()})
+                      target_registry().errors(), plant_registry().errors(),
+                      law_registry().errors(), integrator_registry().errors()})
     all.insert(all.end(), errors.begin(), errors.end());
   return all;
 }
@@ -77,6 +80,9 @@ const BuiltinNames& builtin_plugin_names() {
       .kernels = {"bspline", "gaussian", "matern", "wendland"},
       .centres = {"random", "uniform"},
       .targets = {"csv", "iso8608", "sine"},
+      .plants = {"linear", "quarter_car"},
+      .laws = {"gradient", "rkhs"},
+      .integrators = {"dopri5", "rk4", "rk_fehlberg78", "rodas4", "rosenbrock4"},
   };
   return names;
 }
@@ -90,6 +96,12 @@ std::vector<std::string> missing_builtin_plugins() {
     if (!centre_registry().find(name)) missing.push_back("centres '" + name + "'");
   for (const auto& name : builtin.targets)
     if (!target_registry().find(name)) missing.push_back("target '" + name + "'");
+  for (const auto& name : builtin.plants)
+    if (!plant_registry().find(name)) missing.push_back("plant '" + name + "'");
+  for (const auto& name : builtin.laws)
+    if (!law_registry().find(name)) missing.push_back("law '" + name + "'");
+  for (const auto& name : builtin.integrators)
+    if (!integrator_registry().find(name)) missing.push_back("integrator '" + name + "'");
   return missing;
 }
 
@@ -97,6 +109,9 @@ void freeze_registries() {
   kernel_registry().freeze();
   centre_registry().freeze();
   target_registry().freeze();
+  plant_registry().freeze();
+  law_registry().freeze();
+  integrator_registry().freeze();
 }
 
 }  // namespace rkhs

@@ -101,7 +101,13 @@ TEST_CASE("list shows plugins with parameters and docs; --help works", "[cli]") 
   CHECK(outcome.exit_code == 0);
   for (const char* expected : {"bspline", "gaussian", "matern", "wendland", "sigma", "degree"})
     CHECK_THAT(outcome.output, Catch::Contains(expected));
+  outcome = run("list integrator");
+  CHECK(outcome.exit_code == 0);
+  for (const char* expected : {"rosenbrock4", "rodas4", "dopri5", "rk_fehlberg78", "rk4", "rtol"})
+    CHECK_THAT(outcome.output, Catch::Contains(expected));
   outcome = run("list");
+  for (const char* expected : {"quarter_car", "linear", "gradient", "rkhs", "lyapunov_max_increase"})
+    CHECK_THAT(outcome.output, Catch::Contains(expected));
   CHECK_THAT(outcome.output, Catch::Contains("uniform"));
   CHECK_THAT(outcome.output, Catch::Contains("power_function_sup"));
   for (const char* help : {"--help", "run --help", "list --help", "validate --help"}) {

@@ -2,7 +2,9 @@
 // recorded instead of thrown, and names are suggested for misspellings.
 #include <catch2/catch.hpp>
 
+#include "rkhs/adaptive.hpp"
 #include "rkhs/centres.hpp"
+#include "rkhs/plant.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/target.hpp"
@@ -15,6 +17,9 @@ TEST_CASE("every built-in plugin is registered and no registration failed", "[re
   CHECK(centre_registry().names() == builtin_plugin_names().centres);
   CHECK(target_registry().names() == builtin_plugin_names().targets);
   for (const auto& name : builtin_plugin_names().kernels) CHECK(kernel_registry().find(name));
+  CHECK(plant_registry().names() == builtin_plugin_names().plants);
+  CHECK(law_registry().names() == builtin_plugin_names().laws);
+  CHECK(integrator_registry().names() == builtin_plugin_names().integrators);
 }
 
 TEST_CASE("a bad registration is recorded, not thrown", "[registry]") {

@@ -15,6 +15,9 @@ struct BuiltinNames {
   std::vector<std::string> kernels;
   std::vector<std::string> centres;
   std::vector<std::string> targets;
+  std::vector<std::string> plants;
+  std::vector<std::string> laws;
+  std::vector<std::string> integrators;
 };
 const BuiltinNames& builtin_plugin_names();
 
