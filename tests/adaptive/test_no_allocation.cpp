@@ -1,0 +1,76 @@
+// The right-hand side and the Jacobian of the coupled system allocate nothing: every global
+// operator new of this test binary is counted while the hot calls run.
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <numbers>
+
+#include "rkhs/adaptive.hpp"
+#include "rkhs/gram_solver.hpp"
+#include "rkhs/lyapunov.hpp"
+#include "rkhs/plant.hpp"
+
+namespace {
+std::atomic<long> allocations{0};
+thread_local bool counting = false;
+}  // namespace
+
+// Replacements of the global allocation functions for this executable (the standard allows
+// exactly one definition per program): they count while `counting` is set.
+void* operator new(std::size_t size) {
+  if (counting) ++allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace rkhs;
+
+TEST_CASE("no heap allocation in the right-hand side or the Jacobian", "[adaptive]") {
+  const Domain track{2 * std::numbers::pi * 4, true};
+  const auto* plant_entry = plant_registry().find("quarter_car");
+  const auto plant = plant_entry->factory(ParameterSet::resolve(plant_entry->info.parameters, {}));
+  const auto P = solve_lyapunov(plant->A(), Eigen::MatrixXd::Identity(4, 4)).P;
+  const std::function<double(double)> road = [](double s) { return 2 * std::sin(s / 4); };
+  for (const std::string name : {"gaussian", "bspline", "wendland", "matern"}) {
+    const auto* entry = kernel_registry().find(name);
+    const auto kernel = entry->factory(ParameterSet::resolve(entry->info.parameters, {}), track);
+    std::vector<double> centres;
+    for (int i = 0; i < 40; ++i) centres.push_back(track.length * i / 40.0);
+    const GramSolver solver(kernel->gram(centres), {});
+    for (bool rkhs_law : {false, true}) {
+      const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(40, 40);
+      const Eigen::MatrixXd map = rkhs_law ? Eigen::MatrixXd(solver.solve(identity)) : identity;
+      const auto basis = kernel->basis(centres);
+      AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, track, 0.3);
+      const auto m = system.dimension();
+      Eigen::VectorXd z = Eigen::VectorXd::Constant(m, 0.1), dz(m), dfdt(m);
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
+      system.set_segment(0.0, 100.0);
+      system.rhs(z.data(), dz.data(), 1.0);  // first calls may size scratch buffers
+      system.jacobian(z.data(), J.data(), 1.0, dfdt.data());
+      allocations = 0;
+      counting = true;
+      for (int k = 0; k < 50; ++k) {
+        system.rhs(z.data(), dz.data(), 1.0 + 1.7 * k);
+        system.jacobian(z.data(), J.data(), 1.0 + 1.7 * k, dfdt.data());
+      }
+      counting = false;
+      INFO(name << (rkhs_law ? " rkhs" : " gradient"));
+      CHECK(allocations == 0);
+    }
+  }
+  // The counter works: an allocation while counting is seen.
+  allocations = 0;
+  counting = true;
+  auto* probe = new std::vector<double>(16);
+  counting = false;
+  delete probe;
+  CHECK(allocations >= 1);
+}
