@@ -10,6 +10,9 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <optional>
+#include <csignal>
+#include <atomic>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -27,6 +30,7 @@
 #include "rkhs/plugin_verification.hpp"
 #include "rkhs/plant.hpp"
 #include "rkhs/plugins.hpp"
+#include "rkhs/result_store.hpp"
 #include "rkhs/run.hpp"
 #include "rkhs/study.hpp"
 #include "rkhs/study_rates.hpp"
@@ -37,7 +41,49 @@
 
 namespace {
 
-constexpr int exit_ok = 0, exit_failed_trials = 1, exit_bad_input = 2;
+constexpr int exit_ok = 0, exit_failed_trials = 1, exit_bad_input = 2, exit_interrupted = 130;
+
+// Where finished trials are committed (docs/results.md): shared by every study run from here.
+struct StoreOptions {
+  std::string file = "results/rkhs-study.sqlite";
+  bool fresh = false;     ///< run every trial again (results are still stored)
+  bool disabled = false;  ///< no store at all
+};
+
+// SIGINT / SIGTERM: trials in flight finish and are stored; no new trial starts.
+std::atomic<bool> interrupted{false};
+extern "C" void request_stop(int) { interrupted = true; }
+
+void install_stop_handlers() {
+  std::signal(SIGINT, request_stop);
+  std::signal(SIGTERM, request_stop);
+}
+
+// Runs the trials through the store; prints how to resume when interrupted.
+rkhs::StoredRun run_trials_stored(const rkhs::StudyDefinition& study,
+                                  const std::vector<rkhs::TrialSpec>& trials,
+                                  rkhs::RunOptions options, const StoreOptions& store_options,
+                                  bool quiet) {
+  std::optional<rkhs::ResultStore> store;
+  if (!store_options.disabled) store.emplace(store_options.file);
+  install_stop_handlers();
+  options.stop_requested = [] { return interrupted.load(); };
+  rkhs::freeze_registries();
+  auto run = rkhs::run_with_store(study, trials, options, store ? &*store : nullptr, store_options.fresh);
+  if (!quiet && store)
+    std::cerr << fmt::format("  {} trials reused from {}, {} run now\n", run.reused,
+                             store->file().string(), run.ran);
+  return run;
+}
+
+int report_interruption(const rkhs::StoredRun& run, const StoreOptions& store_options) {
+  std::cerr << fmt::format(
+      "rkhs-study: interrupted: {} trials finished and stored, {} not started.{}\n", run.ran,
+      run.skipped,
+      store_options.disabled ? " Nothing was stored (--no-store)."
+                             : " Run the same command again to resume: stored trials are reused.");
+  return exit_interrupted;
+}
 
 std::string utc_now() {
   const std::time_t now = std::time(nullptr);
@@ -142,7 +188,8 @@ class Journal {
   std::ofstream out_;
 };
 
-int command_run(const std::string& study_file, std::string out_dir, int threads, bool quiet) {
+int command_run(const std::string& study_file, std::string out_dir, int threads, bool quiet,
+                const StoreOptions& store_options) {
   const auto study = rkhs::load_study(study_file);
   if (out_dir.empty()) out_dir = (std::filesystem::path("results") / study.name).string();
   const auto trials = study.trials();
@@ -173,8 +220,11 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
                                failed, std::chrono::duration<double>(now - start).count());
     }
   };
-  rkhs::freeze_registries();
-  const auto results = rkhs::run_trials(study, trials, options);
+  const auto stored = run_trials_stored(study, trials, options, store_options, quiet);
+  if (stored.skipped) return report_interruption(stored, store_options);
+  const auto& results = stored.results;
+  failed = 0;
+  for (const auto& result : results) failed += result.ok ? 0 : 1;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto rates = rkhs::compute_rates(study, trials, results);
@@ -197,7 +247,8 @@ struct CheckArguments {
   bool strict = false;
 };
 
-int command_check(const CheckArguments& arguments, int threads, bool quiet) {
+int command_check(const CheckArguments& arguments, int threads, bool quiet,
+                  const StoreOptions& store_options) {
   auto study = rkhs::load_study(arguments.study_file);
   if (!arguments.tier.empty()) study = rkhs::restrict_to_tier(std::move(study), arguments.tier);
   const auto trials = study.trials();
@@ -210,8 +261,9 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet) {
   const auto start = std::chrono::steady_clock::now();
   rkhs::RunOptions options;
   options.threads = thread_count;
-  rkhs::freeze_registries();
-  const auto results = rkhs::run_trials(study, trials, options);
+  const auto stored = run_trials_stored(study, trials, options, store_options, quiet);
+  if (stored.skipped) return report_interruption(stored, store_options);
+  const auto& results = stored.results;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto rates = rkhs::compute_rates(study, trials, results);
@@ -265,6 +317,14 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "output directory (default: results/<study name>)");
   run->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
   run->add_flag("--quiet,-q", quiet, "print only the final summary line");
+  StoreOptions store_options;
+  auto add_store_options = [&](CLI::App* command) {
+    command->add_option("--store", store_options.file,
+                        "result store (SQLite) shared by studies (default: results/rkhs-study.sqlite)");
+    command->add_flag("--fresh", store_options.fresh, "run every trial again, ignoring stored results");
+    command->add_flag("--no-store", store_options.disabled, "neither read nor write a result store");
+  };
+  add_store_options(run);
 
   auto* list = app.add_subcommand(
       "list", "list plugins (kernel, centres, target, plant, law, integrator) or metrics");
@@ -291,6 +351,7 @@ int main(int argc, char** argv) {
                     "also write trials.csv, rates.csv and summary.json here (default: none)");
   check->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
   check->add_flag("--quiet,-q", quiet, "no progress line");
+  add_store_options(check);
 
   // Plugin modules: --plugin (repeatable) here, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]`.
   std::vector<std::string> plugin_files;
@@ -331,10 +392,10 @@ int main(int argc, char** argv) {
     for (const auto& file : plugin_files) rkhs::load_plugin(file);
     if (!data_dir.empty()) rkhs::set_data_root(data_dir);
     if (*verify) return command_verify_plugin(plugin_to_verify);
-    if (*run) return command_run(study_file, out_dir, threads, quiet);
+    if (*run) return command_run(study_file, out_dir, threads, quiet, store_options);
     if (*list) return command_list(kind);
     if (*validate) return command_validate(study_file);
-    if (*check) return command_check(check_arguments, threads, quiet);
+    if (*check) return command_check(check_arguments, threads, quiet, store_options);
   } catch (const rkhs::StudyError& e) {
     std::cerr << e.what() << "\n";
     return exit_bad_input;

@@ -125,6 +125,11 @@ std::vector<TrialResult> run_trials(const StudyDefinition& study,
         [&](const tbb::blocked_range<std::size_t>& range) {
           for (std::size_t k = range.begin(); k != range.end(); ++k) {
             const std::size_t i = order[k];
+            if (options.stop_requested && options.stop_requested()) {
+              results[i].skipped = true;
+              results[i].reason = "not run: the run was interrupted";
+              continue;
+            }
             results[i] = run_trial(study, trials[i]);
             if (options.on_trial_finished) {
               std::lock_guard lock(report_mutex);

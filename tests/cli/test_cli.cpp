@@ -73,7 +73,7 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
 
   // The same study with one thread writes the same trials.csv, byte for byte.
   REQUIRE(run("run " + (dir / "study.toml").string() + " --quiet --out " + (dir / "one").string() +
-              " --threads 1")
+              " --threads 1 --fresh")
               .exit_code == 0);
   CHECK(read(dir / "one" / "trials.csv") == trials);
   CHECK(read(dir / "one" / "rates.csv") == rates);

@@ -20,6 +20,7 @@ struct TrialResult {
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
   double seconds = 0;             ///< wall time (not part of the deterministic results)
   std::string data_provenance;    ///< the target's external data ("sha256:..."), empty if none
+  bool skipped = false;           ///< not run: the run was interrupted before it started
   // Adaptive trials only:
   std::vector<TimeSample> samples;  ///< |x - xhat| and V at the output samples
   std::vector<double> road;         ///< f on the snapshot grid
@@ -29,7 +30,10 @@ struct TrialResult {
 struct RunOptions {
   int threads = 0;  ///< worker threads; 0: all hardware threads
   /// Called after each trial, from the worker thread that ran it, serialised by a mutex.
-  std::function<void(const TrialSpec&, const TrialResult&)> on_trial_finished;
+  std::function<void(const TrialSpec&, const TrialResult&)> on_trial_finished = {};
+  /// Asked before each trial starts; when it returns true the trial is skipped (`skipped`,
+  /// not reported to on_trial_finished) and trials in flight finish normally.
+  std::function<bool()> stop_requested = {};
 };
 
 /// Runs one trial; never throws (failures are returned as results).

@@ -1,0 +1,139 @@
+// Runs that survive: a study killed with SIGKILL midway resumes where it stopped and gives
+// exactly the trials of an uninterrupted run; SIGINT stops cleanly and says how to resume; a
+// changed parameter re-runs only the affected trials.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <fstream>
+#include <fcntl.h>
+#include <thread>
+
+#include "cli_support.hpp"
+#include "rkhs/result_store.hpp"
+
+namespace fs = std::filesystem;
+using rkhs::test::read_text;
+using rkhs::test::rkhs_study;
+
+namespace {
+
+// Trials of about 0.1-1 s each, so that a run can be caught midway.
+std::string slow_study(const std::string& sigmas) {
+  return R"([study]
+name = "store_cli"
+evaluation_points = 4096
+metrics = ["gram_condition_number", "power_function_sup", "l2_error"]
+[domain]
+radius = 4
+[grid]
+n = { from = 300, to = 900, step = 150 }
+[[kernel]]
+name = "gaussian"
+sigma = )" + sigmas + "\n";
+}
+
+// Starts `rkhs-study args` in the background; returns its pid.
+pid_t start(const std::vector<std::string>& args) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    dup2(devnull, 1);
+    dup2(devnull, 2);
+    execv(RKHS_STUDY_EXECUTABLE, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+// Waits until the store holds at least `count` trials (or the process ended).
+void wait_for_stored(const fs::path& store, std::size_t count, pid_t pid) {
+  for (int i = 0; i < 600; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (waitpid(pid, nullptr, WNOHANG) == pid) FAIL("the run ended before it could be interrupted");
+    if (fs::exists(store) && rkhs::ResultStore(store).size() >= count) return;
+  }
+  FAIL("no trial was stored within 30 s");
+}
+
+}  // namespace
+
+TEST_CASE("a run killed with SIGKILL resumes and equals an uninterrupted run", "[cli][store]") {
+  const auto dir = rkhs::test::scratch_directory("store_kill");
+  std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
+  const auto store = dir / "store.sqlite";
+  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
+                           "--store", store.string(), "--out", (dir / "killed").string()});
+  wait_for_stored(store, 2, pid);
+  kill(pid, SIGKILL);
+  waitpid(pid, nullptr, 0);
+  const auto stored_before = rkhs::ResultStore(store).size();
+  CHECK(stored_before >= 2);
+  CHECK(stored_before < 10);
+
+  const auto resumed = rkhs_study("run " + (dir / "study.toml").string() + " --threads 2 --store " +
+                                  store.string() + " --out " + (dir / "resumed").string());
+  INFO(resumed.output);
+  REQUIRE(resumed.exit_code == 0);
+  CHECK_THAT(resumed.output, Catch::Contains(std::to_string(stored_before) + " trials reused"));
+  CHECK(rkhs::ResultStore(store).size() == 10);  // every trial exactly once
+
+  const auto clean = rkhs_study("run " + (dir / "study.toml").string() + " --quiet --no-store --out " +
+                                (dir / "clean").string());
+  REQUIRE(clean.exit_code == 0);
+  CHECK(read_text(dir / "resumed" / "trials.csv") == read_text(dir / "clean" / "trials.csv"));
+  CHECK(read_text(dir / "resumed" / "rates.csv") == read_text(dir / "clean" / "rates.csv"));
+}
+
+TEST_CASE("SIGINT finishes the trials in flight and says how to resume", "[cli][store]") {
+  const auto dir = rkhs::test::scratch_directory("store_sigint");
+  std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
+  const auto store = dir / "store.sqlite";
+  const auto log = dir / "log.txt";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
+    execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "run", (dir / "study.toml").c_str(),
+          "--threads", "1", "--quiet", "--store", store.c_str(), "--out", (dir / "out").c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  wait_for_stored(store, 1, pid);
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK_THAT(read_text(log), Catch::Contains("Run the same command again to resume"));
+  CHECK_FALSE(fs::exists(dir / "out" / "trials.csv"));  // outputs are for complete runs
+  const auto resumed = rkhs_study("run " + (dir / "study.toml").string() + " --store " +
+                                  store.string() + " --out " + (dir / "out").string());
+  CHECK(resumed.exit_code == 0);
+  CHECK(rkhs::ResultStore(store).size() == 10);
+}
+
+TEST_CASE("a changed parameter re-runs only the affected trials", "[cli][store]") {
+  const auto dir = rkhs::test::scratch_directory("store_change");
+  const auto store = dir / "store.sqlite";
+  std::ofstream(dir / "a.toml") << slow_study("[0.5, 0.7]");
+  std::ofstream(dir / "b.toml") << slow_study("[0.5, 0.9]");
+  auto first = rkhs_study("run " + (dir / "a.toml").string() + " --store " + store.string() +
+                          " --out " + (dir / "a").string());
+  REQUIRE(first.exit_code == 0);
+  CHECK_THAT(first.output, Catch::Contains("0 trials reused"));
+  auto second = rkhs_study("run " + (dir / "b.toml").string() + " --store " + store.string() +
+                           " --out " + (dir / "b").string());
+  INFO(second.output);
+  REQUIRE(second.exit_code == 0);
+  CHECK_THAT(second.output, Catch::Contains("5 trials reused from " + store.string() + ", 5 run now"));
+  auto fresh = rkhs_study("run " + (dir / "b.toml").string() + " --fresh --store " + store.string() +
+                          " --out " + (dir / "b").string());
+  CHECK_THAT(fresh.output, Catch::Contains("0 trials reused from " + store.string() + ", 10 run now"));
+}
