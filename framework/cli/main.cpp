@@ -204,7 +204,10 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   const auto start = std::chrono::steady_clock::now();
   auto last_report = start;
   std::size_t done = 0, failed = 0;
+  const bool terminal = isatty(STDERR_FILENO) != 0;
+  std::size_t pending_total = 0;  // trials the store does not hold (set before they run)
   rkhs::RunOptions options;
+  options.on_start = [&](std::size_t count) { pending_total = count; };
   options.threads = thread_count;
   options.on_trial_finished = [&](const rkhs::TrialSpec& trial, const rkhs::TrialResult& result) {
     journal.record(study, trial, result);
@@ -214,10 +217,25 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
       if (!quiet) std::cerr << fmt::format("  trial failed: {}: {}\n", trial.key, result.reason);
     }
     const auto now = std::chrono::steady_clock::now();
-    if (!quiet && (now - last_report > std::chrono::seconds(2) || done == trials.size())) {
+    if (quiet) return;
+    // Trials run now (stored ones are not counted here); the ETA assumes the rest cost alike.
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    const std::size_t total = std::max<std::size_t>(pending_total, 1);
+    const double eta = done ? elapsed / static_cast<double>(done) * static_cast<double>(total - std::min(done, total)) : 0.0;
+    if (terminal) {
+      // A bar redrawn in place, at most ten times a second.
+      if (now - last_report < std::chrono::milliseconds(100) && done < total) return;
       last_report = now;
-      std::cerr << fmt::format("  {}/{} trials done, {} failed, {:.1f} s\n", done, trials.size(),
-                               failed, std::chrono::duration<double>(now - start).count());
+      const std::size_t width = 30, filled = total ? width * std::min(done, total) / total : width;
+      std::cerr << fmt::format("\r  [{}{}] {}/{} trials, {} failed, {:.1f} s, ETA {:.0f} s   ",
+                               std::string(filled, '#'), std::string(width - filled, '-'), done,
+                               total, failed, elapsed, eta)
+                << (done >= total ? "\n" : "") << std::flush;
+    } else if (now - last_report > std::chrono::seconds(2) || done >= total) {
+      // Not a terminal (a log, CI): a line every few seconds.
+      last_report = now;
+      std::cerr << fmt::format("  {}/{} trials done, {} failed, {:.1f} s, ETA {:.0f} s\n", done,
+                               total, failed, elapsed, eta);
     }
   };
   const auto stored = run_trials_stored(study, trials, options, store_options, quiet);
@@ -234,7 +252,7 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
 
   if (!quiet) std::cout << rkhs::console_tables(record);
   std::cout << fmt::format("{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
-                           "rates.csv, summary.json\n",
+                           "rates.csv, summary.json, rates.md, rates.tex\n",
                            study.name, trials.size(), trials.size() - failed, failed, seconds, out_dir);
   return failed ? exit_failed_trials : exit_ok;
 }

@@ -372,6 +372,101 @@ std::string timeseries_csv(const RunRecord& run) {
   return out;
 }
 
+namespace {
+
+// One metric and group of a run, as a document table needs it.
+struct DocumentTable {
+  std::string metric, group, axis;
+  std::vector<std::string> abscissa, value, rate;
+  std::string fit;  // "-1.50 ± 0.03 (95% CI [-1.53, -1.47], R² = 0.999, 10 points)" or a reason
+};
+
+std::vector<DocumentTable> document_tables(const RunRecord& run) {
+  std::vector<DocumentTable> out;
+  for (const auto& metric : run.study.metrics)
+    for (const auto& series : run.rates) {
+      if (series.metric != metric || series.trials.empty()) continue;
+      const bool in_n = series.analysis.reported == RateModel::exponential ||
+                        run.study.abscissa == Abscissa::n;
+      DocumentTable table{metric, group_label(run.trials[series.trials.front()]),
+                          in_n ? std::string("n") : abscissa_name(run.study), {}, {}, {}, {}};
+      for (std::size_t k = 0; k < series.trials.size(); ++k) {
+        const double x = in_n ? series.n[k] : series.abscissa[k];
+        table.abscissa.push_back(in_n ? fmt::format("{}", run.trials[series.trials[k]].n)
+                                      : fmt::format("{:.4g}", x));
+        const double v = series.values[k];
+        table.value.push_back((std::isnan(v) ? std::string("failed") : fmt::format("{:.4g}", v)) +
+                              (series.flagged[k] ? "*" : ""));
+        const double r = k == 0 ? std::nan("") : series.pairwise[k - 1];
+        table.rate.push_back(std::isfinite(r) ? fmt::format("{:.2f}", r) : std::string("-"));
+      }
+      const auto& fit = series.fit;
+      table.fit = fit && std::isfinite(fit->std_error)
+                      ? fmt::format("{:.3g} ± {:.2g} (95% CI [{:.3g}, {:.3g}], R² = {:.3f}, {} points){}",
+                                    fit->rate, fit->std_error, fit->ci_low, fit->ci_high,
+                                    fit->r_squared, fit->points,
+                                    fit->model == RateModel::exponential ? ", exponential in n" : "")
+                  : fit ? fmt::format("{:.3g} ({} points, no uncertainty)", fit->rate, fit->points)
+                        : "no fit: " + series.no_fit_reason;
+      out.push_back(std::move(table));
+    }
+  return out;
+}
+
+std::string latex_escape(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '_' || c == '%' || c == '&' || c == '#' || c == '$') out += '\\';
+    if (c == '|') {
+      out += "$|$";
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string markdown_tables(const RunRecord& run) {
+  std::string out = fmt::format("# {}: rates\n\n", run.study.name);
+  for (const auto& t : document_tables(run)) {
+    std::string group = t.group;
+    for (std::size_t p = group.find('|'); p != std::string::npos; p = group.find('|', p + 2))
+      group.replace(p, 1, "\\|");
+    out += fmt::format("## {}\n\n{}\n\n| {} | {} | rate |\n|---:|---:|---:|\n", t.metric, group,
+                       t.axis, t.metric);
+    for (std::size_t k = 0; k < t.abscissa.size(); ++k)
+      out += fmt::format("| {} | {} | {} |\n", t.abscissa[k], t.value[k], t.rate[k]);
+    out += fmt::format("\nFitted rate: {}\n\n", t.fit);
+  }
+  out += "\\* value flagged: at the round-off floor or from a singular Gram matrix; not fitted.\n";
+  return out;
+}
+
+std::string latex_tables(const RunRecord& run) {
+  std::string out = fmt::format("% {}: rate tables (needs \\usepackage{{booktabs}})\n",
+                                latex_escape(run.study.name));
+  for (const auto& t : document_tables(run)) {
+    out += fmt::format(
+        "\\begin{{table}}[ht]\n\\centering\n\\caption{{{}: {}}}\n\\begin{{tabular}}{{rrr}}\n"
+        "\\toprule\n${}$ & {} & rate \\\\\n\\midrule\n",
+        latex_escape(t.metric), latex_escape(t.group), t.axis, latex_escape(t.metric));
+    for (std::size_t k = 0; k < t.abscissa.size(); ++k)
+      out += fmt::format("{} & {} & {} \\\\\n", t.abscissa[k], t.value[k],
+                         t.rate[k] == "-" ? "--" : t.rate[k]);
+    std::string fit = latex_escape(t.fit);
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"±", "$\\pm$"},
+                                   {"R²", "$R^2$"}}) {
+      for (auto p = fit.find(from); p != std::string::npos; p = fit.find(from, p + to.size()))
+        fit.replace(p, from.size(), to);
+    }
+    out += fmt::format("\\bottomrule\n\\end{{tabular}}\n\n\\smallskip fitted rate: {}\n\\end{{table}}\n\n",
+                       fit);
+  }
+  return out;
+}
+
 std::string console_tables(const RunRecord& run) {
   std::string out;
   for (const auto& metric : run.study.metrics) {
@@ -418,6 +513,8 @@ void write_outputs(const RunRecord& run, const std::filesystem::path& directory)
   write_file_atomically(directory / "trials.csv", trials_csv(run));
   write_file_atomically(directory / "rates.csv", rates_csv(run));
   write_file_atomically(directory / "summary.json", summary_json(run));
+  write_file_atomically(directory / "rates.md", markdown_tables(run));
+  write_file_atomically(directory / "rates.tex", latex_tables(run));
   if (run.study.kind == "adaptive") {
     write_file_atomically(directory / "estimates.csv", estimates_csv(run));
     write_file_atomically(directory / "timeseries.csv", timeseries_csv(run));

@@ -107,6 +107,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
 std::vector<TrialResult> run_trials(const StudyDefinition& study,
                                     const std::vector<TrialSpec>& trials,
                                     const RunOptions& options) {
+  if (options.on_start) options.on_start(trials.size());
   std::vector<TrialResult> results(trials.size());
   std::vector<std::size_t> order(trials.size());
   std::iota(order.begin(), order.end(), std::size_t{0});

@@ -38,6 +38,11 @@ std::string summary_json(const RunRecord& run);
 std::string estimates_csv(const RunRecord& run);
 /// Adaptive studies: |x - xhat| and V at the output samples of every trial.
 std::string timeseries_csv(const RunRecord& run);
+/// The rate tables as Markdown (one table per metric and group: n, value, pairwise rate, then
+/// the fitted rate with its confidence interval) and as LaTeX (booktabs tables), written as
+/// rates.md and rates.tex. Flagged values carry a '*'.
+std::string markdown_tables(const RunRecord& run);
+std::string latex_tables(const RunRecord& run);
 /// One ConvergenceTable per metric and group.
 std::string console_tables(const RunRecord& run);
 

@@ -34,6 +34,8 @@ struct RunOptions {
   /// Asked before each trial starts; when it returns true the trial is skipped (`skipped`,
   /// not reported to on_trial_finished) and trials in flight finish normally.
   std::function<bool()> stop_requested = {};
+  /// Called once, before any trial starts, with the number of trials about to run.
+  std::function<void(std::size_t)> on_start = {};
 };
 
 /// Runs one trial; never throws (failures are returned as results).
