@@ -29,6 +29,7 @@
 #include "rkhs/plugin_loader.hpp"
 #include "rkhs/plugin_verification.hpp"
 #include "rkhs/plant.hpp"
+#include "rkhs/plots.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/result_store.hpp"
 #include "rkhs/run.hpp"
@@ -189,7 +190,7 @@ class Journal {
 };
 
 int command_run(const std::string& study_file, std::string out_dir, int threads, bool quiet,
-                const StoreOptions& store_options) {
+                const StoreOptions& store_options, bool plots) {
   const auto study = rkhs::load_study(study_file);
   if (out_dir.empty()) out_dir = (std::filesystem::path("results") / study.name).string();
   const auto trials = study.trials();
@@ -249,6 +250,14 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started};
   rkhs::write_outputs(record, out_dir);
   journal.remove();
+  if (plots) {
+    try {
+      const auto rendered = rkhs::write_plots(record, out_dir);
+      if (!quiet) std::cerr << fmt::format("  {} plots in {}/plots (SVG and PNG)\n", rendered.size(), out_dir);
+    } catch (const std::exception& e) {
+      std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
+    }
+  }
 
   if (!quiet) std::cout << rkhs::console_tables(record);
   std::cout << fmt::format("{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
@@ -343,6 +352,8 @@ int main(int argc, char** argv) {
     command->add_flag("--no-store", store_options.disabled, "neither read nor write a result store");
   };
   add_store_options(run);
+  bool no_plots = false;
+  run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
 
   auto* list = app.add_subcommand(
       "list", "list plugins (kernel, centres, target, plant, law, integrator) or metrics");
@@ -410,7 +421,7 @@ int main(int argc, char** argv) {
     for (const auto& file : plugin_files) rkhs::load_plugin(file);
     if (!data_dir.empty()) rkhs::set_data_root(data_dir);
     if (*verify) return command_verify_plugin(plugin_to_verify);
-    if (*run) return command_run(study_file, out_dir, threads, quiet, store_options);
+    if (*run) return command_run(study_file, out_dir, threads, quiet, store_options, !no_plots);
     if (*list) return command_list(kind);
     if (*validate) return command_validate(study_file);
     if (*check) return command_check(check_arguments, threads, quiet, store_options);

@@ -65,6 +65,17 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
   CHECK_THAT(rates, Catch::Contains("power_function_sup,n,fit,power_law,8,32,3,"));
   CHECK_THAT(rates, Catch::Contains("power_function_sup,n,alternative_fit,exponential,8,32,3,"));
   CHECK_FALSE(fs::exists(dir / "out" / "journal.csv"));
+  // Plots: one convergence plot per metric, as SVG (well-formed XML) and PNG.
+  for (const char* metric : {"power_function_sup", "gram_condition_number"}) {
+    const auto stem = dir / "out" / "plots" / (std::string("convergence_") + metric);
+    INFO(stem.string());
+    CHECK(fs::exists(stem.string() + ".gp"));
+    CHECK(read(stem.string() + ".png").substr(0, 4) == "\x89PNG");
+    CHECK(std::system(("python3 -c 'import sys, xml.etree.ElementTree as e; "
+                       "assert e.parse(sys.argv[1]).getroot().tag.endswith(\"svg\")' " +
+                       stem.string() + ".svg").c_str()) == 0);
+  }
+  CHECK(read(dir / "out" / "rates.md").find("## power_function_sup") != std::string::npos);
   const int json_ok = std::system(("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
                                    "assert d[\"counts\"][\"trials\"]==6 and len(d[\"rates\"])>0' " +
                                    (dir / "out" / "summary.json").string())
