@@ -29,6 +29,7 @@
 #include "rkhs/plugin_loader.hpp"
 #include "rkhs/plugin_verification.hpp"
 #include "rkhs/plant.hpp"
+#include "rkhs/html_report.hpp"
 #include "rkhs/plots.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/result_store.hpp"
@@ -258,6 +259,8 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
       std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
     }
   }
+  rkhs::write_file_atomically(std::filesystem::path(out_dir) / "report.html",
+                              rkhs::html_report(record, std::filesystem::path(out_dir) / "plots"));
 
   if (!quiet) std::cout << rkhs::console_tables(record);
   std::cout << fmt::format("{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
@@ -314,6 +317,38 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   return rkhs::check_exit_code(rkhs::count_verdicts(outcomes), arguments.strict);
 }
 
+// `report DIR`: the tables of the run in DIR again, from the study file it names (summary.json)
+// and the result store (trials not stored are run).
+int command_report(const std::string& directory, const std::string& format,
+                   const StoreOptions& store_options) {
+  const auto summary = std::filesystem::path(directory) / "summary.json";
+  std::ifstream in(summary);
+  if (!in) throw std::runtime_error(summary.string() + ": cannot open (is it a results directory?)");
+  std::string line, source;
+  while (std::getline(in, line))
+    if (const auto at = line.find("\"source\": \""); at != std::string::npos) {
+      source = line.substr(at + 11);
+      source = source.substr(0, source.find('"'));
+      break;
+    }
+  if (source.empty()) throw std::runtime_error(summary.string() + ": no \"source\" study file recorded");
+  const auto study = rkhs::load_study(source);
+  const auto trials = study.trials();
+  rkhs::RunOptions options;
+  const auto stored = run_trials_stored(study, trials, options, store_options, true);
+  if (stored.skipped) return report_interruption(stored, store_options);
+  const auto rates = rkhs::compute_rates(study, trials, stored.results);
+  const rkhs::RunRecord record{study, trials, stored.results, rates, 1, 0.0, utc_now()};
+  if (format == "md") std::cout << rkhs::markdown_tables(record);
+  else if (format == "tex") std::cout << rkhs::latex_tables(record);
+  else {
+    const auto file = std::filesystem::path(directory) / "report.html";
+    rkhs::write_file_atomically(file, rkhs::html_report(record, std::filesystem::path(directory) / "plots"));
+    std::cout << "wrote " << file.string() << "\n";
+  }
+  return exit_ok;
+}
+
 int command_validate(const std::string& study_file) {
   const auto study = rkhs::load_study(study_file);
   const auto trials = study.trials();
@@ -361,6 +396,13 @@ int main(int argc, char** argv) {
                    "kernel, centres, target, plant, law, integrator or metrics (default: all)")
       ->check(CLI::IsMember({"kernel", "kernels", "centres", "target", "targets", "plant", "plants",
                              "law", "laws", "integrator", "integrators", "metric", "metrics"}));
+
+  std::string report_dir, report_format = "html";
+  auto* report = app.add_subcommand("report", "the rate tables of a run again: Markdown, LaTeX or report.html");
+  report->add_option("directory", report_dir, "a results directory (with summary.json)")->required()->check(CLI::ExistingDirectory);
+  report->add_option("--format", report_format, "md, tex or html (default html: writes DIR/report.html)")
+      ->check(CLI::IsMember({"md", "tex", "html"}));
+  add_store_options(report);
 
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
@@ -423,6 +465,7 @@ int main(int argc, char** argv) {
     if (*verify) return command_verify_plugin(plugin_to_verify);
     if (*run) return command_run(study_file, out_dir, threads, quiet, store_options, !no_plots);
     if (*list) return command_list(kind);
+    if (*report) return command_report(report_dir, report_format, store_options);
     if (*validate) return command_validate(study_file);
     if (*check) return command_check(check_arguments, threads, quiet, store_options);
   } catch (const rkhs::StudyError& e) {

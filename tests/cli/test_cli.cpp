@@ -76,6 +76,12 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
                        stem.string() + ".svg").c_str()) == 0);
   }
   CHECK(read(dir / "out" / "rates.md").find("## power_function_sup") != std::string::npos);
+  // `report DIR` gives the tables of the run again, from the store.
+  const auto markdown = run("report " + (dir / "out").string() + " --format md");
+  CHECK(markdown.exit_code == 0);
+  CHECK(markdown.output == read(dir / "out" / "rates.md"));
+  CHECK(read(dir / "out" / "report.html").find("<h2>Rates</h2>") != std::string::npos);
+  CHECK(run("report " + (dir / "missing").string()).exit_code == 2);
   const int json_ok = std::system(("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
                                    "assert d[\"counts\"][\"trials\"]==6 and len(d[\"rates\"])>0' " +
                                    (dir / "out" / "summary.json").string())
