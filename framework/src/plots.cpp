@@ -1,5 +1,8 @@
 #include "rkhs/plots.hpp"
 
+#include "rkhs/kernel.hpp"
+#include "rkhs/theory.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -91,6 +94,31 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
                           block, block + 1, block, block + 1,
                           gnuplot_string(fmt::format("rate {:.3g}{}", fit->rate,
                                              fit->model == RateModel::exponential ? " (exp in n)" : "")));
+    }
+    // The theory slope (power-law theories from the kernel's metadata), through the first usable
+    // point: what the fitted line should be parallel to.
+    try {
+      const auto& trial = run.trials[series.trials.front()];
+      const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, run.study.domain);
+      const auto theory = theory_rate(metric, kernel->properties(), 1);
+      std::size_t first = series.trials.size();
+      for (std::size_t k = 0; k < series.trials.size(); ++k)
+        if (!series.flagged[k] && std::isfinite(series.values[k]) && series.values[k] > 0) {
+          first = k;
+          break;
+        }
+      if (theory && theory->model == RateModel::power_law && first < series.trials.size() && in_n == (run.study.abscissa == Abscissa::n)) {
+        const double slope = run.study.abscissa == Abscissa::n ? -theory->h_exponent : theory->h_exponent;
+        data += fmt::format("$theory{} << EOD\n", block);
+        for (std::size_t k = first; k < series.trials.size(); ++k)
+          data += fmt::format("{} {}\n", format_real(x[k]),
+                              format_real(series.values[first] * std::pow(x[k] / x[first], slope)));
+        data += "EOD\n";
+        plot += fmt::format("$theory{} using 1:2 with lines dt 3 lw 2 lc {} title {}, ", block, block + 1,
+                            gnuplot_string(fmt::format("theory slope {:.3g}", slope)));
+      }
+    } catch (const std::exception&) {
+      // A kernel that cannot be rebuilt here (e.g. from an unloaded plugin): no theory line.
     }
     ++block;
   }
