@@ -26,7 +26,9 @@ done
 config=$(find "$prefix" -name rkhs_studyConfig.cmake)
 [[ -n $config ]] || fail "rkhs_studyConfig.cmake not installed"
 # The installed command uses the installed library (its RUNPATH), not the build tree's.
-ldd "$rkhs" | grep -q "$prefix/.*librkhs_study.so" || fail "rkhs-study does not find $prefix's library: $(ldd "$rkhs" | grep rkhs)"
+# (ldd's output is captured first: `ldd | grep -q` under pipefail fails when grep exits early.)
+linked=$(ldd "$rkhs")
+grep -q "$prefix/.*librkhs_study.so" <<<"$linked" || fail "rkhs-study does not find $prefix's library: $(grep rkhs <<<"$linked")"
 
 step "build examples/kernel-plugin out of tree against the prefix"
 cp -r "$source/examples/kernel-plugin" "$work/kernel-plugin"
