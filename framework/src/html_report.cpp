@@ -130,9 +130,11 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
       }
       page += "</table>\n";
       if (const auto& fit = series.fit)
-        page += fmt::format("<p class=\"fit\">fitted rate {:.3g} &plusmn; {:.2g} (95% CI [{:.3g}, {:.3g}], R&sup2; = {:.3f}, {} points{}){}</p>\n",
+        page += fmt::format("<p class=\"fit\">fitted rate {:.3g} &plusmn; {:.2g} (95% CI [{:.3g}, {:.3g}], R&sup2; = {:.3f}, {} points, window n = {}..{}{}){}</p>\n",
                             fit->rate, fit->std_error, fit->ci_low, fit->ci_high, fit->r_squared,
-                            fit->points, fit->model == RateModel::exponential ? ", exponential in n" : "",
+                            fit->points, run.trials[series.trials[fit->used.front()]].n,
+                            run.trials[series.trials[fit->used.back()]].n,
+                            fit->model == RateModel::exponential ? ", exponential in n" : "",
                             series.note.empty() ? "" : "<br>" + escape_html(series.note));
       else
         page += "<p class=\"fit\">no fit: " + escape_html(series.no_fit_reason) + "</p>\n";
