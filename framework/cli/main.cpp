@@ -190,11 +190,45 @@ class Journal {
   std::ofstream out_;
 };
 
+// "K/N" -> (K, N) with 1 <= K <= N; throws CLI::ValidationError otherwise.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  std::size_t k = 0, n = 0;
+  try {
+    if (slash != std::string::npos) {
+      k = std::stoul(text.substr(0, slash));
+      n = std::stoul(text.substr(slash + 1));
+    }
+  } catch (const std::exception&) {
+  }
+  if (n == 0 || k == 0 || k > n)
+    throw std::invalid_argument("--shard must be K/N with 1 <= K <= N, found '" + text + "'");
+  return {k, n};
+}
+
 int command_run(const std::string& study_file, std::string out_dir, int threads, bool quiet,
-                const StoreOptions& store_options, bool plots) {
+                const StoreOptions& store_options, bool plots, const std::string& shard) {
   const auto study = rkhs::load_study(study_file);
   if (out_dir.empty()) out_dir = (std::filesystem::path("results") / study.name).string();
-  const auto trials = study.trials();
+  auto trials = study.trials();
+  if (!shard.empty()) {
+    // A shard runs the trials whose grid index is K - 1 modulo N into its own store; `merge`
+    // combines the stores and a run over the merged store writes the outputs.
+    const auto [k, n] = parse_shard(shard);
+    if (store_options.disabled) throw std::invalid_argument("--shard needs a result store (not --no-store)");
+    std::vector<rkhs::TrialSpec> mine;
+    for (const auto& trial : trials)
+      if (trial.index % n == k - 1) mine.push_back(trial);
+    rkhs::RunOptions options;
+    options.threads = threads;
+    const auto stored = run_trials_stored(study, mine, options, store_options, quiet);
+    if (stored.skipped) return report_interruption(stored, store_options);
+    std::cout << fmt::format("{}: shard {}/{}: {} of {} trials ({} reused, {} run) in {}; combine "
+                             "the shards' stores with `rkhs-study merge`\n",
+                             study.name, k, n, mine.size(), trials.size(), stored.reused, stored.ran,
+                             store_options.file);
+    return exit_ok;
+  }
   const int thread_count = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::filesystem::create_directories(out_dir);
   Journal journal(std::filesystem::path(out_dir) / "journal.csv", study.metrics);
@@ -387,6 +421,13 @@ int main(int argc, char** argv) {
     command->add_flag("--no-store", store_options.disabled, "neither read nor write a result store");
   };
   add_store_options(run);
+  std::string shard;
+  run->add_option("--shard", shard, "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
+  std::string merge_into;
+  std::vector<std::string> merge_from;
+  auto* merge = app.add_subcommand("merge", "combine result stores (e.g. of shards) into one");
+  merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
+  merge->add_option("from", merge_from, "stores to copy from")->required()->check(CLI::ExistingFile);
   bool no_plots = false;
   run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
 
@@ -463,7 +504,16 @@ int main(int argc, char** argv) {
     for (const auto& file : plugin_files) rkhs::load_plugin(file);
     if (!data_dir.empty()) rkhs::set_data_root(data_dir);
     if (*verify) return command_verify_plugin(plugin_to_verify);
-    if (*run) return command_run(study_file, out_dir, threads, quiet, store_options, !no_plots);
+    if (*run) return command_run(study_file, out_dir, threads, quiet, store_options, !no_plots, shard);
+    if (*merge) {
+      rkhs::ResultStore into(merge_into);
+      for (const auto& from : merge_from) {
+        const auto count = into.merge_from(from);
+        std::cout << fmt::format("merged {} trials from {}\n", count, from);
+      }
+      std::cout << fmt::format("{} holds {} trials\n", merge_into, into.size());
+      return exit_ok;
+    }
     if (*list) return command_list(kind);
     if (*report) return command_report(report_dir, report_format, store_options);
     if (*validate) return command_validate(study_file);

@@ -274,6 +274,25 @@ void ResultStore::put(const std::string& hash, const std::string& study, const s
     throw std::runtime_error(fmt::format("{}: result store: {}", file_.string(), sqlite3_errmsg(db_)));
 }
 
+std::size_t ResultStore::merge_from(const std::filesystem::path& other) {
+  if (!std::filesystem::exists(other))
+    throw std::runtime_error(fmt::format("{}: no such result store", other.string()));
+  const std::size_t count = ResultStore(other).size();  // also checks that it is a store
+  Statement attach(db_, "ATTACH DATABASE ?1 AS other", file_);
+  sqlite3_bind_text(attach.handle, 1, other.c_str(), -1, SQLITE_TRANSIENT);
+  if (sqlite3_step(attach.handle) != SQLITE_DONE)
+    throw std::runtime_error(fmt::format("{}: cannot attach {}: {}", file_.string(), other.string(),
+                                         sqlite3_errmsg(db_)));
+  try {
+    exec("INSERT OR REPLACE INTO trials SELECT hash, study, key, result, stored FROM other.trials");
+  } catch (...) {
+    exec("DETACH DATABASE other");
+    throw;
+  }
+  exec("DETACH DATABASE other");
+  return count;
+}
+
 std::size_t ResultStore::size() const {
   Statement statement(db_, "SELECT COUNT(*) FROM trials", file_);
   if (sqlite3_step(statement.handle) != SQLITE_ROW) return 0;

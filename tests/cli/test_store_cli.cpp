@@ -137,3 +137,45 @@ TEST_CASE("a changed parameter re-runs only the affected trials", "[cli][store]"
                           " --out " + (dir / "b").string());
   CHECK_THAT(fresh.output, Catch::Contains("0 trials reused from " + store.string() + ", 10 run now"));
 }
+
+TEST_CASE("shards run disjoint subsets; merged stores reproduce a single run", "[cli][store]") {
+  const auto dir = rkhs::test::scratch_directory("store_shards");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "shards"
+evaluation_points = 512
+[domain]
+radius = 4
+[grid]
+n = { from = 8, to = 64, step = 8 }
+[[kernel]]
+name = "bspline"
+degree = [1, 2]
+J = 5
+)";
+  const auto study = (dir / "study.toml").string();
+  for (int k = 1; k <= 3; ++k) {
+    const auto shard = rkhs_study("run " + study + " --quiet --shard " + std::to_string(k) +
+                                  "/3 --store " + (dir / ("shard" + std::to_string(k) + ".sqlite")).string());
+    INFO(shard.output);
+    REQUIRE(shard.exit_code == 0);
+    CHECK_THAT(shard.output, Catch::Contains("shard " + std::to_string(k) + "/3:"));
+  }
+  // 16 trials: indices 0..15 split 6, 5, 5.
+  CHECK(rkhs::ResultStore(dir / "shard1.sqlite").size() == 6);
+  CHECK(rkhs::ResultStore(dir / "shard2.sqlite").size() == 5);
+  const auto merged = rkhs_study("merge " + (dir / "all.sqlite").string() + " " +
+                                 (dir / "shard1.sqlite").string() + " " + (dir / "shard2.sqlite").string() +
+                                 " " + (dir / "shard3.sqlite").string());
+  INFO(merged.output);
+  REQUIRE(merged.exit_code == 0);
+  CHECK_THAT(merged.output, Catch::Contains("holds 16 trials"));
+  const auto from_shards = rkhs_study("run " + study + " --store " + (dir / "all.sqlite").string() +
+                                      " --no-plots --out " + (dir / "from_shards").string());
+  CHECK_THAT(from_shards.output, Catch::Contains("16 trials reused"));
+  CHECK_THAT(from_shards.output, Catch::Contains("0 run now"));
+  REQUIRE(rkhs_study("run " + study + " --quiet --no-store --no-plots --out " + (dir / "single").string())
+              .exit_code == 0);
+  CHECK(read_text(dir / "from_shards" / "trials.csv") == read_text(dir / "single" / "trials.csv"));
+  CHECK(rkhs_study("run " + study + " --shard 4/3").exit_code == 2);
+  CHECK(rkhs_study("merge " + (dir / "x.sqlite").string() + " " + study).exit_code == 2);
+}

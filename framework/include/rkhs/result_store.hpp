@@ -63,6 +63,10 @@ class ResultStore {
   /// Stores (or replaces) a result and commits it before returning.
   void put(const std::string& hash, const std::string& study, const std::string& key,
            const TrialResult& result);
+  /// Copies every trial of the store at `other` into this one (a later copy of the same hash
+  /// replaces an earlier one: results of the same hash are identical). Returns how many trials
+  /// `other` holds. Throws std::runtime_error naming a file that is not a store.
+  std::size_t merge_from(const std::filesystem::path& other);
   /// Number of stored trials (of all studies).
   std::size_t size() const;
   const std::filesystem::path& file() const noexcept { return file_; }
