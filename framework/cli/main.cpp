@@ -24,6 +24,7 @@
 #include "rkhs/build_info.hpp"
 #include "rkhs/centres.hpp"
 #include "rkhs/data_root.hpp"
+#include "rkhs/distributed.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/output.hpp"
 #include "rkhs/plugin_loader.hpp"
@@ -61,21 +62,74 @@ void install_stop_handlers() {
   std::signal(SIGTERM, request_stop);
 }
 
-// Runs the trials through the store; prints how to resume when interrupted.
-rkhs::StoredRun run_trials_stored(const rkhs::StudyDefinition& study,
-                                  const std::vector<rkhs::TrialSpec>& trials,
-                                  rkhs::RunOptions options, const StoreOptions& store_options,
-                                  bool quiet) {
+using rkhs::distributed::Session;
+
+// Runs the trials through the store; prints how to resume when interrupted. With MPI (`mpi`
+// not null) the trials are spread over the ranks: rank 0 alone opens the store and gets the
+// results; the other ranks get std::nullopt when they are done.
+std::optional<rkhs::StoredRun> run_trials_stored(const rkhs::StudyDefinition& study,
+                                                 const std::vector<rkhs::TrialSpec>& trials,
+                                                 rkhs::RunOptions options,
+                                                 const StoreOptions& store_options, bool quiet,
+                                                 const Session* mpi = nullptr,
+                                                 std::vector<rkhs::RankRecord>* ranks = nullptr) {
   std::optional<rkhs::ResultStore> store;
-  if (!store_options.disabled) store.emplace(store_options.file);
+  std::string store_error;
+  try {
+    if (!store_options.disabled && (!mpi || mpi->is_root())) store.emplace(store_options.file);
+  } catch (const std::exception& e) {
+    if (!mpi) throw;
+    store_error = e.what();
+  }
+  if (mpi) rkhs::distributed::require_no_errors(*mpi, store_error);
   install_stop_handlers();
   options.stop_requested = [] { return interrupted.load(); };
   rkhs::freeze_registries();
-  auto run = rkhs::run_with_store(study, trials, options, store ? &*store : nullptr, store_options.fresh);
-  if (!quiet && store)
-    std::cerr << fmt::format("  {} trials reused from {}, {} run now\n", run.reused,
-                             store->file().string(), run.ran);
+  std::optional<rkhs::StoredRun> run;
+  if (mpi) {
+    rkhs::distributed::JobStatistics spread;
+    run = rkhs::distributed::run_with_store(*mpi, study, trials, options, store ? &*store : nullptr,
+                                            store_options.fresh, &spread);
+    if (ranks) *ranks = spread.ranks;
+    if (run && !quiet) {
+      std::string per_rank;
+      for (std::size_t r = 0; r < spread.ranks.size(); ++r)
+        per_rank += fmt::format("{}rank {} ({}, {} thread{}): {}", r ? "; " : "", r,
+                                spread.ranks[r].host, spread.ranks[r].threads,
+                                spread.ranks[r].threads == 1 ? "" : "s", spread.ranks[r].trials);
+      std::cerr << fmt::format("  trials run per MPI rank: {}\n", per_rank);
+    }
+  } else {
+    run = rkhs::run_with_store(study, trials, options, store ? &*store : nullptr, store_options.fresh);
+  }
+  if (run && !quiet && store)
+    std::cerr << fmt::format("  {} trials reused from {}, {} run now\n", run->reused,
+                             store->file().string(), run->ran);
   return run;
+}
+
+// Loads the study (`load` reads it) on this rank; with MPI every rank must succeed before any
+// goes on, and rank 0 reports the errors.
+template <class Load>
+rkhs::StudyDefinition load_on_every_rank(const Load& load, const Session* mpi) {
+  if (!mpi) return load();
+  std::optional<rkhs::StudyDefinition> study;
+  std::string error;
+  std::exception_ptr own_error;
+  try {
+    study.emplace(load());
+  } catch (const std::exception& e) {
+    error = e.what();
+    own_error = std::current_exception();
+  }
+  try {
+    rkhs::distributed::require_no_errors(*mpi, error);
+  } catch (const std::runtime_error&) {
+    // Rank 0's own error alone is rethrown as it was (a StudyError keeps its form).
+    if (mpi->is_root() && own_error) std::rethrow_exception(own_error);
+    throw;
+  }
+  return std::move(*study);
 }
 
 int report_interruption(const rkhs::StoredRun& run, const StoreOptions& store_options) {
@@ -190,6 +244,22 @@ class Journal {
   std::ofstream out_;
 };
 
+// Threads of this process: --threads, else all cores (shared by the MPI ranks on a node).
+int default_thread_count(int threads, const Session* mpi) {
+  if (threads > 0) return threads;
+  if (mpi) return mpi->default_threads();
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// An MPI rank other than 0: runs the trials rank 0 hands it; writes nothing.
+int serve_trials(const rkhs::StudyDefinition& study, const std::vector<rkhs::TrialSpec>& trials,
+                 int threads, const StoreOptions& store_options, const Session* mpi) {
+  rkhs::RunOptions options;
+  options.threads = default_thread_count(threads, mpi);
+  run_trials_stored(study, trials, options, store_options, true, mpi);
+  return interrupted ? exit_interrupted : exit_ok;
+}
+
 // "K/N" -> (K, N) with 1 <= K <= N; throws CLI::ValidationError otherwise.
 std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
   const auto slash = text.find('/');
@@ -207,10 +277,13 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
 }
 
 int command_run(const std::string& study_file, std::string out_dir, int threads, bool quiet,
-                const StoreOptions& store_options, bool plots, const std::string& shard) {
-  const auto study = rkhs::load_study(study_file);
+                const StoreOptions& store_options, bool plots, const std::string& shard,
+                const Session* mpi) {
+  const auto study = load_on_every_rank([&] { return rkhs::load_study(study_file); }, mpi);
   if (out_dir.empty()) out_dir = (std::filesystem::path("results") / study.name).string();
   auto trials = study.trials();
+  if (mpi) rkhs::distributed::require_same_trials(*mpi, study, trials);
+  if (mpi && !mpi->is_root()) return serve_trials(study, trials, threads, store_options, mpi);
   if (!shard.empty()) {
     // A shard runs the trials whose grid index is K - 1 modulo N into its own store; `merge`
     // combines the stores and a run over the merged store writes the outputs.
@@ -221,7 +294,7 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
       if (trial.index % n == k - 1) mine.push_back(trial);
     rkhs::RunOptions options;
     options.threads = threads;
-    const auto stored = run_trials_stored(study, mine, options, store_options, quiet);
+    const auto stored = *run_trials_stored(study, mine, options, store_options, quiet);
     if (stored.skipped) return report_interruption(stored, store_options);
     std::cout << fmt::format("{}: shard {}/{}: {} of {} trials ({} reused, {} run) in {}; combine "
                              "the shards' stores with `rkhs-study merge`\n",
@@ -229,13 +302,14 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
                              store_options.file);
     return exit_ok;
   }
-  const int thread_count = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int thread_count = default_thread_count(threads, mpi);
   std::filesystem::create_directories(out_dir);
   Journal journal(std::filesystem::path(out_dir) / "journal.csv", study.metrics);
 
   if (!quiet)
-    std::cerr << fmt::format("rkhs-study: {} ({} trials, {} threads) -> {}\n", study.name,
-                             trials.size(), thread_count, out_dir);
+    std::cerr << fmt::format("rkhs-study: {} ({} trials, {} thread{}{}) -> {}\n", study.name,
+                             trials.size(), thread_count, thread_count == 1 ? "" : "s",
+                             mpi ? fmt::format(" on rank 0 of {} MPI ranks", mpi->size()) : "", out_dir);
   const std::string started = utc_now();
   const auto start = std::chrono::steady_clock::now();
   auto last_report = start;
@@ -274,7 +348,8 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
                                total, failed, elapsed, eta);
     }
   };
-  const auto stored = run_trials_stored(study, trials, options, store_options, quiet);
+  std::vector<rkhs::RankRecord> ranks;
+  const auto stored = *run_trials_stored(study, trials, options, store_options, quiet, mpi, &ranks);
   if (stored.skipped) return report_interruption(stored, store_options);
   const auto& results = stored.results;
   failed = 0;
@@ -282,7 +357,7 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto rates = rkhs::compute_rates(study, trials, results);
-  const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started};
+  const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started, ranks};
   rkhs::write_outputs(record, out_dir);
   journal.remove();
   if (plots) {
@@ -312,11 +387,18 @@ struct CheckArguments {
 };
 
 int command_check(const CheckArguments& arguments, int threads, bool quiet,
-                  const StoreOptions& store_options) {
-  auto study = rkhs::load_study(arguments.study_file);
-  if (!arguments.tier.empty()) study = rkhs::restrict_to_tier(std::move(study), arguments.tier);
+                  const StoreOptions& store_options, const Session* mpi) {
+  const auto study = load_on_every_rank(
+      [&] {
+        auto loaded = rkhs::load_study(arguments.study_file);
+        if (!arguments.tier.empty()) loaded = rkhs::restrict_to_tier(std::move(loaded), arguments.tier);
+        return loaded;
+      },
+      mpi);
   const auto trials = study.trials();
-  const int thread_count = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (mpi) rkhs::distributed::require_same_trials(*mpi, study, trials);
+  if (mpi && !mpi->is_root()) return serve_trials(study, trials, threads, store_options, mpi);
+  const int thread_count = default_thread_count(threads, mpi);
   const auto tier_text = arguments.tier.empty() ? std::string() : " (tier " + arguments.tier + ")";
   if (!quiet)
     std::cerr << fmt::format("rkhs-study check: {}{}: {} trials, {} threads\n", study.name,
@@ -325,7 +407,8 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   const auto start = std::chrono::steady_clock::now();
   rkhs::RunOptions options;
   options.threads = thread_count;
-  const auto stored = run_trials_stored(study, trials, options, store_options, quiet);
+  std::vector<rkhs::RankRecord> ranks;
+  const auto stored = *run_trials_stored(study, trials, options, store_options, quiet, mpi, &ranks);
   if (stored.skipped) return report_interruption(stored, store_options);
   const auto& results = stored.results;
   const double seconds =
@@ -334,7 +417,7 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   std::size_t failed = 0;
   for (const auto& result : results) failed += result.ok ? 0 : 1;
   if (!arguments.out_dir.empty()) {
-    const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started};
+    const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started, ranks};
     rkhs::write_outputs(record, arguments.out_dir);
   }
   const auto outcomes = rkhs::verify_expectations(study, trials, results, rates);
@@ -369,7 +452,7 @@ int command_report(const std::string& directory, const std::string& format,
   const auto study = rkhs::load_study(source);
   const auto trials = study.trials();
   rkhs::RunOptions options;
-  const auto stored = run_trials_stored(study, trials, options, store_options, true);
+  const auto stored = *run_trials_stored(study, trials, options, store_options, true);
   if (stored.skipped) return report_interruption(stored, store_options);
   const auto rates = rkhs::compute_rates(study, trials, stored.results);
   const rkhs::RunRecord record{study, trials, stored.results, rates, 1, 0.0, utc_now()};
@@ -428,6 +511,8 @@ int main(int argc, char** argv) {
   auto* merge = app.add_subcommand("merge", "combine result stores (e.g. of shards) into one");
   merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
   merge->add_option("from", merge_from, "stores to copy from")->required()->check(CLI::ExistingFile);
+  bool use_mpi = false;
+  run->add_flag("--mpi", use_mpi, "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
   bool no_plots = false;
   run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
 
@@ -464,6 +549,7 @@ int main(int argc, char** argv) {
   check->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
   check->add_flag("--quiet,-q", quiet, "no progress line");
   add_store_options(check);
+  check->add_flag("--mpi", use_mpi, "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
 
   // Plugin modules: --plugin (repeatable) here, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]`.
   std::vector<std::string> plugin_files;
@@ -499,12 +585,52 @@ int main(int argc, char** argv) {
     return exit_bad_input;
   }
 
+  // MPI for the whole command when --mpi is given; a command started as several MPI processes
+  // without it would run the whole study once per process.
+  std::optional<Session> mpi;
+  if ((*run || *check) && !use_mpi && rkhs::distributed::launched_process_count() > 1) {
+    if (const char* rank = std::getenv("OMPI_COMM_WORLD_RANK"); !rank || std::string(rank) == "0")
+      std::cerr << fmt::format("rkhs-study: started as {} MPI processes without --mpi: each would run "
+                               "the whole study and write the same files; add --mpi\n",
+                               rkhs::distributed::launched_process_count());
+    return exit_bad_input;
+  }
+  if (use_mpi) {
+    if (!shard.empty()) {
+      std::cerr << "rkhs-study: --mpi and --shard exclude each other (--shard is for schedulers without MPI)\n";
+      return exit_bad_input;
+    }
+    try {
+      mpi.emplace(argc, argv);
+    } catch (const std::exception& e) {
+      std::cerr << "rkhs-study: " << e.what() << "\n";
+      return exit_bad_input;
+    }
+  }
+  const Session* mpi_session = mpi ? &*mpi : nullptr;
+
   try {
-    rkhs::load_plugins_from_environment();
-    for (const auto& file : plugin_files) rkhs::load_plugin(file);
-    if (!data_dir.empty()) rkhs::set_data_root(data_dir);
+    const auto load_plugins = [&] {
+      rkhs::load_plugins_from_environment();
+      for (const auto& file : plugin_files) rkhs::load_plugin(file);
+      if (!data_dir.empty()) rkhs::set_data_root(data_dir);
+    };
+    if (!mpi) {
+      load_plugins();
+    } else {
+      // Every rank loads the plugins; one that cannot must not leave the others waiting.
+      std::string error;
+      try {
+        load_plugins();
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      rkhs::distributed::require_no_errors(*mpi, error);
+    }
     if (*verify) return command_verify_plugin(plugin_to_verify);
-    if (*run) return command_run(study_file, out_dir, threads, quiet, store_options, !no_plots, shard);
+    if (*run)
+      return command_run(study_file, out_dir, threads, quiet || (mpi && !mpi->is_root()), store_options,
+                         !no_plots, shard, mpi_session);
     if (*merge) {
       rkhs::ResultStore into(merge_into);
       for (const auto& from : merge_from) {
@@ -517,7 +643,9 @@ int main(int argc, char** argv) {
     if (*list) return command_list(kind);
     if (*report) return command_report(report_dir, report_format, store_options);
     if (*validate) return command_validate(study_file);
-    if (*check) return command_check(check_arguments, threads, quiet, store_options);
+    if (*check) return command_check(check_arguments, threads, quiet, store_options, mpi_session);
+  } catch (const rkhs::distributed::QuietExit& e) {
+    return e.code;
   } catch (const rkhs::StudyError& e) {
     std::cerr << e.what() << "\n";
     return exit_bad_input;

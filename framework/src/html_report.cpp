@@ -60,6 +60,11 @@ std::string read_file(const std::filesystem::path& file) {
 std::string html_report(const RunRecord& run, const std::filesystem::path& plots) {
   const auto& study = run.study;
   const auto& build = build_info();
+  std::string mpi_rows;  // a distributed run: one row per MPI rank
+  for (std::size_t r = 0; r < run.ranks.size(); ++r)
+    mpi_rows += fmt::format("<tr><th>MPI rank {}</th><td class=\"text\">{}: {} threads, {} trials</td></tr>\n",
+                            r, escape_html(run.ranks[r].host), run.ranks[r].threads,
+                            run.ranks[r].trials);
   std::string page = fmt::format(R"(<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{0}: rkhs-study report</title>
 <style>
@@ -84,13 +89,13 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
 <tr><th>started</th><td class="text">{8}</td></tr>
 <tr><th>threads, wall time</th><td class="text">{9}, {10:.2f} s</td></tr>
 <tr><th>trials</th><td class="text">{11}</td></tr>
-</table>
+{12}</table>
 )",
                                  escape_html(study.name), escape_html(study.description),
                                  escape_html(study.source), escape_html(study.kind), build.version,
                                  build.git_commit, build.compiler, build.build_type,
                                  escape_html(run.started), run.threads, run.wall_seconds,
-                                 run.trials.size());
+                                 run.trials.size(), mpi_rows);
 
   // Failed trials first: they are what a reader must not miss.
   std::string failed;

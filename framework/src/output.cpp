@@ -243,12 +243,21 @@ std::string summary_json(const RunRecord& run) {
   out += fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
                      json_string(study.name), json_string(study.description),
                      json_string(study.source), json_string(study.kind));
+  // A distributed run names its ranks: host, threads and trials run on each.
+  std::string mpi;
+  if (!run.ranks.empty()) {
+    std::vector<std::string> ranks;
+    for (const auto& r : run.ranks)
+      ranks.push_back(fmt::format("{{\"host\": {}, \"threads\": {}, \"trials\": {}}}",
+                                  json_string(r.host), r.threads, r.trials));
+    mpi = fmt::format(", \"mpi_ranks\": [{}]", join(ranks, ", "));
+  }
   out += fmt::format(
       "  \"provenance\": {{\"version\": {}, \"git_commit\": {}, \"compiler\": {}, "
-      "\"build_type\": {}, \"threads\": {}, \"started\": {}, \"wall_seconds\": {}}},\n",
+      "\"build_type\": {}, \"threads\": {}, \"started\": {}, \"wall_seconds\": {}{}}},\n",
       json_string(build.version), json_string(build.git_commit), json_string(build.compiler),
       json_string(build.build_type), run.threads, json_string(run.started),
-      json_number(std::round(run.wall_seconds * 1000) / 1000));
+      json_number(std::round(run.wall_seconds * 1000) / 1000), mpi);
   out += fmt::format("  \"domain\": {{\"length\": {}, \"periodic\": {}}},\n",
                      json_number(study.domain.length), study.domain.periodic ? "true" : "false");
   std::vector<std::string> n_values;

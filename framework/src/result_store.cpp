@@ -117,7 +117,8 @@ std::vector<std::string> trial_hashes(const StudyDefinition& study,
 }
 
 StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
-                         const RunOptions& options, ResultStore* store, bool fresh) {
+                         const RunOptions& options, ResultStore* store, bool fresh,
+                         const TrialExecutor& execute) {
   StoredRun out;
   out.results.resize(trials.size());
   const auto hashes = store ? trial_hashes(study, trials) : std::vector<std::string>();
@@ -140,7 +141,7 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
     if (store) store->put(hashes[slot.at(trial.index)], study.name, trial.key, result);
     if (options.on_trial_finished) options.on_trial_finished(trial, result);
   };
-  auto ran = run_trials(study, pending, storing);
+  auto ran = execute(study, pending, storing);
   for (std::size_t k = 0; k < pending.size(); ++k) {
     if (ran[k].skipped) ++out.skipped;
     else ++out.ran;

@@ -104,16 +104,23 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
   return result;
 }
 
+std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
+                                             const std::vector<TrialSpec>& trials) {
+  std::vector<double> cost(trials.size());
+  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = estimated_cost(study, trials[i]);
+  std::vector<std::size_t> order(trials.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
+  return order;
+}
+
 std::vector<TrialResult> run_trials(const StudyDefinition& study,
                                     const std::vector<TrialSpec>& trials,
                                     const RunOptions& options) {
   if (options.on_start) options.on_start(trials.size());
   std::vector<TrialResult> results(trials.size());
-  std::vector<std::size_t> order(trials.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return estimated_cost(study, trials[a]) > estimated_cost(study, trials[b]);
-  });
+  const auto order = largest_first_order(study, trials);
   std::mutex report_mutex;
   const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
   // Raise TBB's worker limit to the requested count (it defaults to the hardware threads).

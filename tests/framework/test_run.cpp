@@ -129,3 +129,29 @@ matrix_megabytes = 50
   CHECK_FALSE(results[1].ok);
   CHECK_THAT(results[1].reason, Catch::Contains("above limits.matrix_megabytes = 50"));
 }
+
+TEST_CASE("trials start largest first: by estimated cost, ties in grid order", "[run]") {
+  const auto study = parse_study(R"([study]
+name = "order"
+evaluation_points = 256
+[domain]
+radius = 1
+[grid]
+n = [10, 40, 20]
+[[kernel]]
+name = "gaussian"
+sigma = [0.5, 1.0]
+)", "order.toml");
+  const auto trials = study.trials();
+  REQUIRE(trials.size() == 6);
+  const auto order = largest_first_order(study, trials);
+  // Cost grows with n; the two kernels tie at each n and keep their grid order.
+  std::vector<std::size_t> by_n;
+  for (const auto k : order) by_n.push_back(trials[k].n);
+  CHECK(by_n == std::vector<std::size_t>{40, 40, 20, 20, 10, 10});
+  for (std::size_t k = 0; k + 1 < order.size(); k += 2) CHECK(order[k] < order[k + 1]);
+  // A permutation of every trial.
+  auto sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  CHECK(sorted == std::vector<std::size_t>{0, 1, 2, 3, 4, 5});
+}

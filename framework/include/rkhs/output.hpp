@@ -14,6 +14,13 @@
 
 namespace rkhs {
 
+/// One MPI rank of a distributed run.
+struct RankRecord {
+  std::string host;
+  int threads = 0;
+  std::size_t trials = 0;  ///< trials it ran in this run
+};
+
 struct RunRecord {
   const StudyDefinition& study;
   const std::vector<TrialSpec>& trials;
@@ -22,6 +29,7 @@ struct RunRecord {
   int threads = 1;
   double wall_seconds = 0;
   std::string started;  ///< ISO 8601 UTC time the run started
+  std::vector<RankRecord> ranks = {};  ///< MPI ranks of a distributed run (empty: one process)
 };
 
 /// The axis columns of trials.csv and rates.csv: kernel, each kernel parameter by its own name,

@@ -9,6 +9,7 @@
 // synchronous = NORMAL).
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,11 +44,17 @@ struct StoredRun {
   std::size_t skipped = 0;           ///< trials not run because the run was interrupted
 };
 
+/// What runs the trials the store does not hold: run_trials by default, the MPI coordinator in
+/// a distributed run. Same contract as run_trials (results in the order of its `trials`).
+using TrialExecutor = std::function<std::vector<TrialResult>(
+    const StudyDefinition&, const std::vector<TrialSpec>&, const RunOptions&)>;
+
 /// Runs the trials that `store` does not hold yet (all of them when `fresh` or when `store` is
-/// null), committing each to the store as it finishes, and returns every result. `options`'
-/// own callback is called for the trials run now.
+/// null) with `execute`, committing each to the store as it finishes, and returns every result.
+/// `options`' own callback is called for the trials run now.
 StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
-                         const RunOptions& options, ResultStore* store, bool fresh);
+                         const RunOptions& options, ResultStore* store, bool fresh,
+                         const TrialExecutor& execute = run_trials);
 
 class ResultStore {
  public:

@@ -41,6 +41,11 @@ struct RunOptions {
 /// Runs one trial; never throws (failures are returned as results).
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial);
 
+/// The positions of `trials` ordered by estimated cost, largest first (ties keep grid order):
+/// the order in which trials are started, so that long trials do not end a run alone.
+std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
+                                             const std::vector<TrialSpec>& trials);
+
 /// Runs `trials` concurrently, largest first; results in the order of `trials`.
 std::vector<TrialResult> run_trials(const StudyDefinition& study,
                                     const std::vector<TrialSpec>& trials,

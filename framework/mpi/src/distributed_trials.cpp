@@ -1,0 +1,133 @@
+// Trials across MPI ranks: the study-level layer of rkhs/distributed.hpp over distribute().
+
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <map>
+
+#include "rkhs/distributed.hpp"
+#include "rkhs/sha256.hpp"
+
+namespace rkhs::distributed {
+
+namespace {
+
+// Trial ids on the wire are grid indices; every rank maps them back to its own TrialSpec.
+std::map<std::uint64_t, const TrialSpec*> trials_by_index(const std::vector<TrialSpec>& trials) {
+  std::map<std::uint64_t, const TrialSpec*> out;
+  for (const auto& trial : trials)
+    if (!out.emplace(trial.index, &trial).second)
+      throw std::logic_error(fmt::format("two trials with grid index {}", trial.index));
+  return out;
+}
+
+}  // namespace
+
+void require_same_trials(const Session& session, const StudyDefinition& study,
+                         const std::vector<TrialSpec>& trials) {
+  std::string mine;
+  try {
+    Sha256 digest;
+    for (const auto& hash : trial_hashes(study, trials)) digest.update(hash);
+    mine = "ok " + digest.hex_digest();
+  } catch (const std::exception& e) {
+    mine = std::string("error ") + e.what();
+  }
+  std::string verdict;
+  const auto all = session.gather(mine + " " + std::to_string(trials.size()));
+  if (session.is_root()) {
+    for (std::size_t r = 0; r < all.size(); ++r) {
+      if (all[r].rfind("error ", 0) == 0)
+        verdict += fmt::format("\n  rank {}: {}", r, all[r].substr(6, all[r].rfind(' ') - 6));
+      else if (all[r] != all[0] && all[0].rfind("ok ", 0) == 0)
+        verdict += fmt::format(
+            "\n  rank {} sees other trials than rank 0 ({} trials; a different study file, data "
+            "file, plugin or rkhs-study build on its node)",
+            r, all[r].substr(all[r].rfind(' ') + 1));
+    }
+    if (!verdict.empty())
+      verdict =
+          fmt::format("{}: the MPI ranks do not agree on the study's trials, nothing was run:{}",
+                      study.name, verdict);
+  }
+  verdict = session.broadcast(verdict);
+  if (!verdict.empty()) {
+    if (session.is_root()) throw std::runtime_error(verdict);
+    throw QuietExit{2};
+  }
+}
+
+void require_no_errors(const Session& session, const std::string& error) {
+  const auto errors = session.gather(error);
+  std::string verdict;
+  if (session.is_root()) {
+    std::size_t failing = 0;
+    for (const auto& e : errors) failing += e.empty() ? 0 : 1;
+    if (failing == 1 && !errors[0].empty()) {
+      verdict = errors[0];
+    } else if (failing > 0) {
+      verdict = fmt::format("{} of {} MPI ranks cannot go on:", failing, errors.size());
+      for (std::size_t r = 0; r < errors.size(); ++r)
+        if (!errors[r].empty()) verdict += fmt::format("\n  rank {}: {}", r, errors[r]);
+    }
+  }
+  verdict = session.broadcast(verdict);
+  if (verdict.empty()) return;
+  if (session.is_root()) throw std::runtime_error(verdict);
+  throw QuietExit{2};
+}
+
+int launched_process_count() noexcept {
+  // Open MPI's mpirun, then the PMI variables of Slurm's srun and of MPICH's launchers.
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "SLURM_NTASKS"}) {
+    if (const char* value = std::getenv(name)) {
+      char* end = nullptr;
+      const long size = std::strtol(value, &end, 10);
+      if (end != value && size >= 1 && size < 1 << 24) return static_cast<int>(size);
+    }
+  }
+  return 1;
+}
+
+std::optional<StoredRun> run_with_store(const Session& session, const StudyDefinition& study,
+                                        const std::vector<TrialSpec>& trials,
+                                        const RunOptions& options, ResultStore* store, bool fresh,
+                                        JobStatistics* statistics) {
+  require_same_trials(session, study, trials);
+  const auto by_index = trials_by_index(trials);
+  Job job;
+  job.threads = options.threads > 0 ? options.threads : session.default_threads();
+  job.stop_requested = options.stop_requested;
+  job.run = [&](std::uint64_t id) { return serialize_result(run_trial(study, *by_index.at(id))); };
+  if (!session.is_root()) {
+    distribute(session, job);
+    return std::nullopt;
+  }
+  // Rank 0: the trials the store lacks are handed out, largest first; each result is committed
+  // (through `storing`) as it arrives.
+  const TrialExecutor coordinate = [&](const StudyDefinition&,
+                                       const std::vector<TrialSpec>& pending,
+                                       const RunOptions& storing) {
+    if (storing.on_start) storing.on_start(pending.size());
+    std::vector<TrialResult> results(pending.size());
+    std::map<std::uint64_t, std::size_t> slot;
+    for (std::size_t k = 0; k < pending.size(); ++k) slot[pending[k].index] = k;
+    for (const auto k : largest_first_order(study, pending)) job.order.push_back(pending[k].index);
+    job.on_report = [&](const TaskReport& report) {
+      const std::size_t k = slot.at(report.id);
+      if (report.skipped) {
+        results[k].skipped = true;
+        results[k].reason = "not run: the run was interrupted";
+        return;
+      }
+      results[k] = deserialize_result(report.payload);
+      if (storing.on_trial_finished) storing.on_trial_finished(pending[k], results[k]);
+    };
+    auto spread = distribute(session, job);
+    if (statistics) *statistics = std::move(spread);
+    return results;
+  };
+  return rkhs::run_with_store(study, trials, options, store, fresh, coordinate);
+}
+
+}  // namespace rkhs::distributed

@@ -1,0 +1,439 @@
+// The MPI side of rkhs/distributed.hpp: the session and the task hand-out protocol.
+//
+// Protocol (tags below), rank 0 coordinating, every rank (rank 0 too) running tasks:
+//   worker -> 0  request  int32: how many tasks it takes (threads + 1), sent once
+//   0 -> worker  assign   uint64 ids (none: no more tasks for this job; nothing follows)
+//   worker -> 0  result   uint64 id, uint8 skipped, payload; asks for one more task
+// Rank 0 answers every request and every result with `assign` until it has no task left or a
+// stop is requested; then it answers with an empty `assign` once, and the worker finishes its
+// tasks in flight, sends their results and leaves. Only the thread that created the Session
+// calls MPI (MPI_THREAD_FUNNELED); oneTBB threads run the tasks and queue their results.
+//
+// The calling threads poll (MPI_Iprobe) rather than block in MPI_Recv, which spins at full
+// speed in Open MPI and would take a core from the worker threads: after activity the poll
+// interval starts at a few microseconds and doubles up to a millisecond while idle; a finished
+// task wakes the thread at once.
+
+#include <fmt/format.h>
+#include <mpi.h>
+#include <sched.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <cstdlib>
+#include <cstring>
+#include <deque>
+#include <exception>
+#include <iostream>
+#include <limits>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "rkhs/distributed.hpp"
+
+namespace rkhs::distributed {
+
+namespace {
+
+constexpr int tag_request = 7101, tag_assign = 7102, tag_result = 7103;
+
+void check(int code, const char* what) {
+  if (code != MPI_SUCCESS) {
+    char text[MPI_MAX_ERROR_STRING];
+    int length = 0;
+    MPI_Error_string(code, text, &length);
+    throw std::runtime_error(std::string(what) + ": " +
+                             std::string(text, static_cast<std::size_t>(length)));
+  }
+}
+
+int byte_count(std::size_t size) {
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw std::runtime_error("an MPI message above 2 GiB");
+  return static_cast<int>(size);
+}
+
+// Receives the message that MPI_Iprobe found, whatever its length.
+std::string receive(const MPI_Status& probed) {
+  int count = 0;
+  check(MPI_Get_count(&probed, MPI_BYTE, &count), "MPI_Get_count");
+  std::string bytes(static_cast<std::size_t>(count), '\0');
+  check(MPI_Recv(bytes.data(), count, MPI_BYTE, probed.MPI_SOURCE, probed.MPI_TAG, MPI_COMM_WORLD,
+                 MPI_STATUS_IGNORE),
+        "MPI_Recv");
+  return bytes;
+}
+
+void send(const std::string& bytes, int destination, int tag) {
+  check(
+      MPI_Send(bytes.data(), byte_count(bytes.size()), MPI_BYTE, destination, tag, MPI_COMM_WORLD),
+      "MPI_Send");
+}
+
+template <class T>
+void append(std::string& bytes, T value) {
+  bytes.append(reinterpret_cast<const char*>(&value), sizeof value);
+}
+
+template <class T>
+T read(const std::string& bytes, std::size_t at) {
+  if (at + sizeof(T) > bytes.size()) throw std::runtime_error("a truncated MPI message");
+  T value;
+  std::memcpy(&value, bytes.data() + at, sizeof value);
+  return value;
+}
+
+// This rank's worker threads: tasks go in, reports come out (in completion order) to the MPI
+// thread, which is woken when one arrives. A runner thread enters a oneTBB arena of `threads`
+// slots and runs one consumer loop per slot for the whole job; the consumers take tasks from a
+// queue. The runner works in the arena itself, so the tasks progress even before (or without)
+// oneTBB's worker threads joining, and handing a task over is one condition-variable signal.
+class LocalPool {
+ public:
+  explicit LocalPool(const Job& job) : job_(job), runner_([this] { run_consumers(); }) {}
+
+  /// Lets the consumers finish the queued tasks, then joins the runner.
+  ~LocalPool() {
+    {
+      std::lock_guard lock(mutex_);
+      closed_ = true;
+    }
+    work_.notify_all();
+    runner_.join();
+  }
+
+  void submit(std::uint64_t id) {
+    ++in_flight_;
+    {
+      std::lock_guard lock(mutex_);
+      queued_.push_back(id);
+    }
+    work_.notify_one();
+  }
+
+  /// The reports that arrived, after waiting up to `wait` for one when there is none.
+  std::deque<TaskReport> take(std::chrono::microseconds wait) {
+    std::unique_lock lock(mutex_);
+    if (done_.empty() && wait.count() > 0)
+      ready_.wait_for(lock, wait, [this] { return !done_.empty(); });
+    if (error_) std::rethrow_exception(error_);  // a task's `run` broke its contract
+    std::deque<TaskReport> out;
+    out.swap(done_);
+    in_flight_ -= out.size();
+    return out;
+  }
+
+  std::size_t in_flight() const noexcept { return in_flight_; }
+  /// Tasks to keep on this rank: one per thread plus one waiting, so that a thread that
+  /// finishes starts the next task at once instead of waiting for a message round trip.
+  std::size_t capacity() const noexcept { return static_cast<std::size_t>(job_.threads) + 1; }
+
+ private:
+  void run_consumers() {
+    const auto threads = static_cast<std::size_t>(job_.threads);
+    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, threads);
+    tbb::task_arena arena(job_.threads);
+    arena.execute([&] {
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, threads, 1),
+          [&](const tbb::blocked_range<std::size_t>& range) {
+            for (auto k = range.begin(); k != range.end(); ++k) consume();
+          },
+          tbb::simple_partitioner());
+    });
+  }
+
+  // Runs queued tasks until the pool is closed and the queue is empty.
+  void consume() {
+    for (;;) {
+      std::uint64_t id = 0;
+      {
+        std::unique_lock lock(mutex_);
+        work_.wait(lock, [this] { return closed_ || !queued_.empty(); });
+        if (queued_.empty()) return;
+        id = queued_.front();
+        queued_.pop_front();
+      }
+      TaskReport report;
+      report.id = id;
+      std::exception_ptr error;
+      try {
+        if (job_.stop_requested && job_.stop_requested())
+          report.skipped = true;
+        else
+          report.payload = job_.run(id);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      {
+        std::lock_guard lock(mutex_);
+        if (error && !error_) error_ = error;
+        done_.push_back(std::move(report));
+      }
+      ready_.notify_one();
+    }
+  }
+
+  const Job& job_;
+  std::mutex mutex_;
+  std::condition_variable work_, ready_;
+  std::deque<std::uint64_t> queued_;
+  bool closed_ = false;
+  std::deque<TaskReport> done_;
+  std::exception_ptr error_;
+  std::size_t in_flight_ = 0;  // submitted, report not yet taken (the MPI thread only)
+  std::thread runner_;         // last: started once everything above exists
+};
+
+// Poll interval: short right after activity, doubling to 1 ms while nothing happens.
+class Backoff {
+ public:
+  std::chrono::microseconds next() {
+    const auto wait = wait_;
+    wait_ = std::min(wait_ * 2, std::chrono::microseconds(1000));
+    return wait;
+  }
+  void reset() { wait_ = std::chrono::microseconds(4); }
+
+ private:
+  std::chrono::microseconds wait_{4};
+};
+
+// Rank 0: hands tasks out and collects their reports.
+void coordinate(const Session& session, const Job& job, JobStatistics& statistics) {
+  LocalPool pool(job);
+  const std::size_t ranks = static_cast<std::size_t>(session.size());
+  std::size_t next = 0;                         // next task of job.order to hand out
+  std::vector<std::size_t> outstanding(ranks);  // handed out, not yet reported
+  std::vector<bool> closed(ranks, false);       // told that no task follows
+  closed[0] = true;
+  bool stopping = false;
+  Backoff backoff;
+
+  auto report = [&](TaskReport&& r) {
+    --outstanding[static_cast<std::size_t>(r.rank)];
+    if (!r.skipped) ++statistics.ranks[static_cast<std::size_t>(r.rank)].trials;
+    job.on_report(r);
+  };
+  // Answers a rank that can start `wanted` more tasks.
+  auto assign = [&](int rank, std::size_t wanted) {
+    const auto r = static_cast<std::size_t>(rank);
+    if (closed[r]) return;
+    std::string ids;
+    for (; wanted > 0 && !stopping && next < job.order.size(); --wanted) {
+      append(ids, job.order[next++]);
+      ++outstanding[r];
+    }
+    if (ids.empty()) closed[r] = true;  // an empty assignment: no more tasks
+    send(ids, rank, tag_assign);
+  };
+
+  for (;;) {
+    bool activity = false;
+    if (!stopping && job.stop_requested && job.stop_requested()) {
+      stopping = true;
+      for (; next < job.order.size(); ++next) {
+        ++outstanding[0];
+        report({job.order[next], true, {}, 0});
+      }
+    }
+    while (!stopping && pool.in_flight() < pool.capacity() && next < job.order.size()) {
+      ++outstanding[0];
+      pool.submit(job.order[next++]);
+    }
+    int arrived = 0;
+    MPI_Status status;
+    check(MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, &status), "MPI_Iprobe");
+    if (arrived) {
+      activity = true;
+      const std::string bytes = receive(status);
+      if (status.MPI_TAG == tag_request) {
+        assign(status.MPI_SOURCE,
+               static_cast<std::size_t>(std::max(read<std::int32_t>(bytes, 0), 1)));
+      } else if (status.MPI_TAG == tag_result) {
+        TaskReport r{read<std::uint64_t>(bytes, 0), read<std::uint8_t>(bytes, 8) != 0,
+                     bytes.substr(9), status.MPI_SOURCE};
+        report(std::move(r));
+        assign(status.MPI_SOURCE, 1);
+      } else {
+        throw std::runtime_error("an MPI message with an unknown tag");
+      }
+    }
+    const bool all_done =
+        next == job.order.size() &&
+        std::all_of(outstanding.begin(), outstanding.end(), [](auto n) { return n == 0; }) &&
+        std::all_of(closed.begin(), closed.end(), [](bool c) { return c; });
+    if (all_done) break;
+    auto finished = pool.take(activity ? std::chrono::microseconds(0) : backoff.next());
+    if (!finished.empty()) activity = true;
+    for (auto& r : finished) report(std::move(r));
+    if (activity) backoff.reset();
+  }
+}
+
+// Other ranks: ask for tasks, run them, send the results back.
+void serve(const Job& job) {
+  LocalPool pool(job);
+  std::string request;
+  append(request, static_cast<std::int32_t>(pool.capacity()));
+  send(request, 0, tag_request);
+  bool no_more = false;
+  Backoff backoff;
+  while (!no_more || pool.in_flight() > 0) {
+    bool activity = false;
+    int arrived = 0;
+    MPI_Status status;
+    check(MPI_Iprobe(0, tag_assign, MPI_COMM_WORLD, &arrived, &status), "MPI_Iprobe");
+    if (arrived) {
+      activity = true;
+      const std::string ids = receive(status);
+      if (ids.empty()) no_more = true;
+      for (std::size_t at = 0; at + 8 <= ids.size(); at += 8)
+        pool.submit(read<std::uint64_t>(ids, at));
+    }
+    auto finished = pool.take(activity ? std::chrono::microseconds(0) : backoff.next());
+    for (auto& r : finished) {
+      std::string bytes;
+      bytes.reserve(9 + r.payload.size());
+      append(bytes, r.id);
+      append(bytes, static_cast<std::uint8_t>(r.skipped ? 1 : 0));
+      bytes += r.payload;
+      send(bytes, 0, tag_result);
+      activity = true;
+    }
+    if (activity) backoff.reset();
+  }
+}
+
+}  // namespace
+
+bool available() noexcept {
+  return true;
+}
+
+int usable_cpus() noexcept {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0)
+    return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, CPU_COUNT(&set));
+}
+
+Session::Session(int& argc, char**& argv) {
+  int initialised = 0;
+  check(MPI_Initialized(&initialised), "MPI_Initialized");
+  if (initialised) throw std::runtime_error("MPI is already initialised (one Session per process)");
+  int provided = 0;
+  check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  if (provided < MPI_THREAD_FUNNELED) {
+    MPI_Finalize();
+    throw std::runtime_error("the MPI library does not support MPI_THREAD_FUNNELED");
+  }
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  MPI_Comm node;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node);
+  MPI_Comm_size(node, &ranks_on_node_);
+  MPI_Comm_free(&node);
+  char name[MPI_MAX_PROCESSOR_NAME];
+  int length = 0;
+  MPI_Get_processor_name(name, &length);
+  host_.assign(name, static_cast<std::size_t>(length));
+}
+
+Session::~Session() {
+  MPI_Finalize();
+}
+
+int Session::default_threads() const noexcept {
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, std::min(usable_cpus(), hardware / std::max(1, ranks_on_node_)));
+}
+
+std::vector<std::string> Session::gather(const std::string& text) const {
+  int length = byte_count(text.size());
+  std::vector<int> lengths(is_root() ? static_cast<std::size_t>(size_) : 0);
+  check(MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD),
+        "MPI_Gather");
+  std::vector<int> offsets(lengths.size());
+  std::string all;
+  if (is_root()) {
+    std::size_t total = 0;
+    for (std::size_t r = 0; r < lengths.size(); ++r) {
+      offsets[r] = byte_count(total);
+      total += static_cast<std::size_t>(lengths[r]);
+    }
+    all.resize(total);
+  }
+  check(MPI_Gatherv(text.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(),
+                    MPI_BYTE, 0, MPI_COMM_WORLD),
+        "MPI_Gatherv");
+  std::vector<std::string> out;
+  for (std::size_t r = 0; r < lengths.size(); ++r)
+    out.push_back(
+        all.substr(static_cast<std::size_t>(offsets[r]), static_cast<std::size_t>(lengths[r])));
+  return out;
+}
+
+std::string Session::broadcast(const std::string& value) const {
+  int length = is_root() ? byte_count(value.size()) : 0;
+  check(MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  std::string out = is_root() ? value : std::string(static_cast<std::size_t>(length), '\0');
+  check(MPI_Bcast(out.data(), length, MPI_BYTE, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  return out;
+}
+
+void Session::barrier() const {
+  check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+}
+
+void Session::abort(const std::string& why, int code) const {
+  std::cerr << "rkhs-study: rank " << rank_ << ": " << why << "; ending the MPI job\n"
+            << std::flush;
+  MPI_Abort(MPI_COMM_WORLD, code);
+  std::abort();
+}
+
+JobStatistics distribute(const Session& session, const Job& job) {
+  if (job.threads < 1)
+    throw std::invalid_argument("a distributed job needs at least one thread per rank");
+  // Who takes part: host and threads of every rank.
+  JobStatistics statistics;
+  const auto described =
+      session.gather(fmt::format("{} {} {}", job.threads, usable_cpus(), session.host()));
+  for (std::size_t r = 0; r < described.size(); ++r) {
+    std::istringstream in(described[r]);
+    RankRecord rank;
+    int cpus = 0;
+    in >> rank.threads >> cpus >> std::ws;
+    std::getline(in, rank.host);
+    // A rank bound to fewer cores than it has threads (mpirun binds to a core by default
+    // when there are 2 ranks or fewer) runs them in turn.
+    if (rank.threads > cpus)
+      std::cerr << fmt::format(
+          "rkhs-study: warning: MPI rank {} on {} runs {} threads on {} "
+          "core{} it is bound to; start mpirun with --bind-to none (or give "
+          "each rank as many cores as threads)\n",
+          r, rank.host, rank.threads, cpus, cpus == 1 ? "" : "s");
+    statistics.ranks.push_back(std::move(rank));
+  }
+  try {
+    if (session.is_root())
+      coordinate(session, job, statistics);
+    else
+      serve(job);
+  } catch (const std::exception& e) {
+    session.abort(e.what(), 2);
+  } catch (...) {
+    session.abort("unknown exception", 2);
+  }
+  session.barrier();
+  return statistics;
+}
+
+}  // namespace rkhs::distributed
