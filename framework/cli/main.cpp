@@ -486,7 +486,11 @@ int main(int argc, char** argv) {
   CLI::App app{"rkhs-study: convergence studies of kernel approximation and adaptive estimation "
                "in reproducing kernel Hilbert spaces"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("rkhs-study ") + rkhs::build_info().version);
+  app.set_version_flag("--version",
+                       fmt::format("rkhs-study {} (commit {}; {}; MPI runner: {})",
+                                   rkhs::build_info().version, rkhs::build_info().git_commit,
+                                   rkhs::build_info().build_type,
+                                   rkhs::distributed::available() ? "yes" : "no, see docs/cluster.md"));
 
   std::string study_file, out_dir, kind;
   int threads = 0;

@@ -165,6 +165,12 @@ TEST_CASE("mpirun -np 2 --mpi gives the single-process results bit for bit", "[c
   }
 }
 
+TEST_CASE("rkhs-study --version says that the MPI runner is built in", "[cli][mpi]") {
+  const auto version = rkhs_study("--version");
+  CHECK(version.exit_code == 0);
+  CHECK_THAT(version.output, Catch::Contains("MPI runner: yes"));
+}
+
 TEST_CASE("rkhs-study check --mpi judges the same expectations", "[cli][mpi]") {
   const auto dir = rkhs::test::scratch_directory("mpi_check");
   const auto study = std::string(RKHS_STUDY_SOURCE_DIR) + "/studies/gram_and_power.toml";
@@ -338,6 +344,7 @@ TEST_CASE("a build without MPI says that --mpi is not available", "[cli][mpi]") 
   const auto outcome = rkhs_study("run " + (dir / "a.toml").string() + " --mpi --no-store");
   CHECK(outcome.exit_code == 2);
   CHECK_THAT(outcome.output, Catch::Contains("built without MPI"));
+  CHECK_THAT(rkhs_study("--version").output, Catch::Contains("MPI runner: no"));
   (void)adaptive_study;
 }
 
