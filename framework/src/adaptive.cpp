@@ -104,9 +104,13 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                          names.begin())] = value;
   };
 
-  // The static part: the space H_n and the projection Pi_n of the target.
-  const auto approximation =
-      measure_approximation(kernel, target, centres, evaluation_points, solver_options);
+  // The static part: the space H_n and the projection Pi_n of the target. The Gram matrix, its
+  // solver and the cross matrix on the evaluation grid serve the adaptive part too.
+  const Eigen::MatrixXd gram = kernel.gram(centres);
+  const GramSolver solver(gram, solver_options);
+  Eigen::MatrixXd cross;
+  const auto approximation = measure_approximation(kernel, target, centres, evaluation_points,
+                                                   gram, solver, &cross);
   const auto& approximation_names = approximation_metric_names();
   auto approximated = [&](std::string_view name) {
     return approximation.metrics[static_cast<std::size_t>(
@@ -121,8 +125,6 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     out.flags.push_back(
         flag == "sup_error_at_floor" || flag == "l2_error_at_floor" ? "interpolant_" + flag : flag);
 
-  const Eigen::MatrixXd gram = kernel.gram(centres);
-  const GramSolver solver(gram, solver_options);
   Eigen::VectorXd at_centres(n);
   target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
   const Eigen::VectorXd alpha_star = solver.solve(at_centres);  // Pi_n f = sum alpha*_i phi_i
@@ -191,8 +193,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   for (std::size_t m = 0; m < snapshot_grid.size(); ++m) out.road[m] = road(snapshot_grid[m]);
 
   // Errors at T on the M-point grid.
-  const auto grid = domain.uniform_points(evaluation_points);
-  const Eigen::MatrixXd cross = kernel.cross(grid, centres);
+  const auto grid = domain.uniform_points(evaluation_points);  // the rows of `cross`
   Eigen::VectorXd f(static_cast<Eigen::Index>(grid.size()));
   for (std::size_t m = 0; m < grid.size(); ++m) f(static_cast<Eigen::Index>(m)) = road(grid[m]);
   const Eigen::VectorXd alpha = z.tail(n);

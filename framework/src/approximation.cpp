@@ -79,6 +79,18 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                std::span<const double> centres,
                                                std::size_t evaluation_points,
                                                const SolverOptions& solver_options) {
+  const Eigen::MatrixXd gram = kernel.gram(centres);
+  const GramSolver solver(gram, solver_options);
+  return measure_approximation(kernel, target, centres, evaluation_points, gram, solver);
+}
+
+ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
+                                               const TargetFunction& target,
+                                               std::span<const double> centres,
+                                               std::size_t evaluation_points,
+                                               const Eigen::MatrixXd& gram,
+                                               const GramSolver& solver,
+                                               Eigen::MatrixXd* cross_out) {
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(centres.size());
   const auto points = domain.uniform_points(evaluation_points);
@@ -89,8 +101,6 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   set(0, fill_distance(centres, domain));
   set(1, separation_distance(centres, domain));
 
-  const Eigen::MatrixXd gram = kernel.gram(centres);
-  const GramSolver solver(gram, solver_options);
   const auto& spectrum = solver.spectrum();
   out.solve_method = solver.method();
   set(2, spectrum.condition_number);
@@ -99,7 +109,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   if (spectrum.singular) out.flags.push_back("gram_singular");
 
   // Power function from the cross matrix K_mi = k(s_m, c_i), O(n^2) per point.
-  const auto data = power_function_data(kernel, solver, centres, points);
+  auto data = power_function_data(kernel, solver, centres, points);
   const Eigen::MatrixXd& cross = data.cross;
   const Eigen::VectorXd& solution_norm_squared = data.solution_norm_squared;
   const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
@@ -125,6 +135,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   set(10, std::sqrt(std::max(0.0, alpha.dot(gram * alpha))));
   if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
   if (l2 <= error_floor * std::sqrt(domain.length)) out.flags.push_back("l2_error_at_floor");
+  if (cross_out) *cross_out = std::move(data.cross);
   return out;
 }
 

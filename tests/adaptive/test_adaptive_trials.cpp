@@ -3,32 +3,15 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "rkhs/run.hpp"
-#include "rkhs/study.hpp"
+#include "study_support.hpp"
 
 using namespace rkhs;
 
 namespace {
 
-struct Outcome {
-  StudyDefinition study;
-  std::vector<TrialSpec> trials;
-  std::vector<TrialResult> results;
-  double metric(std::size_t trial, std::string_view name) const {
-    return results.at(trial).metrics.at(study.metric_index(name));
-  }
-};
-
-Outcome run(const std::string& text) {
-  Outcome out{parse_study(text, "adaptive.toml"), {}, {}};
-  out.trials = out.study.trials();
-  out.results = run_trials(out.study, out.trials, {2, {}});
-  for (std::size_t i = 0; i < out.results.size(); ++i) {
-    INFO(out.trials[i].key);
-    REQUIRE(out.results[i].reason == "");
-    REQUIRE(out.results[i].ok);
-  }
-  return out;
+// Every trial of the study must succeed.
+test::StudyOutcome run(const std::string& text) {
+  return test::run_study_text(text, "adaptive.toml");
 }
 
 double relative(double a, double b) {

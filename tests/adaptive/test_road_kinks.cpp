@@ -5,8 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rkhs/run.hpp"
-#include "rkhs/study.hpp"
+#include "study_support.hpp"
 
 using namespace rkhs;
 
@@ -48,17 +47,9 @@ speed = 1e-4
 laps = 2
 samples_per_lap = 4
 )";
-  const auto study = parse_study(study_text, "road_kinks.toml");
-  const auto trials = study.trials();
-  REQUIRE(trials.size() == 2);
-  const auto results = run_trials(study, trials, {2, {}});
-  for (const auto& r : results) {
-    INFO(r.reason);
-    REQUIRE(r.ok);
-  }
-  auto metric = [&](std::size_t i, std::string_view name) {
-    return results[i].metrics[study.metric_index(name)];
-  };
+  const auto outcome = test::run_study_text(study_text, "road_kinks.toml");
+  REQUIRE(outcome.trials.size() == 2);
+  auto metric = [&](std::size_t i, std::string_view name) { return outcome.metric(i, name); };
   // 40 samples per lap (the seam among them), 2 laps: at least 80 segments with restarts; the
   // Gaussian is periodised and smooth, so without them only the output samples cut the run.
   CHECK(metric(0, "segments") >= 80);

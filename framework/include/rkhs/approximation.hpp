@@ -46,6 +46,17 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                std::size_t evaluation_points,
                                                const SolverOptions& solver);
 
+/// The same measurement from a Gram matrix `gram` of `centres` and its `solver` already built
+/// by the caller (who needs them too: an adaptive trial). The cross matrix
+/// K_mi = k(s_m, c_i) on the evaluation points is moved into `*cross` when it is not null.
+ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
+                                               const TargetFunction& target,
+                                               std::span<const double> centres,
+                                               std::size_t evaluation_points,
+                                               const Eigen::MatrixXd& gram,
+                                               const GramSolver& solver,
+                                               Eigen::MatrixXd* cross = nullptr);
+
 /// P_n(s) at each point, with the same solver (values below round-off clamped to 0).
 Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,
                                std::span<const double> centres, std::span<const double> points);
