@@ -151,27 +151,13 @@ std::string utc_now() {
 }
 
 std::string describe_parameter(const rkhs::ParameterSpec& spec) {
-  std::string out = fmt::format("    {:<14} {}", spec.name, spec.doc);
-  std::string detail;
-  if (!spec.default_doc.empty()) detail = "default " + spec.default_doc;
-  else detail = "default " + rkhs::format_value(spec.default_value);
-  if (spec.type == rkhs::ParameterType::choice) {
-    detail += "; one of";
-    for (std::size_t i = 0; i < spec.choices.size(); ++i) detail += (i ? ", " : " ") + spec.choices[i];
-  } else if (!spec.allowed.empty()) {
-    detail += "; one of";
-    for (std::size_t i = 0; i < spec.allowed.size(); ++i)
-      detail += (i ? ", " : " ") + rkhs::format_real(spec.allowed[i]);
-  } else if (spec.type == rkhs::ParameterType::real || spec.type == rkhs::ParameterType::integer) {
-    const bool lo = spec.min > -1e308, hi = spec.max < 1e308;
-    auto bound = [&](double v) {
-      return spec.type == rkhs::ParameterType::integer
-                 ? std::to_string(static_cast<long long>(v)) : rkhs::format_real(v);
-    };
-    if (lo) detail += fmt::format("; {} {}", spec.min_exclusive ? ">" : ">=", bound(spec.min));
-    if (hi) detail += fmt::format("; {} {}", spec.max_exclusive ? "<" : "<=", bound(spec.max));
-  }
-  return out + " (" + detail + ")";
+  std::string detail = "default " + (spec.default_doc.empty() ? rkhs::format_value(spec.default_value)
+                                                              : spec.default_doc);
+  if (spec.type == rkhs::ParameterType::choice)
+    detail += fmt::format("; one of {}", fmt::join(spec.choices, ", "));
+  else if (spec.type == rkhs::ParameterType::real || spec.type == rkhs::ParameterType::integer)
+    if (const auto range = rkhs::describe_range(spec); range != "any number") detail += "; " + range;
+  return fmt::format("    {:<14} {} ({})", spec.name, spec.doc, detail);
 }
 
 template <class RegistryType>

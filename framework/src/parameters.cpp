@@ -96,8 +96,6 @@ std::string format_value(const ParameterValue& value) {
   return std::visit(Visitor{}, value);
 }
 
-namespace {
-
 std::string describe_range(const ParameterSpec& spec) {
   std::string out;
   if (!spec.allowed.empty()) {
@@ -118,6 +116,8 @@ std::string describe_range(const ParameterSpec& spec) {
   if (has_max) return fmt::format("{} {}", spec.max_exclusive ? "<" : "<=", bound(spec.max));
   return "any number";
 }
+
+namespace {
 
 // Checks `value` (already of the spec's type) and returns what is wrong, or "".
 std::string check_value(const ParameterSpec& spec, const ParameterValue& value) {

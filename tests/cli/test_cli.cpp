@@ -118,6 +118,11 @@ TEST_CASE("list shows plugins with parameters and docs; --help works", "[cli]") 
   CHECK(outcome.exit_code == 0);
   for (const char* expected : {"bspline", "gaussian", "matern", "wendland", "sigma", "degree"})
     CHECK_THAT(outcome.output, Catch::Contains(expected));
+  // Defaults and ranges, worded as in error messages.
+  CHECK_THAT(outcome.output, Catch::Contains("(default 1; in [0, 3])"));
+  CHECK_THAT(outcome.output, Catch::Contains("(default 1; > 0)"));
+  CHECK_THAT(outcome.output, Catch::Contains("(default 1.5; one of 0.5, 1.5, 2.5)"));
+  CHECK_THAT(outcome.output, Catch::Contains("(default 2sigma2; one of 2sigma2, sigma2)"));
   outcome = run("list integrator");
   CHECK(outcome.exit_code == 0);
   for (const char* expected : {"rosenbrock4", "rodas4", "dopri5", "rk_fehlberg78", "rk4", "rtol"})

@@ -98,6 +98,10 @@ class ParameterSet {
 /// shortest representation that reads back to the same double.
 std::string format_value(const ParameterValue& value);
 std::string format_real(double value);
+
+/// The values a numeric parameter accepts, as error messages and `rkhs-study list` say it:
+/// "one of 0.5, 1.5", "in [0, 3]", "> 0", "any number".
+std::string describe_range(const ParameterSpec& spec);
 std::string_view type_name(ParameterType type);
 
 /// Checks a declaration (default valid, bounds ordered, choices non-empty). Returns an empty
