@@ -4,12 +4,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <mutex>
 
+#include "rkhs/adaptive.hpp"
 #include "rkhs/build_info.hpp"
 #include "rkhs/centres.hpp"
 #include "rkhs/kernel.hpp"
+#include "rkhs/plant.hpp"
 #include "rkhs/plugin.hpp"
 #include "rkhs/target.hpp"
 
@@ -19,24 +22,47 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// What the registries hold, to learn what a module registered and whether it was refused.
-struct Snapshot {
-  std::vector<std::string> kernels, centres, targets;
-  std::size_t kernel_errors = 0, centre_errors = 0, target_errors = 0;
+// The six registries, each seen through the operations the loader needs.
+struct RegistryView {
+  std::vector<std::string> (*names)();
+  std::size_t (*error_count)();
+  void (*remove)(const std::string&);
+  std::vector<std::string> (*take_errors_after)(std::size_t);
+};
 
-  static Snapshot take() {
-    return {kernel_registry().names(),       centre_registry().names(),
-            target_registry().names(),       kernel_registry().error_count(),
-            centre_registry().error_count(), target_registry().error_count()};
+template <auto& registry>
+constexpr RegistryView view_of() {
+  return {[] { return registry().names(); }, [] { return registry().error_count(); },
+          [](const std::string& name) { registry().remove(name); },
+          [](std::size_t count) { return registry().take_errors_after(count); }};
+}
+
+// In the order of LoadedPlugin's lists.
+constexpr std::size_t registry_count = 6;
+constexpr std::array<RegistryView, registry_count> registries{
+    view_of<kernel_registry>(), view_of<centre_registry>(), view_of<target_registry>(),
+    view_of<plant_registry>(),  view_of<law_registry>(),    view_of<integrator_registry>()};
+
+std::array<std::vector<std::string>*, registry_count> lists_of(LoadedPlugin& plugin) {
+  return {&plugin.kernels, &plugin.centres, &plugin.targets,
+          &plugin.plants,  &plugin.laws,    &plugin.integrators};
+}
+
+// What the registries hold, to learn what a module registered and whether it was refused.
+struct RegistryState {
+  std::array<std::vector<std::string>, registry_count> names;
+  std::array<std::size_t, registry_count> errors{};
+
+  static RegistryState take() {
+    RegistryState out;
+    for (std::size_t r = 0; r < registry_count; ++r) {
+      out.names[r] = registries[r].names();
+      out.errors[r] = registries[r].error_count();
+    }
+    return out;
   }
-  bool same_errors(const Snapshot& other) const {
-    return kernel_errors == other.kernel_errors && centre_errors == other.centre_errors &&
-           target_errors == other.target_errors;
-  }
-  bool same(const Snapshot& other) const {
-    return kernels == other.kernels && centres == other.centres && targets == other.targets &&
-           same_errors(other);
-  }
+  bool same_errors(const RegistryState& other) const { return errors == other.errors; }
+  bool same(const RegistryState& other) const { return names == other.names && same_errors(other); }
 };
 
 std::vector<std::string> added(const std::vector<std::string>& before,
@@ -48,16 +74,14 @@ std::vector<std::string> added(const std::vector<std::string>& before,
 }
 
 // Removes what was registered since `before` and returns the registration errors recorded since.
-std::vector<std::string> roll_back(const Snapshot& before) {
-  const auto now = Snapshot::take();
-  for (const auto& name : added(before.kernels, now.kernels)) kernel_registry().remove(name);
-  for (const auto& name : added(before.centres, now.centres)) centre_registry().remove(name);
-  for (const auto& name : added(before.targets, now.targets)) target_registry().remove(name);
+std::vector<std::string> roll_back(const RegistryState& before) {
+  const auto now = RegistryState::take();
   std::vector<std::string> errors;
-  for (auto taken : {kernel_registry().take_errors_after(before.kernel_errors),
-                     centre_registry().take_errors_after(before.centre_errors),
-                     target_registry().take_errors_after(before.target_errors)})
+  for (std::size_t r = 0; r < registry_count; ++r) {
+    for (const auto& name : added(before.names[r], now.names[r])) registries[r].remove(name);
+    const auto taken = registries[r].take_errors_after(before.errors[r]);
     errors.insert(errors.end(), taken.begin(), taken.end());
+  }
   return errors;
 }
 
@@ -102,7 +126,7 @@ LoadedPlugin load_plugin(const fs::path& file) {
   for (const auto& module : modules())
     if (module.plugin.file == canonical) return module.plugin;
 
-  const auto before = Snapshot::take();
+  const auto before = RegistryState::take();
   dlerror();
   // Lazy binding: see plugin.hpp (a module built against another ABI still loads far enough to
   // say which ABI it was built against). Local: its symbols do not leak into other modules.
@@ -134,7 +158,7 @@ LoadedPlugin load_plugin(const fs::path& file) {
         fmt::format("built against plugin ABI {} (rkhs-study {}), this rkhs-study {} has plugin "
                     "ABI {}; rebuild the plugin against this rkhs-study",
                     abi, built_with, build_info().version, RKHS_PLUGIN_ABI_VERSION));
-  if (!Snapshot::take().same(before))
+  if (!RegistryState::take().same(before))
     fail(
         "registered plugins while being loaded, before its ABI could be checked: compile every "
         "source of the module with RKHS_BUILDING_PLUGIN defined (rkhs_study_add_plugin() and "
@@ -154,7 +178,7 @@ LoadedPlugin load_plugin(const fs::path& file) {
                        module.plugin.file.string()));
 
   const int failed = register_all();
-  const auto after = Snapshot::take();
+  const auto after = RegistryState::take();
   if (!after.same_errors(before)) {
     const auto errors = roll_back(before);
     dlclose(handle);
@@ -169,15 +193,21 @@ LoadedPlugin load_plugin(const fs::path& file) {
                     "by a plugin's info()?)",
                     failed));
 
-  LoadedPlugin plugin{canonical,
-                      name,
-                      built_with,
-                      abi,
-                      added(before.kernels, after.kernels),
-                      added(before.centres, after.centres),
-                      added(before.targets, after.targets)};
-  if (plugin.kernels.empty() && plugin.centres.empty() && plugin.targets.empty())
-    fail("registered nothing (use RKHS_REGISTER_KERNEL(Type) in the module's sources)");
+  LoadedPlugin plugin;
+  plugin.file = canonical;
+  plugin.name = name;
+  plugin.rkhs_study_version = built_with;
+  plugin.abi_version = abi;
+  bool registered = false;
+  const auto lists = lists_of(plugin);
+  for (std::size_t r = 0; r < registry_count; ++r) {
+    *lists[r] = added(before.names[r], after.names[r]);
+    registered = registered || !lists[r]->empty();
+  }
+  if (!registered)
+    fail(
+        "registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, _PLANT, _LAW, "
+        "_INTEGRATOR, in the module's sources)");
   modules().push_back({plugin, handle});
   return plugin;
 }
@@ -197,9 +227,9 @@ bool unload_plugin(const fs::path& file) {
   const auto it = std::find_if(loaded.begin(), loaded.end(),
                                [&](const Module& m) { return m.plugin.file == canonical; });
   if (error || it == loaded.end()) return false;
-  for (const auto& name : it->plugin.kernels) kernel_registry().remove(name);
-  for (const auto& name : it->plugin.centres) centre_registry().remove(name);
-  for (const auto& name : it->plugin.targets) target_registry().remove(name);
+  const auto lists = lists_of(it->plugin);
+  for (std::size_t r = 0; r < registry_count; ++r)
+    for (const auto& name : *lists[r]) registries[r].remove(name);
   dlclose(it->handle);
   loaded.erase(it);
   return true;

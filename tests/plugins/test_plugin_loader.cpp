@@ -12,9 +12,11 @@
 #include "plugin_test_support.hpp"
 #include "rkhs/build_info.hpp"
 #include "rkhs/kernel.hpp"
+#include "rkhs/plant.hpp"
 #include "rkhs/plugin.hpp"
 #include "rkhs/plugin_loader.hpp"
 #include "rkhs/plugins.hpp"
+#include "study_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace rkhs;
@@ -141,7 +143,8 @@ TEST_CASE("plugin error: a module that registers nothing, or registers inside dl
   const auto nothing = module("registers_nothing");
   CHECK(refusal(nothing) ==
         nothing.string() +
-            ": registered nothing (use RKHS_REGISTER_KERNEL(Type) in the module's sources)");
+            ": registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, _PLANT, "
+            "_LAW, _INTEGRATOR, in the module's sources)");
   const auto early = module("registers_early");
   CHECK(refusal(early) ==
         early.string() +
@@ -186,4 +189,68 @@ TEST_CASE("a plugin unloaded by a test leaves the registries as they were and lo
     CHECK(loaded_plugins().empty());
   }
   CHECK_FALSE(unload_plugin(module("inverse_multiquadric")));
+}
+
+TEST_CASE("a module may register plants and learning laws; a study runs with them", "[plugin]") {
+  const auto plants = plant_registry().names();
+  const auto laws = law_registry().names();
+  const auto plugin = load_plugin(module("adaptive_parts"));
+  CHECK(plugin.plants == std::vector<std::string>{"test_mass_spring"});
+  CHECK(plugin.laws == std::vector<std::string>{"test_scaled_gradient"});
+  CHECK(plugin.kernels.empty());
+  CHECK(plugin.integrators.empty());
+  // The plugin's plant and law are the built-in linear plant and gradient law with the same A,
+  // B and Gamma: the trials must agree bit for bit.
+  const std::string common = R"(
+[study]
+name = "plugin_parts"
+kind = "adaptive"
+evaluation_points = 128
+[domain]
+radius = 1.0
+[grid]
+n = [6, 10]
+[[kernel]]
+name = "gaussian"
+sigma = 0.5
+[adaptive]
+speed = 1.0
+laps = 1
+samples_per_lap = 8
+)";
+  const auto with_plugin = test::run_study_text(common + R"(
+[[plant]]
+name = "test_mass_spring"
+k = 4.0
+c = 2.0
+[[law]]
+name = "test_scaled_gradient"
+gamma = 0.5
+scale = 0.25
+)");
+  const auto built_in = test::run_study_text(common + R"(
+[[plant]]
+name = "linear"
+A = "0 1; -4 -2"
+B = "0; 1"
+[[law]]
+name = "gradient"
+gamma = 0.125
+)");
+  REQUIRE(with_plugin.results.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& a = with_plugin.results[i].metrics;
+    const auto& b = built_in.results[i].metrics;
+    REQUIRE(a.size() == b.size());
+    for (std::size_t m = 0; m < a.size(); ++m) {
+      INFO(with_plugin.study.all_metrics()[m]);
+      if (std::isnan(a[m]))
+        CHECK(std::isnan(b[m]));
+      else
+        CHECK(a[m] == b[m]);
+    }
+  }
+  CHECK(unload_plugin(module("adaptive_parts")));
+  CHECK(plant_registry().names() == plants);
+  CHECK(law_registry().names() == laws);
 }

@@ -147,8 +147,5 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
 
 }  // namespace rkhs
 
-#define RKHS_REGISTER_INTEGRATOR(Type)                                        \
-  namespace {                                                                 \
-  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_integrator_registered_) = \
-      ::rkhs::register_integrator<Type>();                                    \
-  }
+#define RKHS_REGISTER_INTEGRATOR(Type) \
+  RKHS_REGISTRAR(rkhs_integrator_registered_, ::rkhs::register_integrator<Type>())

@@ -66,13 +66,6 @@ bool register_law() noexcept {
 
 }  // namespace rkhs
 
-#define RKHS_REGISTER_PLANT(Type)                                        \
-  namespace {                                                            \
-  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_plant_registered_) = \
-      ::rkhs::register_plant<Type>();                                    \
-  }
-#define RKHS_REGISTER_LAW(Type)                                        \
-  namespace {                                                          \
-  [[maybe_unused]] const bool RKHS_UNIQUE_NAME(rkhs_law_registered_) = \
-      ::rkhs::register_law<Type>();                                    \
-  }
+#define RKHS_REGISTER_PLANT(Type) \
+  RKHS_REGISTRAR(rkhs_plant_registered_, ::rkhs::register_plant<Type>())
+#define RKHS_REGISTER_LAW(Type) RKHS_REGISTRAR(rkhs_law_registered_, ::rkhs::register_law<Type>())

@@ -1,10 +1,11 @@
 #pragma once
 // What a plugin module (a shared library loaded at run time) declares about itself.
 //
-// A plugin module is one or more .cpp files that register kernels (or centre placements, or
-// targets) with the same macros as the built-ins, compiled with RKHS_BUILDING_PLUGIN defined and
-// linked against librkhs_study (the CMake package does both: rkhs_study_add_plugin(name file.cpp)
-// or target_link_libraries(name PRIVATE rkhs_study::plugin)). Exactly one of its files says
+// A plugin module is one or more .cpp files that register kernels (or centre placements,
+// targets, plants, learning laws, integrators) with the same macros as the built-ins, compiled
+// with RKHS_BUILDING_PLUGIN defined and linked against librkhs_study (the CMake package does
+// both: rkhs_study_add_plugin(name file.cpp) or target_link_libraries(name PRIVATE
+// rkhs_study::plugin)). Exactly one of its files says
 //
 //     #include "rkhs/plugin.hpp"
 //     RKHS_PLUGIN_MODULE("my_kernels")
@@ -35,7 +36,8 @@
 // RKHS_PLUGIN_ABI_VERSION covers everything a plugin compiles into itself from the framework's
 // headers: the layouts of PluginInfo, ParameterSpec, ParameterValue, ParameterSet, Domain,
 // KernelProperties, SparseFeatures, Registry and Registry::Entry, the virtual functions of
-// AnyKernel, KernelBasis, CentrePlacement and TargetFunction, and the signatures of the framework
+// AnyKernel, KernelBasis, CentrePlacement, TargetFunction, Plant, LearningLaw, Integrator and
+// AdaptiveSystem, and the signatures of the framework
 // functions the headers call. Change any of them: increment it. It assumes what any C++ shared
 // library assumes of its clients: the same compiler family and standard library, and no
 // layout-changing library mode (a _GLIBCXX_DEBUG plugin is not compatible with a normal build).

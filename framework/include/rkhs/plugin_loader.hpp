@@ -39,7 +39,8 @@ struct LoadedPlugin {
   std::string name;                ///< RKHS_PLUGIN_MODULE(name)
   std::string rkhs_study_version;  ///< the rkhs-study it was built against
   int abi_version = 0;
-  std::vector<std::string> kernels, centres, targets;  ///< what it registered, sorted
+  /// What it registered, sorted, per registry.
+  std::vector<std::string> kernels, centres, targets, plants, laws, integrators;
 };
 
 /// Loads a plugin module (see the file comment). Throws PluginError.
