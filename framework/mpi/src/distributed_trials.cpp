@@ -78,8 +78,9 @@ void require_no_errors(const Session& session, const std::string& error) {
 }
 
 int launched_process_count() noexcept {
-  // Open MPI's mpirun, then the PMI variables of Slurm's srun and of MPICH's launchers.
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "SLURM_NTASKS"}) {
+  // Open MPI's mpirun, then PMI (MPICH's launchers, srun --mpi=pmi2). Not SLURM_NTASKS: a batch
+  // script of a many-task job has it while it runs as one process.
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
     if (const char* value = std::getenv(name)) {
       char* end = nullptr;
       const long size = std::strtol(value, &end, 10);

@@ -32,8 +32,9 @@ bool available() noexcept;
 /// CPUs this process may run on (its affinity mask: mpirun and srun bind ranks to cores).
 int usable_cpus() noexcept;
 
-/// The number of processes this one was started among by an MPI launcher (mpirun, srun), read
-/// from the launcher's environment before MPI is initialised; 1 when not started by one.
+/// The number of processes this one was started among by an MPI launcher, read from the
+/// launcher's environment before MPI is initialised (OMPI_COMM_WORLD_SIZE of Open MPI's mpirun,
+/// PMI_SIZE of MPICH's launchers and srun --mpi=pmi2); 1 when not started by one.
 int launched_process_count() noexcept;
 
 /// Thrown on ranks other than 0 for an error that rank 0 reports: the rank exits with `code`
