@@ -42,6 +42,10 @@ namespace {
 
 constexpr int tag_request = 7101, tag_assign = 7102, tag_result = 7103;
 
+// rkhs-study's own communicator (a duplicate of MPI_COMM_WORLD made by the Session): its
+// messages can never match those of a library or of other code in the process.
+MPI_Comm communicator = MPI_COMM_NULL;
+
 void check(int code, const char* what) {
   if (code != MPI_SUCCESS) {
     char text[MPI_MAX_ERROR_STRING];
@@ -63,16 +67,15 @@ std::string receive(const MPI_Status& probed) {
   int count = 0;
   check(MPI_Get_count(&probed, MPI_BYTE, &count), "MPI_Get_count");
   std::string bytes(static_cast<std::size_t>(count), '\0');
-  check(MPI_Recv(bytes.data(), count, MPI_BYTE, probed.MPI_SOURCE, probed.MPI_TAG, MPI_COMM_WORLD,
+  check(MPI_Recv(bytes.data(), count, MPI_BYTE, probed.MPI_SOURCE, probed.MPI_TAG, communicator,
                  MPI_STATUS_IGNORE),
         "MPI_Recv");
   return bytes;
 }
 
 void send(const std::string& bytes, int destination, int tag) {
-  check(
-      MPI_Send(bytes.data(), byte_count(bytes.size()), MPI_BYTE, destination, tag, MPI_COMM_WORLD),
-      "MPI_Send");
+  check(MPI_Send(bytes.data(), byte_count(bytes.size()), MPI_BYTE, destination, tag, communicator),
+        "MPI_Send");
 }
 
 template <class T>
@@ -248,7 +251,7 @@ void coordinate(const Session& session, const Job& job, JobStatistics& statistic
     }
     int arrived = 0;
     MPI_Status status;
-    check(MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, &status), "MPI_Iprobe");
+    check(MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, communicator, &arrived, &status), "MPI_Iprobe");
     if (arrived) {
       activity = true;
       const std::string bytes = receive(status);
@@ -288,7 +291,7 @@ void serve(const Job& job) {
     bool activity = false;
     int arrived = 0;
     MPI_Status status;
-    check(MPI_Iprobe(0, tag_assign, MPI_COMM_WORLD, &arrived, &status), "MPI_Iprobe");
+    check(MPI_Iprobe(0, tag_assign, communicator, &arrived, &status), "MPI_Iprobe");
     if (arrived) {
       activity = true;
       const std::string ids = receive(status);
@@ -334,10 +337,11 @@ Session::Session(int& argc, char**& argv) {
     MPI_Finalize();
     throw std::runtime_error("the MPI library does not support MPI_THREAD_FUNNELED");
   }
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  check(MPI_Comm_dup(MPI_COMM_WORLD, &communicator), "MPI_Comm_dup");
+  MPI_Comm_rank(communicator, &rank_);
+  MPI_Comm_size(communicator, &size_);
   MPI_Comm node;
-  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node);
+  MPI_Comm_split_type(communicator, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node);
   MPI_Comm_size(node, &ranks_on_node_);
   MPI_Comm_free(&node);
   char name[MPI_MAX_PROCESSOR_NAME];
@@ -347,6 +351,7 @@ Session::Session(int& argc, char**& argv) {
 }
 
 Session::~Session() {
+  MPI_Comm_free(&communicator);
   MPI_Finalize();
 }
 
@@ -358,8 +363,7 @@ int Session::default_threads() const noexcept {
 std::vector<std::string> Session::gather(const std::string& text) const {
   int length = byte_count(text.size());
   std::vector<int> lengths(is_root() ? static_cast<std::size_t>(size_) : 0);
-  check(MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD),
-        "MPI_Gather");
+  check(MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, communicator), "MPI_Gather");
   std::vector<int> offsets(lengths.size());
   std::string all;
   if (is_root()) {
@@ -371,7 +375,7 @@ std::vector<std::string> Session::gather(const std::string& text) const {
     all.resize(total);
   }
   check(MPI_Gatherv(text.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(),
-                    MPI_BYTE, 0, MPI_COMM_WORLD),
+                    MPI_BYTE, 0, communicator),
         "MPI_Gatherv");
   std::vector<std::string> out;
   for (std::size_t r = 0; r < lengths.size(); ++r)
@@ -382,14 +386,14 @@ std::vector<std::string> Session::gather(const std::string& text) const {
 
 std::string Session::broadcast(const std::string& value) const {
   int length = is_root() ? byte_count(value.size()) : 0;
-  check(MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  check(MPI_Bcast(&length, 1, MPI_INT, 0, communicator), "MPI_Bcast");
   std::string out = is_root() ? value : std::string(static_cast<std::size_t>(length), '\0');
-  check(MPI_Bcast(out.data(), length, MPI_BYTE, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  check(MPI_Bcast(out.data(), length, MPI_BYTE, 0, communicator), "MPI_Bcast");
   return out;
 }
 
 void Session::barrier() const {
-  check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+  check(MPI_Barrier(communicator), "MPI_Barrier");
 }
 
 void Session::abort(const std::string& why, int code) const {
