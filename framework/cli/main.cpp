@@ -4,19 +4,19 @@
 // or (check) an expectation failed; 2 bad input (command line, study file) or a broken plugin
 // registration; 3 (check) no expectation failed but some are inconclusive.
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <unistd.h>
 
-#include <chrono>
-#include <optional>
-#include <csignal>
+#include <CLI/CLI.hpp>
 #include <atomic>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <thread>
 
 #include "rkhs/adaptive.hpp"
@@ -25,20 +25,20 @@
 #include "rkhs/centres.hpp"
 #include "rkhs/data_root.hpp"
 #include "rkhs/distributed.hpp"
+#include "rkhs/html_report.hpp"
+#include "rkhs/junit.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/output.hpp"
+#include "rkhs/plant.hpp"
+#include "rkhs/plots.hpp"
 #include "rkhs/plugin_loader.hpp"
 #include "rkhs/plugin_verification.hpp"
-#include "rkhs/plant.hpp"
-#include "rkhs/html_report.hpp"
-#include "rkhs/plots.hpp"
 #include "rkhs/plugins.hpp"
 #include "rkhs/result_store.hpp"
 #include "rkhs/run.hpp"
 #include "rkhs/study.hpp"
 #include "rkhs/study_rates.hpp"
 #include "rkhs/target.hpp"
-#include "rkhs/junit.hpp"
 #include "rkhs/tiers.hpp"
 #include "rkhs/verification.hpp"
 
@@ -53,9 +53,14 @@ struct StoreOptions {
   bool disabled = false;  ///< no store at all
 };
 
+// --rank-timeout: an MPI rank silent this long is taken as lost (docs/cluster.md).
+double rank_timeout_seconds = 60;
+
 // SIGINT / SIGTERM: trials in flight finish and are stored; no new trial starts.
 std::atomic<bool> interrupted{false};
-extern "C" void request_stop(int) { interrupted = true; }
+extern "C" void request_stop(int) {
+  interrupted = true;
+}
 
 void install_stop_handlers() {
   std::signal(SIGINT, request_stop);
@@ -89,18 +94,20 @@ std::optional<rkhs::StoredRun> run_trials_stored(const rkhs::StudyDefinition& st
   if (mpi) {
     rkhs::distributed::JobStatistics spread;
     run = rkhs::distributed::run_with_store(*mpi, study, trials, options, store ? &*store : nullptr,
-                                            store_options.fresh, &spread);
+                                            store_options.fresh, &spread, rank_timeout_seconds);
     if (ranks) *ranks = spread.ranks;
     if (run && !quiet) {
       std::string per_rank;
       for (std::size_t r = 0; r < spread.ranks.size(); ++r)
-        per_rank += fmt::format("{}rank {} ({}, {} thread{}): {}", r ? "; " : "", r,
-                                spread.ranks[r].host, spread.ranks[r].threads,
-                                spread.ranks[r].threads == 1 ? "" : "s", spread.ranks[r].trials);
+        per_rank +=
+            fmt::format("{}rank {} ({}, {} thread{}): {}{}", r ? "; " : "", r, spread.ranks[r].host,
+                        spread.ranks[r].threads, spread.ranks[r].threads == 1 ? "" : "s",
+                        spread.ranks[r].trials, spread.ranks[r].lost ? " (lost)" : "");
       std::cerr << fmt::format("  trials run per MPI rank: {}\n", per_rank);
     }
   } else {
-    run = rkhs::run_with_store(study, trials, options, store ? &*store : nullptr, store_options.fresh);
+    run = rkhs::run_with_store(study, trials, options, store ? &*store : nullptr,
+                               store_options.fresh);
   }
   if (run && !quiet && store)
     std::cerr << fmt::format("  {} trials reused from {}, {} run now\n", run->reused,
@@ -151,12 +158,14 @@ std::string utc_now() {
 }
 
 std::string describe_parameter(const rkhs::ParameterSpec& spec) {
-  std::string detail = "default " + (spec.default_doc.empty() ? rkhs::format_value(spec.default_value)
-                                                              : spec.default_doc);
+  std::string detail =
+      "default " +
+      (spec.default_doc.empty() ? rkhs::format_value(spec.default_value) : spec.default_doc);
   if (spec.type == rkhs::ParameterType::choice)
     detail += fmt::format("; one of {}", fmt::join(spec.choices, ", "));
   else if (spec.type == rkhs::ParameterType::real || spec.type == rkhs::ParameterType::integer)
-    if (const auto range = rkhs::describe_range(spec); range != "any number") detail += "; " + range;
+    if (const auto range = rkhs::describe_range(spec); range != "any number")
+      detail += "; " + range;
   return fmt::format("    {:<14} {} ({})", spec.name, spec.doc, detail);
 }
 
@@ -174,9 +183,11 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
 
 int command_list(const std::string& kind) {
   const bool all = kind.empty();
-  if (all || kind == "kernel" || kind == "kernels") list_registry(rkhs::kernel_registry(), std::cout);
+  if (all || kind == "kernel" || kind == "kernels")
+    list_registry(rkhs::kernel_registry(), std::cout);
   if (all || kind == "centres") list_registry(rkhs::centre_registry(), std::cout);
-  if (all || kind == "target" || kind == "targets") list_registry(rkhs::target_registry(), std::cout);
+  if (all || kind == "target" || kind == "targets")
+    list_registry(rkhs::target_registry(), std::cout);
   if (all || kind == "plant" || kind == "plants") list_registry(rkhs::plant_registry(), std::cout);
   if (all || kind == "law" || kind == "laws") list_registry(rkhs::law_registry(), std::cout);
   if (all || kind == "integrator" || kind == "integrators")
@@ -207,7 +218,8 @@ int command_verify_plugin(const std::string& file) {
 // it computed; removed once the outputs are complete.
 class Journal {
  public:
-  Journal(const std::filesystem::path& file, const std::vector<std::string>& metrics) : file_(file) {
+  Journal(const std::filesystem::path& file, const std::vector<std::string>& metrics)
+      : file_(file) {
     out_.open(file, std::ios::trunc);
     out_ << "index,key,status,reason";
     for (const auto& m : metrics) out_ << "," << m;
@@ -217,7 +229,8 @@ class Journal {
               const rkhs::TrialResult& result) {
     out_ << trial.index << "," << rkhs::csv_field(trial.key) << "," << (result.ok ? "ok" : "failed")
          << "," << rkhs::csv_field(result.reason);
-    for (const auto& m : study.metrics) out_ << "," << rkhs::csv_number(result.metrics[study.metric_index(m)]);
+    for (const auto& m : study.metrics)
+      out_ << "," << rkhs::csv_number(result.metrics[study.metric_index(m)]);
     out_ << "\n" << std::flush;
   }
   void remove() {
@@ -274,7 +287,8 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
     // A shard runs the trials whose grid index is K - 1 modulo N into its own store; `merge`
     // combines the stores and a run over the merged store writes the outputs.
     const auto [k, n] = parse_shard(shard);
-    if (store_options.disabled) throw std::invalid_argument("--shard needs a result store (not --no-store)");
+    if (store_options.disabled)
+      throw std::invalid_argument("--shard needs a result store (not --no-store)");
     std::vector<rkhs::TrialSpec> mine;
     for (const auto& trial : trials)
       if (trial.index % n == k - 1) mine.push_back(trial);
@@ -282,10 +296,11 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
     options.threads = threads;
     const auto stored = *run_trials_stored(study, mine, options, store_options, quiet);
     if (stored.skipped) return report_interruption(stored, store_options);
-    std::cout << fmt::format("{}: shard {}/{}: {} of {} trials ({} reused, {} run) in {}; combine "
-                             "the shards' stores with `rkhs-study merge`\n",
-                             study.name, k, n, mine.size(), trials.size(), stored.reused, stored.ran,
-                             store_options.file);
+    std::cout << fmt::format(
+        "{}: shard {}/{}: {} of {} trials ({} reused, {} run) in {}; combine "
+        "the shards' stores with `rkhs-study merge`\n",
+        study.name, k, n, mine.size(), trials.size(), stored.reused, stored.ran,
+        store_options.file);
     return exit_ok;
   }
   const int thread_count = default_thread_count(threads, mpi);
@@ -295,7 +310,8 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   if (!quiet)
     std::cerr << fmt::format("rkhs-study: {} ({} trials, {} thread{}{}) -> {}\n", study.name,
                              trials.size(), thread_count, thread_count == 1 ? "" : "s",
-                             mpi ? fmt::format(" on rank 0 of {} MPI ranks", mpi->size()) : "", out_dir);
+                             mpi ? fmt::format(" on rank 0 of {} MPI ranks", mpi->size()) : "",
+                             out_dir);
   const std::string started = utc_now();
   const auto start = std::chrono::steady_clock::now();
   auto last_report = start;
@@ -317,7 +333,9 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
     // Trials run now (stored ones are not counted here); the ETA assumes the rest cost alike.
     const double elapsed = std::chrono::duration<double>(now - start).count();
     const std::size_t total = std::max<std::size_t>(pending_total, 1);
-    const double eta = done ? elapsed / static_cast<double>(done) * static_cast<double>(total - std::min(done, total)) : 0.0;
+    const double eta = done ? elapsed / static_cast<double>(done) *
+                                  static_cast<double>(total - std::min(done, total))
+                            : 0.0;
     if (terminal) {
       // A bar redrawn in place, at most ten times a second.
       if (now - last_report < std::chrono::milliseconds(100) && done < total) return;
@@ -343,13 +361,16 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto rates = rkhs::compute_rates(study, trials, results);
-  const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started, ranks};
+  const rkhs::RunRecord record{study,        trials,  results, rates,
+                               thread_count, seconds, started, ranks};
   rkhs::write_outputs(record, out_dir);
   journal.remove();
   if (plots) {
     try {
       const auto rendered = rkhs::write_plots(record, out_dir);
-      if (!quiet) std::cerr << fmt::format("  {} plots in {}/plots (SVG and PNG)\n", rendered.size(), out_dir);
+      if (!quiet)
+        std::cerr << fmt::format("  {} plots in {}/plots (SVG and PNG)\n", rendered.size(),
+                                 out_dir);
     } catch (const std::exception& e) {
       std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
     }
@@ -358,9 +379,10 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
                               rkhs::html_report(record, std::filesystem::path(out_dir) / "plots"));
 
   if (!quiet) std::cout << rkhs::console_tables(record);
-  std::cout << fmt::format("{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
-                           "rates.csv, summary.json, rates.md, rates.tex\n",
-                           study.name, trials.size(), trials.size() - failed, failed, seconds, out_dir);
+  std::cout << fmt::format(
+      "{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
+      "rates.csv, summary.json, rates.md, rates.tex\n",
+      study.name, trials.size(), trials.size() - failed, failed, seconds, out_dir);
   return failed ? exit_failed_trials : exit_ok;
 }
 
@@ -377,7 +399,8 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   const auto study = load_on_every_rank(
       [&] {
         auto loaded = rkhs::load_study(arguments.study_file);
-        if (!arguments.tier.empty()) loaded = rkhs::restrict_to_tier(std::move(loaded), arguments.tier);
+        if (!arguments.tier.empty())
+          loaded = rkhs::restrict_to_tier(std::move(loaded), arguments.tier);
         return loaded;
       },
       mpi);
@@ -403,20 +426,22 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   std::size_t failed = 0;
   for (const auto& result : results) failed += result.ok ? 0 : 1;
   if (!arguments.out_dir.empty()) {
-    const rkhs::RunRecord record{study, trials, results, rates, thread_count, seconds, started, ranks};
+    const rkhs::RunRecord record{study,        trials,  results, rates,
+                                 thread_count, seconds, started, ranks};
     rkhs::write_outputs(record, arguments.out_dir);
   }
   const auto outcomes = rkhs::verify_expectations(study, trials, results, rates);
   std::cout << fmt::format("{}{}: {} trials, {} ok, {} failed in {:.2f} s\n", study.name, tier_text,
                            trials.size(), trials.size() - failed, failed, seconds);
   if (failed)
-    std::cout << fmt::format("note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n",
-                             failed, failed > 1 ? "s" : "");
+    std::cout << fmt::format(
+        "note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n", failed,
+        failed > 1 ? "s" : "");
   std::cout << rkhs::format_verification(outcomes, arguments.strict);
   if (!arguments.junit_file.empty())
-    rkhs::write_file_atomically(arguments.junit_file,
-                                rkhs::junit_xml({study, outcomes, arguments.strict, seconds,
-                                                 arguments.tier, started}));
+    rkhs::write_file_atomically(
+        arguments.junit_file,
+        rkhs::junit_xml({study, outcomes, arguments.strict, seconds, arguments.tier, started}));
   return rkhs::check_exit_code(rkhs::count_verdicts(outcomes), arguments.strict);
 }
 
@@ -426,7 +451,8 @@ int command_report(const std::string& directory, const std::string& format,
                    const StoreOptions& store_options) {
   const auto summary = std::filesystem::path(directory) / "summary.json";
   std::ifstream in(summary);
-  if (!in) throw std::runtime_error(summary.string() + ": cannot open (is it a results directory?)");
+  if (!in)
+    throw std::runtime_error(summary.string() + ": cannot open (is it a results directory?)");
   std::string line, source;
   while (std::getline(in, line))
     if (const auto at = line.find("\"source\": \""); at != std::string::npos) {
@@ -434,7 +460,8 @@ int command_report(const std::string& directory, const std::string& format,
       source = source.substr(0, source.find('"'));
       break;
     }
-  if (source.empty()) throw std::runtime_error(summary.string() + ": no \"source\" study file recorded");
+  if (source.empty())
+    throw std::runtime_error(summary.string() + ": no \"source\" study file recorded");
   const auto study = rkhs::load_study(source);
   const auto trials = study.trials();
   rkhs::RunOptions options;
@@ -442,11 +469,14 @@ int command_report(const std::string& directory, const std::string& format,
   if (stored.skipped) return report_interruption(stored, store_options);
   const auto rates = rkhs::compute_rates(study, trials, stored.results);
   const rkhs::RunRecord record{study, trials, stored.results, rates, 1, 0.0, utc_now()};
-  if (format == "md") std::cout << rkhs::markdown_tables(record);
-  else if (format == "tex") std::cout << rkhs::latex_tables(record);
+  if (format == "md")
+    std::cout << rkhs::markdown_tables(record);
+  else if (format == "tex")
+    std::cout << rkhs::latex_tables(record);
   else {
     const auto file = std::filesystem::path(directory) / "report.html";
-    rkhs::write_file_atomically(file, rkhs::html_report(record, std::filesystem::path(directory) / "plots"));
+    rkhs::write_file_atomically(
+        file, rkhs::html_report(record, std::filesystem::path(directory) / "plots"));
     std::cout << "wrote " << file.string() << "\n";
   }
   return exit_ok;
@@ -455,54 +485,76 @@ int command_report(const std::string& directory, const std::string& format,
 int command_validate(const std::string& study_file) {
   const auto study = rkhs::load_study(study_file);
   const auto trials = study.trials();
-  std::cout << fmt::format("{}: valid; {} kernels x {} targets x {} centre placements x {} values "
-                           "of n = {} trials\n",
-                           study_file, study.kernels.size(), study.targets.size(),
-                           study.centres.size(), study.n_values.size(), trials.size());
+  std::cout << fmt::format(
+      "{}: valid; {} kernels x {} targets x {} centre placements x {} values "
+      "of n = {} trials\n",
+      study_file, study.kernels.size(), study.targets.size(), study.centres.size(),
+      study.n_values.size(), trials.size());
   if (const auto tiers = rkhs::study_tiers(study); !study.expectations.empty() || !tiers.empty())
-    std::cout << fmt::format("  {} expectation{}; tiers: {}\n", study.expectations.size(),
-                             study.expectations.size() == 1 ? "" : "s",
-                             tiers.empty() ? std::string("none") : fmt::format("{}", fmt::join(tiers, ", ")));
+    std::cout << fmt::format(
+        "  {} expectation{}; tiers: {}\n", study.expectations.size(),
+        study.expectations.size() == 1 ? "" : "s",
+        tiers.empty() ? std::string("none") : fmt::format("{}", fmt::join(tiers, ", ")));
   return exit_ok;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"rkhs-study: convergence studies of kernel approximation and adaptive estimation "
-               "in reproducing kernel Hilbert spaces"};
+  CLI::App app{
+      "rkhs-study: convergence studies of kernel approximation and adaptive estimation "
+      "in reproducing kernel Hilbert spaces"};
   app.require_subcommand(1);
-  app.set_version_flag("--version",
-                       fmt::format("rkhs-study {} (commit {}; {}; MPI runner: {})",
-                                   rkhs::build_info().version, rkhs::build_info().git_commit,
-                                   rkhs::build_info().build_type,
-                                   rkhs::distributed::available() ? "yes" : "no, see docs/cluster.md"));
+  app.set_version_flag(
+      "--version",
+      fmt::format("rkhs-study {} (commit {}; {}; MPI runner: {})", rkhs::build_info().version,
+                  rkhs::build_info().git_commit, rkhs::build_info().build_type,
+                  rkhs::distributed::available() ? "yes" : "no, see docs/cluster.md"));
 
   std::string study_file, out_dir, kind;
   int threads = 0;
   bool quiet = false;
-  auto* run = app.add_subcommand("run", "run a study: trials, rates, trials.csv, rates.csv, summary.json");
-  run->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
+  auto* run =
+      app.add_subcommand("run", "run a study: trials, rates, trials.csv, rates.csv, summary.json");
+  run->add_option("study", study_file, "study definition (TOML)")
+      ->required()
+      ->check(CLI::ExistingFile);
   run->add_option("--out", out_dir, "output directory (default: results/<study name>)");
-  run->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  run->add_option("--threads", threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
   run->add_flag("--quiet,-q", quiet, "print only the final summary line");
   StoreOptions store_options;
   auto add_store_options = [&](CLI::App* command) {
-    command->add_option("--store", store_options.file,
-                        "result store (SQLite) shared by studies (default: results/rkhs-study.sqlite)");
-    command->add_flag("--fresh", store_options.fresh, "run every trial again, ignoring stored results");
-    command->add_flag("--no-store", store_options.disabled, "neither read nor write a result store");
+    command->add_option(
+        "--store", store_options.file,
+        "result store (SQLite) shared by studies (default: results/rkhs-study.sqlite)");
+    command->add_flag("--fresh", store_options.fresh,
+                      "run every trial again, ignoring stored results");
+    command->add_flag("--no-store", store_options.disabled,
+                      "neither read nor write a result store");
   };
   add_store_options(run);
   std::string shard;
-  run->add_option("--shard", shard, "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
+  run->add_option("--shard", shard,
+                  "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
   std::string merge_into;
   std::vector<std::string> merge_from;
   auto* merge = app.add_subcommand("merge", "combine result stores (e.g. of shards) into one");
   merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
-  merge->add_option("from", merge_from, "stores to copy from")->required()->check(CLI::ExistingFile);
+  merge->add_option("from", merge_from, "stores to copy from")
+      ->required()
+      ->check(CLI::ExistingFile);
   bool use_mpi = false;
-  run->add_flag("--mpi", use_mpi, "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
+  run->add_flag("--mpi", use_mpi,
+                "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
+  const auto add_rank_timeout = [&](CLI::App* command) {
+    command
+        ->add_option("--rank-timeout", rank_timeout_seconds,
+                     "with --mpi: seconds of silence after which a rank is taken as lost and its "
+                     "trials run elsewhere (0: never; default 60)")
+        ->check(CLI::Range(0.0, 1e9));
+  };
+  add_rank_timeout(run);
   bool no_plots = false;
   run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
 
@@ -514,21 +566,30 @@ int main(int argc, char** argv) {
                              "law", "laws", "integrator", "integrators", "metric", "metrics"}));
 
   std::string report_dir, report_format = "html";
-  auto* report = app.add_subcommand("report", "the rate tables of a run again: Markdown, LaTeX or report.html");
-  report->add_option("directory", report_dir, "a results directory (with summary.json)")->required()->check(CLI::ExistingDirectory);
-  report->add_option("--format", report_format, "md, tex or html (default html: writes DIR/report.html)")
+  auto* report = app.add_subcommand(
+      "report", "the rate tables of a run again: Markdown, LaTeX or report.html");
+  report->add_option("directory", report_dir, "a results directory (with summary.json)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  report
+      ->add_option("--format", report_format,
+                   "md, tex or html (default html: writes DIR/report.html)")
       ->check(CLI::IsMember({"md", "tex", "html"}));
   add_store_options(report);
 
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
-  validate->add_option("study", study_file, "study definition (TOML)")->required()->check(CLI::ExistingFile);
+  validate->add_option("study", study_file, "study definition (TOML)")
+      ->required()
+      ->check(CLI::ExistingFile);
 
   CheckArguments check_arguments;
   auto* check = app.add_subcommand(
-      "check", "run a study and judge its [[expect]] tables: exit 0 all pass, 1 a failure, "
-               "3 inconclusive, 2 bad input");
+      "check",
+      "run a study and judge its [[expect]] tables: exit 0 all pass, 1 a failure, "
+      "3 inconclusive, 2 bad input");
   check->add_option("study", check_arguments.study_file, "study definition (TOML)")
-      ->required()->check(CLI::ExistingFile);
+      ->required()
+      ->check(CLI::ExistingFile);
   check->add_option("--tier", check_arguments.tier,
                     "run only the entries and expectations of this tier (e.g. quick)");
   check->add_flag("--strict", check_arguments.strict, "count inconclusive verdicts as failures");
@@ -536,10 +597,13 @@ int main(int argc, char** argv) {
                     "write JUnit XML: one test case per expectation and group");
   check->add_option("--out", check_arguments.out_dir,
                     "also write trials.csv, rates.csv and summary.json here (default: none)");
-  check->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  check->add_option("--threads", threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
   check->add_flag("--quiet,-q", quiet, "no progress line");
   add_store_options(check);
-  check->add_flag("--mpi", use_mpi, "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
+  check->add_flag("--mpi", use_mpi,
+                  "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
+  add_rank_timeout(check);
 
   // Plugin modules: --plugin (repeatable) here, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]`.
   std::vector<std::string> plugin_files;
@@ -550,13 +614,15 @@ int main(int argc, char** argv) {
   // The data root that data files in study files are relative to (rkhs/data_root.hpp).
   std::string data_dir;
   for (auto* command : {run, validate, check})
-    command->add_option("--data-dir", data_dir,
-                        "data files named in the study are relative to DIR (default: "
-                        "RKHS_STUDY_DATA, else studies/data/)")
+    command
+        ->add_option("--data-dir", data_dir,
+                     "data files named in the study are relative to DIR (default: "
+                     "RKHS_STUDY_DATA, else studies/data/)")
         ->check(CLI::ExistingDirectory);
-  auto* verify = app.add_subcommand(
-      "verify-plugin", "load a plugin module and check its kernels: the kernel contract, and the "
-                       "declared smoothness against the measured power-function rate");
+  auto* verify =
+      app.add_subcommand("verify-plugin",
+                         "load a plugin module and check its kernels: the kernel contract, and the "
+                         "declared smoothness against the measured power-function rate");
   verify->add_option("plugin", plugin_to_verify, "plugin module (.so)")->required();
 
   try {
@@ -567,7 +633,8 @@ int main(int argc, char** argv) {
   }
 
   if (const auto errors = rkhs::registration_errors(); !errors.empty()) {
-    for (const auto& e : errors) std::cerr << "rkhs-study: plugin registration error: " << e << "\n";
+    for (const auto& e : errors)
+      std::cerr << "rkhs-study: plugin registration error: " << e << "\n";
     return exit_bad_input;
   }
   if (const auto missing = rkhs::missing_builtin_plugins(); !missing.empty()) {
@@ -580,14 +647,16 @@ int main(int argc, char** argv) {
   std::optional<Session> mpi;
   if ((*run || *check) && !use_mpi && rkhs::distributed::launched_process_count() > 1) {
     if (const char* rank = std::getenv("OMPI_COMM_WORLD_RANK"); !rank || std::string(rank) == "0")
-      std::cerr << fmt::format("rkhs-study: started as {} MPI processes without --mpi: each would run "
-                               "the whole study and write the same files; add --mpi\n",
-                               rkhs::distributed::launched_process_count());
+      std::cerr << fmt::format(
+          "rkhs-study: started as {} MPI processes without --mpi: each would run "
+          "the whole study and write the same files; add --mpi\n",
+          rkhs::distributed::launched_process_count());
     return exit_bad_input;
   }
   if (use_mpi) {
     if (!shard.empty()) {
-      std::cerr << "rkhs-study: --mpi and --shard exclude each other (--shard is for schedulers without MPI)\n";
+      std::cerr << "rkhs-study: --mpi and --shard exclude each other (--shard is for schedulers "
+                   "without MPI)\n";
       return exit_bad_input;
     }
     try {
@@ -619,8 +688,8 @@ int main(int argc, char** argv) {
     }
     if (*verify) return command_verify_plugin(plugin_to_verify);
     if (*run)
-      return command_run(study_file, out_dir, threads, quiet || (mpi && !mpi->is_root()), store_options,
-                         !no_plots, shard, mpi_session);
+      return command_run(study_file, out_dir, threads, quiet || (mpi && !mpi->is_root()),
+                         store_options, !no_plots, shard, mpi_session);
     if (*merge) {
       rkhs::ResultStore into(merge_into);
       for (const auto& from : merge_from) {

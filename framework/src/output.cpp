@@ -248,8 +248,9 @@ std::string summary_json(const RunRecord& run) {
   if (!run.ranks.empty()) {
     std::vector<std::string> ranks;
     for (const auto& r : run.ranks)
-      ranks.push_back(fmt::format("{{\"host\": {}, \"threads\": {}, \"trials\": {}}}",
-                                  json_string(r.host), r.threads, r.trials));
+      ranks.push_back(fmt::format("{{\"host\": {}, \"threads\": {}, \"trials\": {}{}}}",
+                                  json_string(r.host), r.threads, r.trials,
+                                  r.lost ? ", \"lost\": true" : ""));
     mpi = fmt::format(", \"mpi_ranks\": [{}]", join(ranks, ", "));
   }
   out += fmt::format(

@@ -181,10 +181,10 @@ TEST_CASE("rkhs-study check --mpi judges the same expectations", "[cli][mpi]") {
   CHECK_THAT(distributed.output, Catch::Contains("11 passed"));
 }
 
-TEST_CASE("an MPI rank killed midway loses only its trials in flight", "[cli][mpi]") {
-  const auto dir = rkhs::test::scratch_directory("mpi_kill");
-  // Ten trials of 0.1-1 s.
-  std::ofstream(dir / "study.toml") << R"([study]
+namespace {
+
+// Ten trials of 0.1-1 s.
+constexpr const char* ten_slow_trials = R"([study]
 name = "mpi_kill"
 evaluation_points = 4096
 metrics = ["gram_condition_number", "power_function_sup", "l2_error"]
@@ -196,21 +196,23 @@ n = { from = 300, to = 900, step = 150 }
 name = "gaussian"
 sigma = [0.5, 0.7]
 )";
-  const auto store = dir / "store.sqlite";
-  const auto run = "run " + (dir / "study.toml").string() +
-                   " --mpi --threads 1 --no-plots --store " + store.string() + " --out " +
-                   (dir / "out").string();
+
+// Starts `mpirun -np 2 [mpirun_options] rkhs-study <run>` with its output in `log`, kills rank 1
+// with SIGKILL once rank 0 has stored two trials into `store`, and returns mpirun's wait status.
+int run_and_kill_rank_1(const std::string& mpirun_options, const std::string& run,
+                        const fs::path& store, const fs::path& log) {
+  std::string command = mpirun(2, run);
+  command.insert(command.find(" -np "), " " + mpirun_options);
   const pid_t launcher = fork();
   if (launcher == 0) {
-    const int devnull = ::open("/dev/null", O_WRONLY);
-    dup2(devnull, 1);
-    dup2(devnull, 2);
-    execl("/bin/sh", "sh", "-c", ("exec env " + mpi_environment + " " + mpirun(2, run)).c_str(),
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
+    execl("/bin/sh", "sh", "-c", ("exec env " + mpi_environment + " " + command).c_str(),
           static_cast<char*>(nullptr));
     _exit(127);
   }
-  // Rank 1 is the launcher's child whose environment says so; it is killed once rank 0 has
-  // stored two trials.
+  // Rank 1 is the launcher's child whose environment says so.
   pid_t rank1 = 0;
   for (int i = 0; i < 600 && !rank1; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -228,6 +230,20 @@ sigma = [0.5, 0.7]
   kill(rank1, SIGKILL);
   int status = 0;
   waitpid(launcher, &status, 0);
+  return status;
+}
+
+}  // namespace
+
+TEST_CASE("an MPI rank killed midway loses only its trials in flight", "[cli][mpi]") {
+  const auto dir = rkhs::test::scratch_directory("mpi_kill");
+  std::ofstream(dir / "study.toml") << ten_slow_trials;
+  const auto store = dir / "store.sqlite";
+  const auto run = "run " + (dir / "study.toml").string() +
+                   " --mpi --threads 1 --no-plots --store " + store.string() + " --out " +
+                   (dir / "out").string();
+  // mpirun's default: the death of a rank ends the job.
+  const int status = run_and_kill_rank_1("", run, store, dir / "killed.log");
   CHECK_FALSE((WIFEXITED(status) && WEXITSTATUS(status) == 0));  // the job failed
   const auto stored_before = rkhs::ResultStore(store).size();
   CHECK(stored_before >= 2);
@@ -238,6 +254,33 @@ sigma = [0.5, 0.7]
   REQUIRE(resumed.exit_code == 0);
   CHECK_THAT(resumed.output, Catch::Contains(std::to_string(stored_before) + " trials reused"));
   CHECK(rkhs::ResultStore(store).size() == 10);
+  const auto clean = rkhs_study("run " + (dir / "study.toml").string() +
+                                " --quiet --no-plots --no-store --out " + (dir / "clean").string());
+  REQUIRE(clean.exit_code == 0);
+  CHECK(read_text(dir / "out" / "trials.csv") == read_text(dir / "clean" / "trials.csv"));
+  CHECK(read_text(dir / "out" / "rates.csv") == read_text(dir / "clean" / "rates.csv"));
+}
+
+TEST_CASE("with mpirun --enable-recovery the other ranks finish a killed rank's trials",
+          "[cli][mpi]") {
+  const auto dir = rkhs::test::scratch_directory("mpi_recovery");
+  std::ofstream(dir / "study.toml") << ten_slow_trials;
+  const auto store = dir / "store.sqlite";
+  const auto log = dir / "run.log";
+  const auto run = "run " + (dir / "study.toml").string() +
+                   " --mpi --threads 1 --rank-timeout 2 --no-plots --store " + store.string() +
+                   " --out " + (dir / "out").string();
+  const int status = run_and_kill_rank_1("--enable-recovery", run, store, log);
+  const auto output = read_text(log);
+  INFO(output);
+  // Rank 0 noticed the silence, ran the lost trials itself and completed the study.
+  CHECK(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  CHECK_THAT(output, Catch::Contains("MPI rank 1 (") &&
+                         Catch::Contains("sent nothing for 2 s: taken as lost"));
+  CHECK_THAT(output, Catch::Contains("10 trials, 10 ok, 0 failed"));
+  CHECK(rkhs::ResultStore(store).size() == 10);
+  CHECK_THAT(read_text(dir / "out" / "summary.json"), Catch::Contains("\"lost\": true"));
   const auto clean = rkhs_study("run " + (dir / "study.toml").string() +
                                 " --quiet --no-plots --no-store --out " + (dir / "clean").string());
   REQUIRE(clean.exit_code == 0);

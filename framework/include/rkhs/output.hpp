@@ -19,6 +19,7 @@ struct RankRecord {
   std::string host;
   int threads = 0;
   std::size_t trials = 0;  ///< trials it ran in this run
+  bool lost = false;       ///< stopped answering during the run; its trials ran elsewhere
 };
 
 struct RunRecord {

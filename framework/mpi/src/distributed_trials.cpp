@@ -93,12 +93,13 @@ int launched_process_count() noexcept {
 std::optional<StoredRun> run_with_store(const Session& session, const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
                                         const RunOptions& options, ResultStore* store, bool fresh,
-                                        JobStatistics* statistics) {
+                                        JobStatistics* statistics, double rank_timeout_seconds) {
   require_same_trials(session, study, trials);
   const auto by_index = trials_by_index(trials);
   Job job;
   job.threads = options.threads > 0 ? options.threads : session.default_threads();
   job.stop_requested = options.stop_requested;
+  job.rank_timeout_seconds = rank_timeout_seconds;
   job.run = [&](std::uint64_t id) { return serialize_result(run_trial(study, *by_index.at(id))); };
   if (!session.is_root()) {
     distribute(session, job);

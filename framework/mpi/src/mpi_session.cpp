@@ -2,12 +2,18 @@
 //
 // Protocol (tags below), rank 0 coordinating, every rank (rank 0 too) running tasks:
 //   worker -> 0  request  int32: how many tasks it takes (threads + 1), sent once
-//   0 -> worker  assign   uint64 ids (none: no more tasks for this job; nothing follows)
+//   0 -> worker  assign   uint64 ids (none: no more tasks for this job)
 //   worker -> 0  result   uint64 id, uint8 skipped, payload; asks for one more task
+//   both ways    alive    empty: sent by a side that sent nothing else for a while
+//   0 -> worker  end      empty: the job is over (or this rank was taken as lost): leave
 // Rank 0 answers every request and every result with `assign` until it has no task left or a
-// stop is requested; then it answers with an empty `assign` once, and the worker finishes its
-// tasks in flight, sends their results and leaves. Only the thread that created the Session
-// calls MPI (MPI_THREAD_FUNNELED); oneTBB threads run the tasks and queue their results.
+// stop is requested; then it answers with an empty `assign` once. When every task is reported
+// it sends `end` to every worker, which then leaves. A worker silent for longer than the job's
+// rank timeout is taken as lost: its tasks in flight go back to the front of the queue, and
+// rank 0 (which always takes tasks itself) or another rank runs them. Under mpirun's default
+// a rank that dies ends the whole job anyway; with --enable-recovery the others go on. Only
+// the thread that created the Session calls MPI (MPI_THREAD_FUNNELED); oneTBB threads run the
+// tasks and queue their results.
 //
 // The calling threads poll (MPI_Iprobe) rather than block in MPI_Recv, which spins at full
 // speed in Open MPI and would take a core from the worker threads: after activity the poll
@@ -30,6 +36,7 @@
 #include <exception>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -40,7 +47,8 @@ namespace rkhs::distributed {
 
 namespace {
 
-constexpr int tag_request = 7101, tag_assign = 7102, tag_result = 7103;
+constexpr int tag_request = 7101, tag_assign = 7102, tag_result = 7103, tag_alive = 7104,
+              tag_end = 7105;
 
 // rkhs-study's own communicator (a duplicate of MPI_COMM_WORLD made by the Session): its
 // messages can never match those of a library or of other code in the process.
@@ -71,11 +79,6 @@ std::string receive(const MPI_Status& probed) {
                  MPI_STATUS_IGNORE),
         "MPI_Recv");
   return bytes;
-}
-
-void send(const std::string& bytes, int destination, int tag) {
-  check(MPI_Send(bytes.data(), byte_count(bytes.size()), MPI_BYTE, destination, tag, communicator),
-        "MPI_Send");
 }
 
 template <class T>
@@ -129,6 +132,12 @@ class LocalPool {
     out.swap(done_);
     in_flight_ -= out.size();
     return out;
+  }
+
+  /// Drops the tasks not started yet (tasks running finish; their reports are not taken).
+  void abandon() {
+    std::lock_guard lock(mutex_);
+    queued_.clear();
   }
 
   std::size_t in_flight() const noexcept { return in_flight_; }
@@ -207,47 +216,117 @@ class Backoff {
   std::chrono::microseconds wait_{4};
 };
 
-// Rank 0: hands tasks out and collects their reports.
+using Clock = std::chrono::steady_clock;
+
+// How often a rank that sent nothing else says it is alive, for a given timeout.
+Clock::duration heartbeat_interval(double timeout_seconds) {
+  const double seconds = std::clamp(timeout_seconds / 5, 0.05, 5.0);
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+bool silent_for(Clock::time_point since, double timeout_seconds, Clock::time_point now) {
+  return timeout_seconds > 0 && now - since > std::chrono::duration<double>(timeout_seconds);
+}
+
+// Sends without blocking on a peer that may be gone: true when the message left.
+bool try_send(const std::string& bytes, int destination, int tag) {
+  return MPI_Send(bytes.data(), byte_count(bytes.size()), MPI_BYTE, destination, tag,
+                  communicator) == MPI_SUCCESS;
+}
+
+// A worker's message to rank 0; a large one waits for rank 0 to take it, which a rank 0 that
+// died never does: then the worker ends with an error instead of waiting for ever.
+void send_to_root(const std::string& bytes, int tag, double timeout_seconds) {
+  MPI_Request request;
+  check(MPI_Isend(bytes.data(), byte_count(bytes.size()), MPI_BYTE, 0, tag, communicator, &request),
+        "MPI_Isend");
+  const auto start = Clock::now();
+  Backoff backoff;
+  for (;;) {
+    int done = 0;
+    check(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+    if (done) return;
+    if (silent_for(start, timeout_seconds, Clock::now()))
+      throw std::runtime_error(fmt::format(
+          "rank 0 took no message for {} s (it stopped, or its node did)", timeout_seconds));
+    std::this_thread::sleep_for(backoff.next());
+  }
+}
+
+// Rank 0: hands tasks out and collects their reports; takes a worker that stays silent longer
+// than job.rank_timeout_seconds as lost and hands its tasks in flight to the other ranks.
 void coordinate(const Session& session, const Job& job, JobStatistics& statistics) {
   LocalPool pool(job);
-  const std::size_t ranks = static_cast<std::size_t>(session.size());
-  std::size_t next = 0;                         // next task of job.order to hand out
-  std::vector<std::size_t> outstanding(ranks);  // handed out, not yet reported
-  std::vector<bool> closed(ranks, false);       // told that no task follows
-  closed[0] = true;
+  const auto ranks = static_cast<std::size_t>(session.size());
+  std::deque<std::uint64_t> queue(job.order.begin(), job.order.end());  // not handed out yet
+  std::map<std::uint64_t, std::size_t> position;  // in job.order: re-queued tasks keep it
+  for (std::size_t k = 0; k < job.order.size(); ++k) position[job.order[k]] = k;
+  struct Peer {
+    std::vector<std::uint64_t> holding;  // handed out, not yet reported
+    bool closed = false;                 // told that no task follows
+    bool lost = false;
+    Clock::time_point heard, told;  // last message from it, to it
+  };
+  std::vector<Peer> peers(ranks);
+  peers[0].closed = true;  // rank 0 takes its tasks from the queue directly
+  for (auto& peer : peers) peer.heard = peer.told = Clock::now();
+  const auto interval = heartbeat_interval(job.rank_timeout_seconds);
   bool stopping = false;
   Backoff backoff;
 
   auto report = [&](TaskReport&& r) {
-    --outstanding[static_cast<std::size_t>(r.rank)];
+    auto& holding = peers[static_cast<std::size_t>(r.rank)].holding;
+    const auto it = std::find(holding.begin(), holding.end(), r.id);
+    if (it == holding.end()) return;  // a task taken back from a rank that was lost
+    holding.erase(it);
     if (!r.skipped) ++statistics.ranks[static_cast<std::size_t>(r.rank)].trials;
     job.on_report(r);
   };
-  // Answers a rank that can start `wanted` more tasks.
-  auto assign = [&](int rank, std::size_t wanted) {
-    const auto r = static_cast<std::size_t>(rank);
-    if (closed[r]) return;
-    std::string ids;
-    for (; wanted > 0 && !stopping && next < job.order.size(); --wanted) {
-      append(ids, job.order[next++]);
-      ++outstanding[r];
+  auto skip_queue = [&] {
+    for (; !queue.empty(); queue.pop_front()) {
+      peers[0].holding.push_back(queue.front());
+      report({queue.front(), true, {}, 0});
     }
-    if (ids.empty()) closed[r] = true;  // an empty assignment: no more tasks
-    send(ids, rank, tag_assign);
+  };
+  auto lose = [&](std::size_t r, const std::string& why) {
+    auto& peer = peers[r];
+    peer.lost = true;
+    statistics.ranks[r].lost = true;
+    std::cerr << fmt::format(
+        "rkhs-study: warning: MPI rank {} ({}) {}: taken as lost; its {} trial{} in flight go "
+        "to the other ranks\n",
+        r, statistics.ranks[r].host, why, peer.holding.size(), peer.holding.size() == 1 ? "" : "s");
+    std::sort(peer.holding.begin(), peer.holding.end(),
+              [&](auto a, auto b) { return position.at(a) > position.at(b); });
+    for (const auto id : peer.holding) queue.push_front(id);  // largest first again
+    peer.holding.clear();
+    try_send({}, static_cast<int>(r), tag_end);  // in case it is only slow: it leaves
+    if (stopping) skip_queue();
+  };
+  // Answers a rank that can start `wanted` more tasks.
+  auto assign = [&](std::size_t r, std::size_t wanted) {
+    auto& peer = peers[r];
+    if (peer.closed) return;
+    std::string ids;
+    for (; wanted > 0 && !stopping && !queue.empty(); --wanted, queue.pop_front()) {
+      append(ids, queue.front());
+      peer.holding.push_back(queue.front());
+    }
+    if (ids.empty()) peer.closed = true;  // an empty assignment: no more tasks
+    if (!try_send(ids, static_cast<int>(r), tag_assign)) lose(r, "cannot be reached");
+    peer.told = Clock::now();
   };
 
   for (;;) {
     bool activity = false;
     if (!stopping && job.stop_requested && job.stop_requested()) {
       stopping = true;
-      for (; next < job.order.size(); ++next) {
-        ++outstanding[0];
-        report({job.order[next], true, {}, 0});
-      }
+      skip_queue();
     }
-    while (!stopping && pool.in_flight() < pool.capacity() && next < job.order.size()) {
-      ++outstanding[0];
-      pool.submit(job.order[next++]);
+    while (!stopping && pool.in_flight() < pool.capacity() && !queue.empty()) {
+      peers[0].holding.push_back(queue.front());
+      pool.submit(queue.front());
+      queue.pop_front();
     }
     int arrived = 0;
     MPI_Status status;
@@ -255,23 +334,40 @@ void coordinate(const Session& session, const Job& job, JobStatistics& statistic
     if (arrived) {
       activity = true;
       const std::string bytes = receive(status);
-      if (status.MPI_TAG == tag_request) {
-        assign(status.MPI_SOURCE,
-               static_cast<std::size_t>(std::max(read<std::int32_t>(bytes, 0), 1)));
-      } else if (status.MPI_TAG == tag_result) {
-        TaskReport r{read<std::uint64_t>(bytes, 0), read<std::uint8_t>(bytes, 8) != 0,
-                     bytes.substr(9), status.MPI_SOURCE};
-        report(std::move(r));
-        assign(status.MPI_SOURCE, 1);
-      } else {
-        throw std::runtime_error("an MPI message with an unknown tag");
+      const auto r = static_cast<std::size_t>(status.MPI_SOURCE);
+      if (!peers[r].lost) {  // a lost rank's late messages are dropped
+        peers[r].heard = Clock::now();
+        if (status.MPI_TAG == tag_request) {
+          assign(r, static_cast<std::size_t>(std::max(read<std::int32_t>(bytes, 0), 1)));
+        } else if (status.MPI_TAG == tag_result) {
+          report({read<std::uint64_t>(bytes, 0), read<std::uint8_t>(bytes, 8) != 0, bytes.substr(9),
+                  status.MPI_SOURCE});
+          assign(r, 1);
+        } else if (status.MPI_TAG != tag_alive) {
+          throw std::runtime_error("an MPI message with an unknown tag");
+        }
+      }
+    }
+    const auto now = Clock::now();
+    for (std::size_t r = 1; r < ranks; ++r) {
+      if (peers[r].lost) continue;
+      if (silent_for(peers[r].heard, job.rank_timeout_seconds, now))
+        lose(r, fmt::format("sent nothing for {} s", job.rank_timeout_seconds));
+      else if (now - peers[r].told > interval) {
+        if (!try_send({}, static_cast<int>(r), tag_alive)) lose(r, "cannot be reached");
+        peers[r].told = now;
       }
     }
     const bool all_done =
-        next == job.order.size() &&
-        std::all_of(outstanding.begin(), outstanding.end(), [](auto n) { return n == 0; }) &&
-        std::all_of(closed.begin(), closed.end(), [](bool c) { return c; });
-    if (all_done) break;
+        queue.empty() &&
+        std::all_of(peers.begin(), peers.end(),
+                    [](const Peer& p) { return p.lost || (p.closed && p.holding.empty()); }) &&
+        peers[0].holding.empty();
+    if (all_done) {
+      for (std::size_t r = 1; r < ranks; ++r)
+        if (!peers[r].lost) try_send({}, static_cast<int>(r), tag_end);
+      return;
+    }
     auto finished = pool.take(activity ? std::chrono::microseconds(0) : backoff.next());
     if (!finished.empty()) activity = true;
     for (auto& r : finished) report(std::move(r));
@@ -279,25 +375,32 @@ void coordinate(const Session& session, const Job& job, JobStatistics& statistic
   }
 }
 
-// Other ranks: ask for tasks, run them, send the results back.
+// Other ranks: ask for tasks, run them, send the results back, until rank 0 says the job is
+// over. Rank 0 silent for longer than job.rank_timeout_seconds ends this rank with an error.
 void serve(const Job& job) {
   LocalPool pool(job);
   std::string request;
   append(request, static_cast<std::int32_t>(pool.capacity()));
-  send(request, 0, tag_request);
-  bool no_more = false;
+  send_to_root(request, tag_request, job.rank_timeout_seconds);
+  const auto interval = heartbeat_interval(job.rank_timeout_seconds);
+  auto heard = Clock::now(), told = Clock::now();
   Backoff backoff;
-  while (!no_more || pool.in_flight() > 0) {
+  for (;;) {
     bool activity = false;
     int arrived = 0;
     MPI_Status status;
-    check(MPI_Iprobe(0, tag_assign, communicator, &arrived, &status), "MPI_Iprobe");
+    check(MPI_Iprobe(0, MPI_ANY_TAG, communicator, &arrived, &status), "MPI_Iprobe");
     if (arrived) {
       activity = true;
-      const std::string ids = receive(status);
-      if (ids.empty()) no_more = true;
-      for (std::size_t at = 0; at + 8 <= ids.size(); at += 8)
-        pool.submit(read<std::uint64_t>(ids, at));
+      heard = Clock::now();
+      const std::string bytes = receive(status);
+      if (status.MPI_TAG == tag_end) {
+        pool.abandon();  // empty unless rank 0 took this rank as lost
+        return;
+      }
+      if (status.MPI_TAG == tag_assign)
+        for (std::size_t at = 0; at + 8 <= bytes.size(); at += 8)
+          pool.submit(read<std::uint64_t>(bytes, at));
     }
     auto finished = pool.take(activity ? std::chrono::microseconds(0) : backoff.next());
     for (auto& r : finished) {
@@ -306,8 +409,17 @@ void serve(const Job& job) {
       append(bytes, r.id);
       append(bytes, static_cast<std::uint8_t>(r.skipped ? 1 : 0));
       bytes += r.payload;
-      send(bytes, 0, tag_result);
+      send_to_root(bytes, tag_result, job.rank_timeout_seconds);
+      told = Clock::now();
       activity = true;
+    }
+    const auto now = Clock::now();
+    if (silent_for(heard, job.rank_timeout_seconds, now))
+      throw std::runtime_error(fmt::format(
+          "rank 0 sent nothing for {} s (it stopped, or its node did)", job.rank_timeout_seconds));
+    if (now - told > interval) {
+      send_to_root({}, tag_alive, job.rank_timeout_seconds);
+      told = now;
     }
     if (activity) backoff.reset();
   }
@@ -338,6 +450,9 @@ Session::Session(int& argc, char**& argv) {
     throw std::runtime_error("the MPI library does not support MPI_THREAD_FUNNELED");
   }
   check(MPI_Comm_dup(MPI_COMM_WORLD, &communicator), "MPI_Comm_dup");
+  // Errors are returned, not fatal: a send to a rank that died marks it lost (mpirun
+  // --enable-recovery keeps the others running).
+  MPI_Comm_set_errhandler(communicator, MPI_ERRORS_RETURN);
   MPI_Comm_rank(communicator, &rank_);
   MPI_Comm_size(communicator, &size_);
   MPI_Comm node;
@@ -350,8 +465,9 @@ Session::Session(int& argc, char**& argv) {
   host_.assign(name, static_cast<std::size_t>(length));
 }
 
+// The communicator is not freed (a collective call, which a lost rank would never join):
+// MPI_Finalize releases it.
 Session::~Session() {
-  MPI_Comm_free(&communicator);
   MPI_Finalize();
 }
 
@@ -436,7 +552,6 @@ JobStatistics distribute(const Session& session, const Job& job) {
   } catch (...) {
     session.abort("unknown exception", 2);
   }
-  session.barrier();
   return statistics;
 }
 

@@ -113,6 +113,10 @@ struct Job {
   /// skipped. Tasks in flight finish normally.
   std::function<bool()> stop_requested;
   int threads = 1;  ///< worker threads on this rank (oneTBB)
+  /// A worker that sends nothing (not even the heartbeat every timeout / 5, at most 5 s) for
+  /// this long is taken as lost by rank 0, and its tasks in flight are run elsewhere; a worker
+  /// that hears nothing from rank 0 for this long ends with an error. 0: wait for ever.
+  double rank_timeout_seconds = 60;
 };
 
 /// How a job was spread, per rank (complete on rank 0 only).
@@ -121,8 +125,8 @@ struct JobStatistics {
 };
 
 /// Collective: runs the job's tasks on every rank's threads; returns when every task is reported
-/// (rank 0) or when rank 0 has no more tasks for this rank (others). Ends with a barrier, so
-/// jobs can follow one another.
+/// (rank 0) or when rank 0 ends the job (others), so jobs can follow one another. A lost rank
+/// is marked in the statistics (RankRecord::lost) and its tasks are run by the others.
 JobStatistics distribute(const Session& session, const Job& job);
 
 /// Collective: runs `trials` of `study` across the ranks through the result store (only rank 0
@@ -134,6 +138,7 @@ JobStatistics distribute(const Session& session, const Job& job);
 std::optional<StoredRun> run_with_store(const Session& session, const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
                                         const RunOptions& options, ResultStore* store, bool fresh,
-                                        JobStatistics* statistics = nullptr);
+                                        JobStatistics* statistics = nullptr,
+                                        double rank_timeout_seconds = 60);
 
 }  // namespace rkhs::distributed
