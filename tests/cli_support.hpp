@@ -17,19 +17,40 @@ struct CommandOutcome {
   std::string output;  ///< stdout and stderr, interleaved
 };
 
-/// Runs the rkhs-study executable of this build with `arguments`. `environment` is put before
-/// the command (e.g. "RKHS_STUDY_DATA=/x" or "env -u RKHS_STUDY_DATA").
-inline CommandOutcome rkhs_study(const std::string& arguments,
-                                 const std::string& environment = "") {
-  const std::string command =
-      environment + " " + std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
+/// Runs a whole command line in the shell; stdout and stderr are captured together.
+inline CommandOutcome run_command(const std::string& command_line) {
+  FILE* pipe = popen((command_line + " 2>&1").c_str(), "r");
   REQUIRE(pipe);
   std::string output;
   char buffer[4096];
   while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
   const int status = pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+/// Runs the rkhs-study executable of this build with `arguments`. `environment` is put before
+/// the command (e.g. "RKHS_STUDY_DATA=/x" or "env -u RKHS_STUDY_DATA").
+inline CommandOutcome rkhs_study(const std::string& arguments,
+                                 const std::string& environment = "") {
+  return run_command(environment + " " + std::string(RKHS_STUDY_EXECUTABLE) + " " + arguments);
+}
+
+/// A study named `name` of ten trials of about 0.1-1 s each (Gaussian kernels of widths
+/// `sigmas`, a TOML array of two, n = 300..900), so that a run can be caught midway.
+inline std::string slow_study(const std::string& name, const std::string& sigmas = "[0.5, 0.7]") {
+  return R"([study]
+name = ")" +
+         name + R"("
+evaluation_points = 4096
+metrics = ["gram_condition_number", "power_function_sup", "l2_error"]
+[domain]
+radius = 4
+[grid]
+n = { from = 300, to = 900, step = 150 }
+[[kernel]]
+name = "gaussian"
+sigma = )" +
+         sigmas + "\n";
 }
 
 /// The whole content of a text file ("" when it cannot be read).

@@ -90,15 +90,9 @@ const std::string mpi_environment =
     "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
     "OMPI_MCA_btl_vader_single_copy_mechanism=none";
 
-// Runs `command` (a whole command line) and returns its exit code and output.
+// Runs `command` (a whole command line) in the MPI environment.
 rkhs::test::CommandOutcome shell(const std::string& command) {
-  FILE* pipe = popen((mpi_environment + " " + command + " 2>&1").c_str(), "r");
-  REQUIRE(pipe);
-  std::string output;
-  char buffer[4096];
-  while (std::size_t got = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, got);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+  return rkhs::test::run_command(mpi_environment + " " + command);
 }
 
 // Every stored trial of `study_file` in both stores, compared as exact text records (reals in
@@ -183,19 +177,7 @@ TEST_CASE("rkhs-study check --mpi judges the same expectations", "[cli][mpi]") {
 
 namespace {
 
-// Ten trials of 0.1-1 s.
-constexpr const char* ten_slow_trials = R"([study]
-name = "mpi_kill"
-evaluation_points = 4096
-metrics = ["gram_condition_number", "power_function_sup", "l2_error"]
-[domain]
-radius = 4
-[grid]
-n = { from = 300, to = 900, step = 150 }
-[[kernel]]
-name = "gaussian"
-sigma = [0.5, 0.7]
-)";
+const std::string ten_slow_trials = rkhs::test::slow_study("mpi_kill");
 
 // Starts `mpirun -np 2 [mpirun_options] rkhs-study <run>` with its output in `log`, kills rank 1
 // with SIGKILL once rank 0 has stored two trials into `store`, and returns mpirun's wait status.
@@ -291,18 +273,7 @@ TEST_CASE("with mpirun --enable-recovery the other ranks finish a killed rank's 
 TEST_CASE("Ctrl-C to mpirun: trials in flight finish and are stored, rank 0 says how to resume",
           "[cli][mpi]") {
   const auto dir = rkhs::test::scratch_directory("mpi_sigint");
-  std::ofstream(dir / "study.toml") << R"([study]
-name = "mpi_sigint"
-evaluation_points = 4096
-metrics = ["gram_condition_number", "power_function_sup"]
-[domain]
-radius = 4
-[grid]
-n = { from = 300, to = 900, step = 50 }
-[[kernel]]
-name = "gaussian"
-sigma = [0.5, 0.7, 0.9]
-)";
+  std::ofstream(dir / "study.toml") << rkhs::test::slow_study("mpi_sigint", "[0.5, 0.7, 0.9]");
   const auto store = dir / "store.sqlite";
   const auto log = dir / "log.txt";
   const auto run = "run " + (dir / "study.toml").string() +
@@ -332,14 +303,14 @@ sigma = [0.5, 0.7, 0.9]
   CHECK_FALSE(fs::exists(dir / "out" / "trials.csv"));  // outputs are for complete runs
   const auto stored = rkhs::ResultStore(store).size();
   CHECK(stored >= 2);
-  CHECK(stored < 39);
+  CHECK(stored < 15);
   CHECK_THAT(output, Catch::Contains("interrupted: " + std::to_string(stored) +
                                      " trials finished and stored"));
   const auto resumed = shell(mpirun(2, run));
   INFO(resumed.output);
   CHECK(resumed.exit_code == 0);
   CHECK_THAT(resumed.output, Catch::Contains(std::to_string(stored) + " trials reused"));
-  CHECK(rkhs::ResultStore(store).size() == 39);
+  CHECK(rkhs::ResultStore(store).size() == 15);
 }
 
 TEST_CASE("ranks that disagree on the study, or a launch without --mpi, run nothing",

@@ -1,6 +1,7 @@
 // Runs that survive: a study killed with SIGKILL midway resumes where it stopped and gives
 // exactly the trials of an uninterrupted run; SIGINT stops cleanly and says how to resume; a
 // changed parameter re-runs only the affected trials.
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -8,7 +9,6 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <fstream>
-#include <fcntl.h>
 #include <thread>
 
 #include "cli_support.hpp"
@@ -20,19 +20,8 @@ using rkhs::test::rkhs_study;
 
 namespace {
 
-// Trials of about 0.1-1 s each, so that a run can be caught midway.
 std::string slow_study(const std::string& sigmas) {
-  return R"([study]
-name = "store_cli"
-evaluation_points = 4096
-metrics = ["gram_condition_number", "power_function_sup", "l2_error"]
-[domain]
-radius = 4
-[grid]
-n = { from = 300, to = 900, step = 150 }
-[[kernel]]
-name = "gaussian"
-sigma = )" + sigmas + "\n";
+  return rkhs::test::slow_study("store_cli", sigmas);
 }
 
 // Starts `rkhs-study args` in the background; returns its pid.
@@ -83,8 +72,8 @@ TEST_CASE("a run killed with SIGKILL resumes and equals an uninterrupted run", "
   CHECK_THAT(resumed.output, Catch::Contains(std::to_string(stored_before) + " trials reused"));
   CHECK(rkhs::ResultStore(store).size() == 10);  // every trial exactly once
 
-  const auto clean = rkhs_study("run " + (dir / "study.toml").string() + " --quiet --no-store --out " +
-                                (dir / "clean").string());
+  const auto clean = rkhs_study("run " + (dir / "study.toml").string() +
+                                " --quiet --no-store --out " + (dir / "clean").string());
   REQUIRE(clean.exit_code == 0);
   CHECK(read_text(dir / "resumed" / "trials.csv") == read_text(dir / "clean" / "trials.csv"));
   CHECK(read_text(dir / "resumed" / "rates.csv") == read_text(dir / "clean" / "rates.csv"));
@@ -132,10 +121,12 @@ TEST_CASE("a changed parameter re-runs only the affected trials", "[cli][store]"
                            " --out " + (dir / "b").string());
   INFO(second.output);
   REQUIRE(second.exit_code == 0);
-  CHECK_THAT(second.output, Catch::Contains("5 trials reused from " + store.string() + ", 5 run now"));
-  auto fresh = rkhs_study("run " + (dir / "b.toml").string() + " --fresh --store " + store.string() +
-                          " --out " + (dir / "b").string());
-  CHECK_THAT(fresh.output, Catch::Contains("0 trials reused from " + store.string() + ", 10 run now"));
+  CHECK_THAT(second.output,
+             Catch::Contains("5 trials reused from " + store.string() + ", 5 run now"));
+  auto fresh = rkhs_study("run " + (dir / "b.toml").string() + " --fresh --store " +
+                          store.string() + " --out " + (dir / "b").string());
+  CHECK_THAT(fresh.output,
+             Catch::Contains("0 trials reused from " + store.string() + ", 10 run now"));
 }
 
 TEST_CASE("shards run disjoint subsets; merged stores reproduce a single run", "[cli][store]") {
@@ -154,8 +145,9 @@ J = 5
 )";
   const auto study = (dir / "study.toml").string();
   for (int k = 1; k <= 3; ++k) {
-    const auto shard = rkhs_study("run " + study + " --quiet --shard " + std::to_string(k) +
-                                  "/3 --store " + (dir / ("shard" + std::to_string(k) + ".sqlite")).string());
+    const auto shard =
+        rkhs_study("run " + study + " --quiet --shard " + std::to_string(k) + "/3 --store " +
+                   (dir / ("shard" + std::to_string(k) + ".sqlite")).string());
     INFO(shard.output);
     REQUIRE(shard.exit_code == 0);
     CHECK_THAT(shard.output, Catch::Contains("shard " + std::to_string(k) + "/3:"));
@@ -163,9 +155,9 @@ J = 5
   // 16 trials: indices 0..15 split 6, 5, 5.
   CHECK(rkhs::ResultStore(dir / "shard1.sqlite").size() == 6);
   CHECK(rkhs::ResultStore(dir / "shard2.sqlite").size() == 5);
-  const auto merged = rkhs_study("merge " + (dir / "all.sqlite").string() + " " +
-                                 (dir / "shard1.sqlite").string() + " " + (dir / "shard2.sqlite").string() +
-                                 " " + (dir / "shard3.sqlite").string());
+  const auto merged =
+      rkhs_study("merge " + (dir / "all.sqlite").string() + " " + (dir / "shard1.sqlite").string() +
+                 " " + (dir / "shard2.sqlite").string() + " " + (dir / "shard3.sqlite").string());
   INFO(merged.output);
   REQUIRE(merged.exit_code == 0);
   CHECK_THAT(merged.output, Catch::Contains("holds 16 trials"));
@@ -173,7 +165,8 @@ J = 5
                                       " --no-plots --out " + (dir / "from_shards").string());
   CHECK_THAT(from_shards.output, Catch::Contains("16 trials reused"));
   CHECK_THAT(from_shards.output, Catch::Contains("0 run now"));
-  REQUIRE(rkhs_study("run " + study + " --quiet --no-store --no-plots --out " + (dir / "single").string())
+  REQUIRE(rkhs_study("run " + study + " --quiet --no-store --no-plots --out " +
+                     (dir / "single").string())
               .exit_code == 0);
   CHECK(read_text(dir / "from_shards" / "trials.csv") == read_text(dir / "single" / "trials.csv"));
   CHECK(rkhs_study("run " + study + " --shard 4/3").exit_code == 2);
