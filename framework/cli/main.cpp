@@ -69,33 +69,67 @@ void install_stop_handlers() {
 
 using rkhs::distributed::Session;
 
-// Runs the trials through the store; prints how to resume when interrupted. With MPI (`mpi`
-// not null) the trials are spread over the ranks: rank 0 alone opens the store and gets the
-// results; the other ranks get std::nullopt when they are done.
+// Runs `action` on this rank. With MPI every rank must succeed before any goes on (a rank
+// that cannot must not leave the others waiting in a collective call): rank 0 reports the
+// errors, as its own exception when every failing rank failed alike, and the other ranks
+// leave quietly.
+template <class Action>
+void on_every_rank(const Session* mpi, const Action& action) {
+  if (!mpi) return action();
+  std::string error;
+  std::exception_ptr own_error;
+  try {
+    action();
+  } catch (const std::exception& e) {
+    error = e.what();
+    own_error = std::current_exception();
+  }
+  try {
+    rkhs::distributed::require_no_errors(*mpi, error);
+  } catch (const std::runtime_error& verdict) {
+    if (own_error && verdict.what() == error) std::rethrow_exception(own_error);
+    throw;
+  }
+}
+
+// A command's part in a distributed run: the session, the trials every rank agreed on and,
+// once they ran, how they were spread over the ranks.
+struct Distributed {
+  const Session& session;
+  rkhs::distributed::AgreedTrials agreed;
+  std::vector<rkhs::RankRecord> ranks = {};
+};
+
+// With --mpi: checks that every rank sees the same trials (before anything is created).
+std::optional<Distributed> distribute_over(const Session* mpi, const rkhs::StudyDefinition& study,
+                                           const std::vector<rkhs::TrialSpec>& trials) {
+  if (!mpi) return std::nullopt;
+  return Distributed{*mpi, rkhs::distributed::require_same_trials(*mpi, study, trials)};
+}
+
+// Runs the trials through the store; prints how to resume when interrupted. With MPI
+// (`distributed` not null) the trials are spread over the ranks: rank 0 alone opens the store
+// and gets the results; the other ranks get std::nullopt when they are done.
 std::optional<rkhs::StoredRun> run_trials_stored(const rkhs::StudyDefinition& study,
                                                  const std::vector<rkhs::TrialSpec>& trials,
                                                  rkhs::RunOptions options,
                                                  const StoreOptions& store_options, bool quiet,
-                                                 const Session* mpi = nullptr,
-                                                 std::vector<rkhs::RankRecord>* ranks = nullptr) {
+                                                 Distributed* distributed = nullptr) {
+  const Session* mpi = distributed ? &distributed->session : nullptr;
   std::optional<rkhs::ResultStore> store;
-  std::string store_error;
-  try {
+  on_every_rank(mpi, [&] {
     if (!store_options.disabled && (!mpi || mpi->is_root())) store.emplace(store_options.file);
-  } catch (const std::exception& e) {
-    if (!mpi) throw;
-    store_error = e.what();
-  }
-  if (mpi) rkhs::distributed::require_no_errors(*mpi, store_error);
+  });
   install_stop_handlers();
   options.stop_requested = [] { return interrupted.load(); };
   rkhs::freeze_registries();
   std::optional<rkhs::StoredRun> run;
-  if (mpi) {
+  if (distributed) {
     rkhs::distributed::JobStatistics spread;
-    run = rkhs::distributed::run_with_store(*mpi, study, trials, options, store ? &*store : nullptr,
-                                            store_options.fresh, &spread, rank_timeout_seconds);
-    if (ranks) *ranks = spread.ranks;
+    run = rkhs::distributed::run_with_store(*mpi, study, trials, distributed->agreed, options,
+                                            store ? &*store : nullptr, store_options.fresh, &spread,
+                                            rank_timeout_seconds);
+    distributed->ranks = spread.ranks;
     if (run && !quiet) {
       std::string per_rank;
       for (std::size_t r = 0; r < spread.ranks.size(); ++r)
@@ -115,27 +149,11 @@ std::optional<rkhs::StoredRun> run_trials_stored(const rkhs::StudyDefinition& st
   return run;
 }
 
-// Loads the study (`load` reads it) on this rank; with MPI every rank must succeed before any
-// goes on, and rank 0 reports the errors.
+// Loads the study (`load` reads it) on every rank.
 template <class Load>
 rkhs::StudyDefinition load_on_every_rank(const Load& load, const Session* mpi) {
-  if (!mpi) return load();
   std::optional<rkhs::StudyDefinition> study;
-  std::string error;
-  std::exception_ptr own_error;
-  try {
-    study.emplace(load());
-  } catch (const std::exception& e) {
-    error = e.what();
-    own_error = std::current_exception();
-  }
-  try {
-    rkhs::distributed::require_no_errors(*mpi, error);
-  } catch (const std::runtime_error&) {
-    // Rank 0's own error alone is rethrown as it was (a StudyError keeps its form).
-    if (mpi->is_root() && own_error) std::rethrow_exception(own_error);
-    throw;
-  }
+  on_every_rank(mpi, [&] { study.emplace(load()); });
   return std::move(*study);
 }
 
@@ -252,10 +270,10 @@ int default_thread_count(int threads, const Session* mpi) {
 
 // An MPI rank other than 0: runs the trials rank 0 hands it; writes nothing.
 int serve_trials(const rkhs::StudyDefinition& study, const std::vector<rkhs::TrialSpec>& trials,
-                 int threads, const StoreOptions& store_options, const Session* mpi) {
+                 int threads, const StoreOptions& store_options, Distributed& distributed) {
   rkhs::RunOptions options;
-  options.threads = default_thread_count(threads, mpi);
-  run_trials_stored(study, trials, options, store_options, true, mpi);
+  options.threads = default_thread_count(threads, &distributed.session);
+  run_trials_stored(study, trials, options, store_options, true, &distributed);
   return interrupted ? exit_interrupted : exit_ok;
 }
 
@@ -281,8 +299,9 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   const auto study = load_on_every_rank([&] { return rkhs::load_study(study_file); }, mpi);
   if (out_dir.empty()) out_dir = (std::filesystem::path("results") / study.name).string();
   auto trials = study.trials();
-  if (mpi) rkhs::distributed::require_same_trials(*mpi, study, trials);
-  if (mpi && !mpi->is_root()) return serve_trials(study, trials, threads, store_options, mpi);
+  auto distributed = distribute_over(mpi, study, trials);
+  if (mpi && !mpi->is_root())
+    return serve_trials(study, trials, threads, store_options, *distributed);
   if (!shard.empty()) {
     // A shard runs the trials whose grid index is K - 1 modulo N into its own store; `merge`
     // combines the stores and a run over the merged store writes the outputs.
@@ -352,8 +371,8 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
                                total, failed, elapsed, eta);
     }
   };
-  std::vector<rkhs::RankRecord> ranks;
-  const auto stored = *run_trials_stored(study, trials, options, store_options, quiet, mpi, &ranks);
+  const auto stored = *run_trials_stored(study, trials, options, store_options, quiet,
+                                         distributed ? &*distributed : nullptr);
   if (stored.skipped) return report_interruption(stored, store_options);
   const auto& results = stored.results;
   failed = 0;
@@ -361,8 +380,11 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto rates = rkhs::compute_rates(study, trials, results);
-  const rkhs::RunRecord record{study,        trials,  results, rates,
-                               thread_count, seconds, started, ranks};
+  const rkhs::RunRecord record{
+      study,        trials,
+      results,      rates,
+      thread_count, seconds,
+      started,      distributed ? distributed->ranks : std::vector<rkhs::RankRecord>{}};
   rkhs::write_outputs(record, out_dir);
   journal.remove();
   if (plots) {
@@ -405,8 +427,9 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
       },
       mpi);
   const auto trials = study.trials();
-  if (mpi) rkhs::distributed::require_same_trials(*mpi, study, trials);
-  if (mpi && !mpi->is_root()) return serve_trials(study, trials, threads, store_options, mpi);
+  auto distributed = distribute_over(mpi, study, trials);
+  if (mpi && !mpi->is_root())
+    return serve_trials(study, trials, threads, store_options, *distributed);
   const int thread_count = default_thread_count(threads, mpi);
   const auto tier_text = arguments.tier.empty() ? std::string() : " (tier " + arguments.tier + ")";
   if (!quiet)
@@ -416,8 +439,8 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   const auto start = std::chrono::steady_clock::now();
   rkhs::RunOptions options;
   options.threads = thread_count;
-  std::vector<rkhs::RankRecord> ranks;
-  const auto stored = *run_trials_stored(study, trials, options, store_options, quiet, mpi, &ranks);
+  const auto stored = *run_trials_stored(study, trials, options, store_options, quiet,
+                                         distributed ? &*distributed : nullptr);
   if (stored.skipped) return report_interruption(stored, store_options);
   const auto& results = stored.results;
   const double seconds =
@@ -426,8 +449,11 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   std::size_t failed = 0;
   for (const auto& result : results) failed += result.ok ? 0 : 1;
   if (!arguments.out_dir.empty()) {
-    const rkhs::RunRecord record{study,        trials,  results, rates,
-                                 thread_count, seconds, started, ranks};
+    const rkhs::RunRecord record{
+        study,        trials,
+        results,      rates,
+        thread_count, seconds,
+        started,      distributed ? distributed->ranks : std::vector<rkhs::RankRecord>{}};
     rkhs::write_outputs(record, arguments.out_dir);
   }
   const auto outcomes = rkhs::verify_expectations(study, trials, results, rates);
@@ -674,18 +700,7 @@ int main(int argc, char** argv) {
       for (const auto& file : plugin_files) rkhs::load_plugin(file);
       if (!data_dir.empty()) rkhs::set_data_root(data_dir);
     };
-    if (!mpi) {
-      load_plugins();
-    } else {
-      // Every rank loads the plugins; one that cannot must not leave the others waiting.
-      std::string error;
-      try {
-        load_plugins();
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-      rkhs::distributed::require_no_errors(*mpi, error);
-    }
+    on_every_rank(mpi_session, load_plugins);
     if (*verify) return command_verify_plugin(plugin_to_verify);
     if (*run)
       return command_run(study_file, out_dir, threads, quiet || (mpi && !mpi->is_root()),

@@ -118,10 +118,15 @@ std::vector<std::string> trial_hashes(const StudyDefinition& study,
 
 StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
                          const RunOptions& options, ResultStore* store, bool fresh,
-                         const TrialExecutor& execute) {
+                         const TrialExecutor& execute,
+                         const std::vector<std::string>& known_hashes) {
   StoredRun out;
   out.results.resize(trials.size());
-  const auto hashes = store ? trial_hashes(study, trials) : std::vector<std::string>();
+  if (!known_hashes.empty() && known_hashes.size() != trials.size())
+    throw std::invalid_argument("run_with_store: one known hash per trial expected");
+  const auto hashes = !store                 ? std::vector<std::string>()
+                      : known_hashes.empty() ? trial_hashes(study, trials)
+                                             : known_hashes;
   std::vector<TrialSpec> pending;
   std::vector<std::size_t> position;  // index into `trials` of each pending trial
   for (std::size_t i = 0; i < trials.size(); ++i) {

@@ -348,6 +348,28 @@ TEST_CASE("ranks that disagree on the study, or a launch without --mpi, run noth
   const auto broken = shell(mpirun(2, "run " + (dir / "missing.toml").string() + " --mpi"));
   CHECK(broken.exit_code == 2);
 
+  // A study file error that every rank meets is said once, by rank 0, in its own form.
+  std::ofstream(dir / "bad.toml") << "[study]\nname = \"bad\"\n";
+  const auto bad = shell(mpirun(2, "run " + (dir / "bad.toml").string() + " --mpi --store " +
+                                       store + " --out " + (dir / "out").string()));
+  INFO(bad.output);
+  CHECK(bad.exit_code == 2);
+  const std::string error = (dir / "bad.toml").string() + ": domain: missing [domain] table";
+  REQUIRE_THAT(bad.output, Catch::Contains(error));
+  CHECK(bad.output.find(error) == bad.output.rfind(error));
+  CHECK_THAT(bad.output, !Catch::Contains("MPI ranks cannot go on"));
+  CHECK_FALSE(fs::exists(store));
+  // Likewise a plugin that no rank can load.
+  const auto plugin = shell(mpirun(2, "run " + (dir / "a.toml").string() + " --mpi --plugin " +
+                                          (dir / "missing.so").string() + " --store " + store));
+  INFO(plugin.output);
+  CHECK(plugin.exit_code == 2);
+  const std::string plugin_error = (dir / "missing.so").string() + ": plugin file not found";
+  REQUIRE_THAT(plugin.output, Catch::Contains(plugin_error));
+  CHECK(plugin.output.find(plugin_error) == plugin.output.rfind(plugin_error));
+  CHECK_THAT(plugin.output, !Catch::Contains("MPI ranks cannot go on"));
+  CHECK_FALSE(fs::exists(store));
+
   const auto shard = rkhs_study("run " + (dir / "a.toml").string() + " --mpi --shard 1/2");
   CHECK(shard.exit_code == 2);
   CHECK_THAT(shard.output, Catch::Contains("--mpi and --shard exclude each other"));

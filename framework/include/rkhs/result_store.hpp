@@ -51,10 +51,12 @@ using TrialExecutor = std::function<std::vector<TrialResult>(
 
 /// Runs the trials that `store` does not hold yet (all of them when `fresh` or when `store` is
 /// null) with `execute`, committing each to the store as it finishes, and returns every result.
-/// `options`' own callback is called for the trials run now.
+/// `options`' own callback is called for the trials run now. `known_hashes`: trial_hashes() of
+/// `trials` when the caller has them already (empty: computed here when there is a store).
 StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
                          const RunOptions& options, ResultStore* store, bool fresh,
-                         const TrialExecutor& execute = run_trials);
+                         const TrialExecutor& execute = run_trials,
+                         const std::vector<std::string>& known_hashes = {});
 
 class ResultStore {
  public:

@@ -23,12 +23,14 @@ std::map<std::uint64_t, const TrialSpec*> trials_by_index(const std::vector<Tria
 
 }  // namespace
 
-void require_same_trials(const Session& session, const StudyDefinition& study,
-                         const std::vector<TrialSpec>& trials) {
+AgreedTrials require_same_trials(const Session& session, const StudyDefinition& study,
+                                 const std::vector<TrialSpec>& trials) {
+  AgreedTrials agreed;
   std::string mine;
   try {
+    agreed.hashes = trial_hashes(study, trials);
     Sha256 digest;
-    for (const auto& hash : trial_hashes(study, trials)) digest.update(hash);
+    for (const auto& hash : agreed.hashes) digest.update(hash);
     mine = "ok " + digest.hex_digest();
   } catch (const std::exception& e) {
     mine = std::string("error ") + e.what();
@@ -55,6 +57,7 @@ void require_same_trials(const Session& session, const StudyDefinition& study,
     if (session.is_root()) throw std::runtime_error(verdict);
     throw QuietExit{2};
   }
+  return agreed;
 }
 
 void require_no_errors(const Session& session, const std::string& error) {
@@ -62,9 +65,13 @@ void require_no_errors(const Session& session, const std::string& error) {
   std::string verdict;
   if (session.is_root()) {
     std::size_t failing = 0;
-    for (const auto& e : errors) failing += e.empty() ? 0 : 1;
-    if (failing == 1 && !errors[0].empty()) {
-      verdict = errors[0];
+    bool alike = true;  // every failing rank failed as rank 0 did
+    for (const auto& e : errors) {
+      failing += e.empty() ? 0 : 1;
+      alike = alike && (e.empty() || e == errors[0]);
+    }
+    if (failing > 0 && alike) {
+      verdict = errors[0];  // said once (the same study file on every rank, typically)
     } else if (failing > 0) {
       verdict = fmt::format("{} of {} MPI ranks cannot go on:", failing, errors.size());
       for (std::size_t r = 0; r < errors.size(); ++r)
@@ -92,9 +99,9 @@ int launched_process_count() noexcept {
 
 std::optional<StoredRun> run_with_store(const Session& session, const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
-                                        const RunOptions& options, ResultStore* store, bool fresh,
-                                        JobStatistics* statistics, double rank_timeout_seconds) {
-  require_same_trials(session, study, trials);
+                                        const AgreedTrials& agreed, const RunOptions& options,
+                                        ResultStore* store, bool fresh, JobStatistics* statistics,
+                                        double rank_timeout_seconds) {
   const auto by_index = trials_by_index(trials);
   Job job;
   job.threads = options.threads > 0 ? options.threads : session.default_threads();
@@ -129,7 +136,7 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
     if (statistics) *statistics = std::move(spread);
     return results;
   };
-  return rkhs::run_with_store(study, trials, options, store, fresh, coordinate);
+  return rkhs::run_with_store(study, trials, options, store, fresh, coordinate, agreed.hashes);
 }
 
 }  // namespace rkhs::distributed

@@ -508,10 +508,6 @@ std::string Session::broadcast(const std::string& value) const {
   return out;
 }
 
-void Session::barrier() const {
-  check(MPI_Barrier(communicator), "MPI_Barrier");
-}
-
 void Session::abort(const std::string& why, int code) const {
   std::cerr << "rkhs-study: rank " << rank_ << ": " << why << "; ending the MPI job\n"
             << std::flush;

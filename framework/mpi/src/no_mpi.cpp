@@ -29,7 +29,6 @@ std::vector<std::string> Session::gather(const std::string& text) const {
 std::string Session::broadcast(const std::string& value) const {
   return value;
 }
-void Session::barrier() const {}
 void Session::abort(const std::string& why, int) const {
   throw std::runtime_error(why);
 }

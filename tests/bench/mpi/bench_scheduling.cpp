@@ -67,7 +67,9 @@ void tiny_trials() {
   const auto trials = study().trials();
   rkhs::RunOptions options;
   options.threads = threads_per_rank();
-  const auto run = distributed::run_with_store(*session, study(), trials, options, nullptr, true);
+  const auto agreed = distributed::require_same_trials(*session, study(), trials);
+  const auto run =
+      distributed::run_with_store(*session, study(), trials, agreed, options, nullptr, true);
   if (session->is_root() && run->ran != trials.size()) throw std::logic_error("trials lost");
 }
 

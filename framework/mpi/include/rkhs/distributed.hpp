@@ -68,8 +68,6 @@ class Session {
   std::vector<std::string> gather(const std::string& text) const;
   /// Collective: rank 0's `value` on every rank.
   std::string broadcast(const std::string& value) const;
-  /// Collective: waits for every rank.
-  void barrier() const;
   /// Ends every rank of the job at once (MPI_Abort) after printing `why` on this one.
   [[noreturn]] void abort(const std::string& why, int code) const;
 
@@ -79,16 +77,22 @@ class Session {
 };
 
 /// Collective: every rank passes its error ("" if none). When any rank has one, rank 0 throws
-/// std::runtime_error with it (its own alone, or each rank's, named) and the others throw
-/// QuietExit{2}: a rank that cannot go on must not leave the others waiting.
+/// std::runtime_error with it (rank 0's own when every failing rank failed alike, else each
+/// rank's, named) and the others throw QuietExit{2}: a rank that cannot go on must not leave
+/// the others waiting.
 void require_no_errors(const Session& session, const std::string& error);
+
+/// The content hashes of a study's trials (trial_hashes()), known to be the same on every rank.
+struct AgreedTrials {
+  std::vector<std::string> hashes;
+};
 
 /// Collective: every rank computes the content hashes of `trials` (key, study settings, data,
 /// build); rank 0 names each rank whose hashes differ from its own or that could not compute
 /// them, and then throws std::runtime_error (the others QuietExit{2}). Call it before creating
-/// anything, so that a refused run leaves nothing behind.
-void require_same_trials(const Session& session, const StudyDefinition& study,
-                         const std::vector<TrialSpec>& trials);
+/// anything, so that a refused run leaves nothing behind; run_with_store() takes its result.
+AgreedTrials require_same_trials(const Session& session, const StudyDefinition& study,
+                                 const std::vector<TrialSpec>& trials);
 
 /// A task as it comes back to rank 0.
 struct TaskReport {
@@ -129,15 +133,16 @@ struct JobStatistics {
 /// is marked in the statistics (RankRecord::lost) and its tasks are run by the others.
 JobStatistics distribute(const Session& session, const Job& job);
 
-/// Collective: runs `trials` of `study` across the ranks through the result store (only rank 0
-/// touches `store`, which may be null there and is ignored elsewhere). Every rank first checks
-/// that it sees the same trials as rank 0 (require_same_trials). Rank 0 gets every result, the
+/// Collective: runs `trials` of `study`, which every rank has `agreed` on, across the ranks
+/// through the result store (only rank 0 touches `store`, which may be null there and is
+/// ignored elsewhere). Rank 0 gets every result, the
 /// others std::nullopt once they are done. `options.threads` is this rank's thread count;
 /// `options.on_start` and `options.on_trial_finished` are called on rank 0 only, from the
 /// calling thread. `statistics`, when given, receives the spread (rank 0).
 std::optional<StoredRun> run_with_store(const Session& session, const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
-                                        const RunOptions& options, ResultStore* store, bool fresh,
+                                        const AgreedTrials& agreed, const RunOptions& options,
+                                        ResultStore* store, bool fresh,
                                         JobStatistics* statistics = nullptr,
                                         double rank_timeout_seconds = 60);
 
