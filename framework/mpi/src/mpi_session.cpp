@@ -358,11 +358,11 @@ void coordinate(const Session& session, const Job& job, JobStatistics& statistic
         peers[r].told = now;
       }
     }
+    // Rank 0 counts as closed: it is never lost, so its own tasks are waited for too.
     const bool all_done =
-        queue.empty() &&
-        std::all_of(peers.begin(), peers.end(),
-                    [](const Peer& p) { return p.lost || (p.closed && p.holding.empty()); }) &&
-        peers[0].holding.empty();
+        queue.empty() && std::all_of(peers.begin(), peers.end(), [](const Peer& p) {
+          return p.lost || (p.closed && p.holding.empty());
+        });
     if (all_done) {
       for (std::size_t r = 1; r < ranks; ++r)
         if (!peers[r].lost) try_send({}, static_cast<int>(r), tag_end);
