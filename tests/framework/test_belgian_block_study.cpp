@@ -1,11 +1,11 @@
 // studies/belgian_block.toml end to end on the held-out long sections of the same road (the
 // wheel tracks at v = +-0.50 m, not used when the study's speed and gain were chosen), read
-// from ../shared/data through the data root. Fails, saying where it looked, without the data.
+// from the repository's studies/data/ through the data root.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 
-#include "../shared_data_support.hpp"
+#include "../study_data_support.hpp"
 #include "rkhs/data_root.hpp"
 #include "rkhs/run.hpp"
 #include "rkhs/sha256.hpp"
@@ -45,7 +45,7 @@ double l2_norm(const TargetFunction& f, const Domain& domain) {
 
 TEST_CASE("belgian_block: the study's configuration learns the held-out long sections",
           "[belgian_block]") {
-  const DataRootScope scope(testing::require_shared_data());
+  const DataRootScope scope(testing::require_study_data());
   auto study = load_study(studies / "belgian_block.toml");
   REQUIRE(study.targets.size() == 1);
   // The same configuration on a smaller grid: the Gaussian and the first-order B-spline (the
@@ -92,7 +92,7 @@ TEST_CASE("belgian_block: the study's configuration learns the held-out long sec
 
 TEST_CASE("belgian_block_heldout.toml is belgian_block.toml but for the files and n",
           "[belgian_block]") {
-  const DataRootScope scope(testing::require_shared_data());
+  const DataRootScope scope(testing::require_study_data());
   const auto study = load_study(studies / "belgian_block.toml");
   const auto heldout = load_study(studies / "belgian_block_heldout.toml");
   auto labels = [](const std::vector<PluginChoice>& choices) {
