@@ -53,6 +53,11 @@ sigma = )" +
          sigmas + "\n";
 }
 
+/// "1 trial", "3 trials": as the command counts trials in its messages.
+inline std::string trials_text(std::size_t count) {
+  return std::to_string(count) + (count == 1 ? " trial" : " trials");
+}
+
 /// The whole content of a text file ("" when it cannot be read).
 inline std::string read_text(const std::filesystem::path& file) {
   std::ifstream in(file);

@@ -19,6 +19,7 @@
 #include <optional>
 #include <thread>
 
+#include "progress.hpp"
 #include "rkhs/adaptive.hpp"
 #include "rkhs/approximation.hpp"
 #include "rkhs/build_info.hpp"
@@ -46,6 +47,16 @@ namespace {
 
 constexpr int exit_ok = 0, exit_failed_trials = 1, exit_bad_input = 2, exit_interrupted = 130;
 
+// "1 trial", "3 trials".
+std::string counted(std::size_t count, const char* singular, const char* plural) {
+  return fmt::format("{} {}", count, count == 1 ? singular : plural);
+}
+
+// A study file's warnings (valid but doubtful settings), one line each.
+void print_warnings(const rkhs::StudyDefinition& study) {
+  for (const auto& warning : study.warnings) std::cerr << warning << "\n";
+}
+
 // Where finished trials are committed (docs/results.md): shared by every study run from here.
 struct StoreOptions {
   std::string file = "results/rkhs-study.sqlite";
@@ -56,8 +67,11 @@ struct StoreOptions {
 // --rank-timeout: an MPI rank silent this long is taken as lost (docs/cluster.md).
 double rank_timeout_seconds = 60;
 
-// SIGINT / SIGTERM: trials in flight finish and are stored; no new trial starts.
+// SIGINT / SIGTERM: no new trial starts, and trials in flight stop at their next cancellation
+// point (rkhs/cancellation.hpp) or are abandoned `abandon_after_seconds` later; neither kind is
+// stored. The run then exits 130 with the resume message.
 std::atomic<bool> interrupted{false};
+constexpr double abandon_after_seconds = 2.0;
 extern "C" void request_stop(int) {
   interrupted = true;
 }
@@ -140,29 +154,52 @@ std::optional<rkhs::StoredRun> run_trials_stored(const rkhs::StudyDefinition& st
       std::cerr << fmt::format("  trials run per MPI rank: {}\n", per_rank);
     }
   } else {
+    // A trial busy in a call without cancellation points (a large eigendecomposition) is
+    // given this long after Ctrl-C, then abandoned; main() then ends the process at once.
+    options.abandon_after_seconds = abandon_after_seconds;
     run = rkhs::run_with_store(study, trials, options, store ? &*store : nullptr,
                                store_options.fresh);
   }
-  if (run && !quiet && store)
-    std::cerr << fmt::format("  {} trials reused from {}, {} run now\n", run->reused,
-                             store->file().string(), run->ran);
+  if (run && !run->skipped && !quiet && store)
+    std::cerr << fmt::format("  {} reused from {}, {} run now\n",
+                             counted(run->reused, "trial", "trials"), store->file().string(),
+                             run->ran);
   return run;
 }
 
-// Loads the study (`load` reads it) on every rank.
+// Loads the study (`load` reads it) on every rank; rank 0 prints its warnings.
 template <class Load>
 rkhs::StudyDefinition load_on_every_rank(const Load& load, const Session* mpi) {
   std::optional<rkhs::StudyDefinition> study;
   on_every_rank(mpi, [&] { study.emplace(load()); });
+  if (!mpi || mpi->is_root()) print_warnings(*study);
   return std::move(*study);
 }
 
-int report_interruption(const rkhs::StoredRun& run, const StoreOptions& store_options) {
-  std::cerr << fmt::format(
-      "rkhs-study: interrupted: {} trials finished and stored, {} not started.{}\n", run.ran,
-      run.skipped,
-      store_options.disabled ? " Nothing was stored (--no-store)."
-                             : " Run the same command again to resume: stored trials are reused.");
+// What an interrupted run did and kept, in words that are true with and without a store.
+// `journal`: where `run` kept the finished trials' metrics (empty for other commands).
+int report_interruption(const rkhs::StoredRun& run, const StoreOptions& store_options,
+                        const std::filesystem::path& journal = {}) {
+  const auto trials = [](std::size_t count) { return counted(count, "trial", "trials"); };
+  const std::size_t not_started = run.skipped - run.stopped;
+  const std::string undone =
+      run.stopped
+          ? fmt::format("{} stopped while running and {} not started", run.stopped, not_started)
+          : fmt::format("{} not started", not_started);
+  if (store_options.disabled) {
+    std::cerr << fmt::format(
+        "rkhs-study: interrupted: {} finished, {}. Nothing was stored (--no-store){}: the same "
+        "command runs every trial again.\n",
+        trials(run.ran), undone,
+        journal.empty() || !run.ran
+            ? std::string()
+            : fmt::format("; the finished trials' metrics are in {}", journal.string()));
+  } else {
+    std::cerr << fmt::format(
+        "rkhs-study: interrupted: {} finished and stored, {} (not stored). Run the same command "
+        "again to resume: stored trials are reused.\n",
+        trials(run.ran), undone);
+  }
   return exit_interrupted;
 }
 
@@ -255,6 +292,7 @@ class Journal {
     out_.close();
     std::filesystem::remove(file_);
   }
+  const std::filesystem::path& file() const { return file_; }
 
  private:
   std::filesystem::path file_;
@@ -327,55 +365,35 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
   Journal journal(std::filesystem::path(out_dir) / "journal.csv", study.metrics);
 
   if (!quiet)
-    std::cerr << fmt::format("rkhs-study: {} ({} trials, {} thread{}{}) -> {}\n", study.name,
-                             trials.size(), thread_count, thread_count == 1 ? "" : "s",
-                             mpi ? fmt::format(" on rank 0 of {} MPI ranks", mpi->size()) : "",
-                             out_dir);
+    std::cerr << fmt::format(
+        "rkhs-study: {} ({}, {}{}) -> {}\n", study.name, counted(trials.size(), "trial", "trials"),
+        counted(thread_count, "thread", "threads"),
+        mpi ? fmt::format(" on rank 0 of {} MPI ranks", mpi->size()) : "", out_dir);
   const std::string started = utc_now();
   const auto start = std::chrono::steady_clock::now();
-  auto last_report = start;
-  std::size_t done = 0, failed = 0;
-  const bool terminal = isatty(STDERR_FILENO) != 0;
-  std::size_t pending_total = 0;  // trials the store does not hold (set before they run)
+  std::size_t failed = 0;
+  std::optional<rkhs::cli::Progress> progress;
+  if (!quiet) progress.emplace(std::cerr, isatty(STDERR_FILENO) != 0);
   rkhs::RunOptions options;
-  options.on_start = [&](std::size_t count) { pending_total = count; };
   options.threads = thread_count;
+  options.on_start = [&](std::size_t count) {
+    if (progress) progress->start(count);  // the trials the store does not hold
+  };
+  options.on_trial_started = [&](const rkhs::TrialSpec& trial) {
+    if (progress) progress->trial_started(trial.index);
+  };
   options.on_trial_finished = [&](const rkhs::TrialSpec& trial, const rkhs::TrialResult& result) {
     journal.record(study, trial, result);
-    ++done;
-    if (!result.ok) {
-      ++failed;
-      if (!quiet) std::cerr << fmt::format("  trial failed: {}: {}\n", trial.key, result.reason);
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (quiet) return;
-    // Trials run now (stored ones are not counted here); the ETA assumes the rest cost alike.
-    const double elapsed = std::chrono::duration<double>(now - start).count();
-    const std::size_t total = std::max<std::size_t>(pending_total, 1);
-    const double eta = done ? elapsed / static_cast<double>(done) *
-                                  static_cast<double>(total - std::min(done, total))
-                            : 0.0;
-    if (terminal) {
-      // A bar redrawn in place, at most ten times a second.
-      if (now - last_report < std::chrono::milliseconds(100) && done < total) return;
-      last_report = now;
-      const std::size_t width = 30, filled = total ? width * std::min(done, total) / total : width;
-      std::cerr << fmt::format("\r  [{}{}] {}/{} trials, {} failed, {:.1f} s, ETA {:.0f} s   ",
-                               std::string(filled, '#'), std::string(width - filled, '-'), done,
-                               total, failed, elapsed, eta)
-                << (done >= total ? "\n" : "") << std::flush;
-    } else if (now - last_report > std::chrono::seconds(2) || done >= total) {
-      // Not a terminal (a log, CI): a line every few seconds.
-      last_report = now;
-      std::cerr << fmt::format("  {}/{} trials done, {} failed, {:.1f} s, ETA {:.0f} s\n", done,
-                               total, failed, elapsed, eta);
-    }
+    if (!progress) return;
+    if (!result.ok)
+      progress->message(fmt::format("  trial failed: {}: {}", trial.key, result.reason));
+    progress->trial_finished(trial.index, result.ok);
   };
   const auto stored = *run_trials_stored(study, trials, options, store_options, quiet,
                                          distributed ? &*distributed : nullptr);
-  if (stored.skipped) return report_interruption(stored, store_options);
+  if (progress) progress->stop();
+  if (stored.skipped) return report_interruption(stored, store_options, journal.file());
   const auto& results = stored.results;
-  failed = 0;
   for (const auto& result : results) failed += result.ok ? 0 : 1;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -387,12 +405,18 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
       started,      distributed ? distributed->ranks : std::vector<rkhs::RankRecord>{}};
   rkhs::write_outputs(record, out_dir);
   journal.remove();
+  std::size_t plot_count = 0;
   if (plots) {
     try {
-      const auto rendered = rkhs::write_plots(record, out_dir);
-      if (!quiet)
-        std::cerr << fmt::format("  {} plots in {}/plots (SVG and PNG)\n", rendered.size(),
-                                 out_dir);
+      const auto outcome = rkhs::write_plots(record, out_dir);
+      plot_count = outcome.rendered.size();
+      if (!quiet) {
+        std::cerr << fmt::format("  {} in {}/plots (SVG and PNG)\n",
+                                 counted(plot_count, "plot", "plots"), out_dir);
+        for (const auto& note : outcome.notes) std::cerr << "  note: " << note << "\n";
+      }
+      for (const auto& failure : outcome.failures)
+        std::cerr << "rkhs-study: warning: plot not rendered: " << failure << "\n";
     } catch (const std::exception& e) {
       std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
     }
@@ -402,9 +426,10 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
 
   if (!quiet) std::cout << rkhs::console_tables(record);
   std::cout << fmt::format(
-      "{}: {} trials, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, "
-      "rates.csv, summary.json, rates.md, rates.tex\n",
-      study.name, trials.size(), trials.size() - failed, failed, seconds, out_dir);
+      "{}: {}, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, rates.csv, summary.json, "
+      "rates.md, rates.tex, report.html{}\n",
+      study.name, counted(trials.size(), "trial", "trials"), trials.size() - failed, failed,
+      seconds, out_dir, plot_count ? fmt::format(", plots/ ({} plots)", plot_count) : "");
   return failed ? exit_failed_trials : exit_ok;
 }
 
@@ -433,8 +458,9 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
   const int thread_count = default_thread_count(threads, mpi);
   const auto tier_text = arguments.tier.empty() ? std::string() : " (tier " + arguments.tier + ")";
   if (!quiet)
-    std::cerr << fmt::format("rkhs-study check: {}{}: {} trials, {} threads\n", study.name,
-                             tier_text, trials.size(), thread_count);
+    std::cerr << fmt::format("rkhs-study check: {}{}: {}, {}\n", study.name, tier_text,
+                             counted(trials.size(), "trial", "trials"),
+                             counted(thread_count, "thread", "threads"));
   const std::string started = utc_now();
   const auto start = std::chrono::steady_clock::now();
   rkhs::RunOptions options;
@@ -457,8 +483,9 @@ int command_check(const CheckArguments& arguments, int threads, bool quiet,
     rkhs::write_outputs(record, arguments.out_dir);
   }
   const auto outcomes = rkhs::verify_expectations(study, trials, results, rates);
-  std::cout << fmt::format("{}{}: {} trials, {} ok, {} failed in {:.2f} s\n", study.name, tier_text,
-                           trials.size(), trials.size() - failed, failed, seconds);
+  std::cout << fmt::format("{}{}: {}, {} ok, {} failed in {:.2f} s\n", study.name, tier_text,
+                           counted(trials.size(), "trial", "trials"), trials.size() - failed,
+                           failed, seconds);
   if (failed)
     std::cout << fmt::format(
         "note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n", failed,
@@ -510,12 +537,13 @@ int command_report(const std::string& directory, const std::string& format,
 
 int command_validate(const std::string& study_file) {
   const auto study = rkhs::load_study(study_file);
+  print_warnings(study);
   const auto trials = study.trials();
-  std::cout << fmt::format(
-      "{}: valid; {} kernels x {} targets x {} centre placements x {} values "
-      "of n = {} trials\n",
-      study_file, study.kernels.size(), study.targets.size(), study.centres.size(),
-      study.n_values.size(), trials.size());
+  std::vector<std::string> factors;
+  for (const auto& axis : study.grid_axes())
+    factors.push_back(counted(axis.count, axis.singular, axis.plural));
+  std::cout << fmt::format("{}: valid; {} = {}\n", study_file, fmt::join(factors, " x "),
+                           counted(trials.size(), "trial", "trials"));
   if (const auto tiers = rkhs::study_tiers(study); !study.expectations.empty() || !tiers.empty())
     std::cout << fmt::format(
         "  {} expectation{}; tiers: {}\n", study.expectations.size(),
@@ -524,9 +552,7 @@ int command_validate(const std::string& study_file) {
   return exit_ok;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int rkhs_study_main(int argc, char** argv) {
   CLI::App app{
       "rkhs-study: convergence studies of kernel approximation and adaptive estimation "
       "in reproducing kernel Hilbert spaces"};
@@ -709,9 +735,10 @@ int main(int argc, char** argv) {
       rkhs::ResultStore into(merge_into);
       for (const auto& from : merge_from) {
         const auto count = into.merge_from(from);
-        std::cout << fmt::format("merged {} trials from {}\n", count, from);
+        std::cout << fmt::format("merged {} from {}\n", counted(count, "trial", "trials"), from);
       }
-      std::cout << fmt::format("{} holds {} trials\n", merge_into, into.size());
+      std::cout << fmt::format("{} holds {}\n", merge_into,
+                               counted(into.size(), "trial", "trials"));
       return exit_ok;
     }
     if (*list) return command_list(kind);
@@ -728,4 +755,18 @@ int main(int argc, char** argv) {
     return exit_bad_input;
   }
   return exit_ok;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int code = rkhs_study_main(argc, argv);
+  if (rkhs::trials_abandoned()) {
+    // Abandoned trials still compute on their threads: end now, without static destructors.
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    std::_Exit(code);
+  }
+  return code;
 }

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rkhs/approximation.hpp"
+#include "rkhs/cancellation.hpp"
 #include "rkhs/gram_solver.hpp"
 #include "rkhs/lyapunov.hpp"
 #include "rkhs/plant.hpp"
@@ -107,7 +108,9 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   // The static part: the space H_n and the projection Pi_n of the target. The Gram matrix, its
   // solver and the cross matrix on the evaluation grid serve the adaptive part too.
   const Eigen::MatrixXd gram = kernel.gram(centres);
+  check_cancelled();
   const GramSolver solver(gram, solver_options);
+  check_cancelled();
   Eigen::MatrixXd cross;
   const auto approximation = measure_approximation(kernel, target, centres, evaluation_points,
                                                    gram, solver, &cross);
@@ -173,6 +176,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
     out.snapshots[i].lap = settings.snapshot_laps[i];
   auto observe = [&](std::size_t k, const double* z) {
+    check_cancelled();  // every breakpoint, also for integrators from plugins
     const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
     if (points[k].roles & sample) {
       const Eigen::VectorXd e = x - xhat;

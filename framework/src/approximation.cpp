@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "rkhs/cancellation.hpp"
+
 namespace rkhs {
 
 namespace {
@@ -80,7 +82,9 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                std::size_t evaluation_points,
                                                const SolverOptions& solver_options) {
   const Eigen::MatrixXd gram = kernel.gram(centres);
+  check_cancelled();
   const GramSolver solver(gram, solver_options);
+  check_cancelled();
   return measure_approximation(kernel, target, centres, evaluation_points, gram, solver);
 }
 
@@ -110,6 +114,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
 
   // Power function from the cross matrix K_mi = k(s_m, c_i), O(n^2) per point.
   auto data = power_function_data(kernel, solver, centres, points);
+  check_cancelled();
   const Eigen::MatrixXd& cross = data.cross;
   const Eigen::VectorXd& solution_norm_squared = data.solution_norm_squared;
   const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;

@@ -1,8 +1,9 @@
 // The `csv` target: a measured road profile (arc length, elevation) read from a CSV file below
-// the data root (docs/roads.md; model section 6). The file is read with fast-cpp-csv-parser's
-// line reader; fields are split here so that every error can name the file's own line and
-// column.
+// the data root (docs/roads.md; docs/model.md section 6). The file is read with
+// fast-cpp-csv-parser's line reader; fields are split here so that every error can name the
+// file's own line and column.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 // fccp copies file names with strncpy into a fixed buffer (truncation is its documented intent).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wstringop-truncation"
@@ -158,7 +159,8 @@ class CsvRoad final : public TargetFunction {
     const auto path = resolve_data_file(p.text("file"));
     file_ = path.string();
     read(path, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
-         unit_scale(p.choice("elevation_units")));
+         unit_scale(p.choice("elevation_units")),
+         p.given("arc_length_column") && p.given("elevation_column"));
     if (cubic_) second_ = natural_spline(u_, z_);
 
     // The section of the profile on the track: [origin, origin + L].
@@ -211,18 +213,48 @@ class CsvRoad final : public TargetFunction {
     }
   }
   std::string data_provenance() const override { return provenance_; }
+  std::vector<std::string> notes() const override { return notes_; }
   std::vector<double> kink_points() const override { return kinks_; }
 
  private:
   // Reads every sample; throws std::invalid_argument "file:line:column: ..." for any problem.
+  // The header (or, without one, the first data line) fixes the number of fields: a line with
+  // more is refused (a decimal comma, "0,5", splits a number in two). A file with more columns
+  // than the two it reads is refused unless `columns_given` (the study names both columns);
+  // then the columns left out are noted once.
   void read(const std::filesystem::path& path, const ColumnChoice& arc,
             const ColumnChoice& elevation, bool header, char delimiter, double arc_scale,
-            double elevation_scale) {
+            double elevation_scale, bool columns_given) {
     try {
       io::LineReader reader(path.string());
       std::size_t arc_index = arc.number ? *arc.number - 1 : 0;
       std::size_t elevation_index = elevation.number ? *elevation.number - 1 : 0;
       bool need_header = header;
+      std::size_t width = 0;           // fields per line, from the first line
+      unsigned width_line = 0;         // the line that set it
+      std::vector<std::string> names;  // the header's column names (empty without a header)
+      const auto set_width = [&](std::size_t count, unsigned line_number) {
+        width = count;
+        width_line = line_number;
+        if (width <= 2) return;
+        std::vector<std::string> unread;
+        for (std::size_t k = 0; k < width; ++k)
+          if (k != arc_index && k != elevation_index)
+            unread.push_back(names.empty() ? fmt::format("{}", k + 1)
+                                           : fmt::format("{} ({})", k + 1, names[k]));
+        if (!columns_given)
+          throw std::invalid_argument(fmt::format(
+              "{}:{}:1: the {} has {} fields and the study reads two (arc length from column {}, "
+              "elevation from column {}, the defaults): name both in the [[target]] entry "
+              "(arc_length_column, elevation_column) to read this file",
+              file_, line_number, header ? "header" : "first line", width, arc_index + 1,
+              elevation_index + 1));
+        notes_.push_back(
+            fmt::format("{}: column{} {} not read (arc length: column {}, "
+                        "elevation: column {})",
+                        file_, unread.size() == 1 ? "" : "s", fmt::join(unread, ", "),
+                        arc_index + 1, elevation_index + 1));
+      };
       while (const char* text = reader.next_line()) {
         const std::string_view line(text);
         const unsigned line_number = reader.get_file_line();
@@ -230,7 +262,6 @@ class CsvRoad final : public TargetFunction {
         const auto fields = split(line, delimiter);
         if (need_header) {
           need_header = false;
-          std::vector<std::string> names;
           for (const auto& f : fields) names.emplace_back(f.text);
           auto locate = [&](const ColumnChoice& choice, std::size_t& index) {
             if (choice.number) {
@@ -255,8 +286,16 @@ class CsvRoad final : public TargetFunction {
           };
           locate(arc, arc_index);
           locate(elevation, elevation_index);
+          set_width(fields.size(), line_number);
           continue;
         }
+        if (width == 0) set_width(fields.size(), line_number);
+        if (fields.size() > width)
+          throw std::invalid_argument(fmt::format(
+              "{}:{}:{}: {} fields where line {} has {}{}: a decimal comma (0,5 for 0.5) or a "
+              "delimiter inside a number?",
+              file_, line_number, fields[width].column, fields.size(), width_line, width,
+              names.empty() ? "" : fmt::format(" ({})", fmt::join(names, ", "))));
         auto number = [&](std::size_t index, const ColumnChoice& choice) {
           if (index >= fields.size())
             throw std::invalid_argument(
@@ -343,6 +382,7 @@ class CsvRoad final : public TargetFunction {
   double length_;
   bool periodic_, cubic_;
   std::string file_, provenance_;
+  std::vector<std::string> notes_;
   std::vector<double> u_, z_, second_;
   std::vector<unsigned> lines_;
   std::vector<std::size_t> arc_columns_;

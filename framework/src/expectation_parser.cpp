@@ -293,6 +293,30 @@ class ExpectationReader {
            fmt::format("{} selects no group of this study (values in the study: {})",
                        e.selector_text(), join(available, "; ")));
     }
+    // Each value of a list must select something too: `degree = [1, 5]` where no group has
+    // degree 5 is a typo, not a wish.
+    for (std::size_t k = 0; k < e.selectors.size(); ++k) {
+      const auto& selector = e.selectors[k];
+      if (selector.values.size() < 2) continue;
+      const auto* array = table.get(selector.column)->as_array();
+      for (std::size_t v = 0; v < selector.values.size(); ++v) {
+        Expectation single = e;
+        single.selectors[k].values = {selector.values[v]};
+        if (std::any_of(groups_.begin(), groups_.end(),
+                        [&](const TrialSpec& group) { return single.selects(group); }))
+          continue;
+        std::set<std::string> values;
+        for (const auto* group : selected)
+          if (auto value = axis_values({selector.column}, *group).front(); !value.empty())
+            values.insert(value);
+        fail(study_.source, array ? array->get(v)->source() : table.source(), "expect." + selector.column,
+             fmt::format("{} selects no group of this study{} (the groups it selects have {}: {})",
+                         single.selector_text(),
+                         e.selectors.size() > 1 ? " together with the other selectors" : "",
+                         selector.column,
+                         join(std::vector<std::string>(values.begin(), values.end()))));
+      }
+    }
     if (e.kind != ExpectationKind::theory) return;
     for (const auto* group : selected) {
       const auto kernel = make_kernel(group->kernel.name, group->kernel.parameters, study_.domain);

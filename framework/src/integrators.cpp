@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "rkhs/adaptive.hpp"
+#include "rkhs/cancellation.hpp"
 
 namespace rkhs {
 namespace {
@@ -80,6 +81,7 @@ IntegrationStats drive_adaptive(Controlled& stepper, System system, AdaptiveSyst
     if (dt <= 0) dt = 1e-6 * (end - t);
     ++stats.segments;
     while (t < end) {
+      check_cancelled();
       const bool last = dt >= end - t;
       double step = last ? end - t : dt;
       const double before = t;
@@ -322,6 +324,7 @@ class Rk4 final : public Integrator {
       system.set_segment(t, end);
       if (end > t) ++stats.segments;
       while (t < end) {
+        check_cancelled();
         const double dt = std::min(step_, end - t);
         stepper.do_step(Rhs{&system}, x, t, dt);
         t = (dt == end - t) ? end : t + dt;

@@ -33,6 +33,11 @@ std::string header(std::string_view title, std::string_view xlabel, std::string_
       logy ? "set logscale y\nset format y '10^{%L}'\n" : "");
 }
 
+// A value a logarithmic axis can show.
+bool usable_on_log_axis(double v) {
+  return std::isfinite(v) && v > 0;
+}
+
 // Short legend text for a group: the plugin labels without the defaults' noise.
 std::string legend(const TrialSpec& trial) {
   std::string out = trial.kernel.label();
@@ -46,13 +51,14 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
   std::size_t block = 0;
   for (const auto& series : run.rates) {
     if (series.metric != metric || series.trials.empty()) continue;
+    if (std::none_of(series.values.begin(), series.values.end(), usable_on_log_axis)) continue;
     const bool in_n = series.analysis.reported == RateModel::exponential || run.study.abscissa == Abscissa::n;
     const auto& x = in_n ? series.n : series.abscissa;
     // Points (flagged ones in a second column), then the fitted line and its confidence band.
     data += fmt::format("$points{} << EOD\n", block);
     for (std::size_t k = 0; k < series.trials.size(); ++k) {
       const double v = series.values[k];
-      const bool usable = std::isfinite(v) && v > 0;
+      const bool usable = usable_on_log_axis(v);
       data += fmt::format("{} {} {}\n", format_real(x[k]),
                           usable && !series.flagged[k] ? format_real(v) : "nan",
                           usable && series.flagged[k] ? format_real(v) : "nan");
@@ -132,12 +138,18 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
 
 }  // namespace
 
-std::vector<std::pair<std::string, std::string>> plot_scripts(const RunRecord& run) {
-  std::vector<std::pair<std::string, std::string>> out;
-  for (const auto& metric : run.study.metrics)
+PlotPlan plot_scripts(const RunRecord& run) {
+  PlotPlan plan;
+  auto& out = plan.scripts;
+  for (const auto& metric : run.study.metrics) {
     if (auto script = convergence_script(run, metric); !script.empty())
       out.emplace_back("convergence_" + metric, std::move(script));
-  if (run.study.kind != "adaptive") return out;
+    else
+      plan.notes.push_back(fmt::format(
+          "convergence_{}: not plotted: no trial has a finite positive {} (a log axis needs one)",
+          metric, metric));
+  }
+  if (run.study.kind != "adaptive") return plan;
 
   // Per group: the estimates at each snapshot lap (largest n of the group) against the road,
   // and |x - xhat| and V against time for every n.
@@ -169,34 +181,81 @@ std::vector<std::pair<std::string, std::string>> plot_scripts(const RunRecord& r
                        data + header(fmt::format("{} (n = {})", legend(trial), trial.n),
                                      "arc length s (m)", "elevation (m)", false, false) +
                            "plot " + plot + "\n");
+    } else if (!run.study.adaptive.snapshot_laps.empty()) {
+      plan.notes.push_back(fmt::format(
+          "estimates_group{}: not plotted: the trial with the largest n of group {} {}", g + 1,
+          g + 1, last.ok ? "has no snapshot" : "failed"));
     }
+    // |x - xhat| and V on log axes: only trials with a sample the axis can show.
     std::string data, plot_error, plot_v;
     for (std::size_t k = 0; k < members.size(); ++k) {
       const auto& result = run.results[members[k]];
+      const auto shows = [&](auto value) {
+        return std::any_of(result.samples.begin(), result.samples.end(),
+                           [&](const TimeSample& s) { return usable_on_log_axis(value(s)); });
+      };
+      const auto title = gnuplot_string(fmt::format("n = {}", run.trials[members[k]].n));
+      if (shows([](const TimeSample& s) { return s.state_error; }))
+        plot_error += fmt::format("{}$series{} using 1:2 with lines title {}",
+                                  plot_error.empty() ? "" : ", ", k, title);
+      if (shows([](const TimeSample& s) { return s.lyapunov; }))
+        plot_v += fmt::format("{}$series{} using 1:3 with lines title {}",
+                              plot_v.empty() ? "" : ", ", k, title);
       data += fmt::format("$series{} << EOD\n", k);
       for (const auto& s : result.samples)
         data += fmt::format("{} {} {}\n", format_real(s.t), format_real(s.state_error > 0 ? s.state_error : NAN),
                             format_real(s.lyapunov > 0 ? s.lyapunov : NAN));
       data += "EOD\n";
-      const auto title = gnuplot_string(fmt::format("n = {}", run.trials[members[k]].n));
-      plot_error += fmt::format("{}$series{} using 1:2 with lines title {}", k ? ", " : "", k, title);
-      plot_v += fmt::format("{}$series{} using 1:3 with lines title {}", k ? ", " : "", k, title);
     }
-    out.emplace_back(fmt::format("state_error_group{}", g + 1),
-                     data + header(legend(trial) + ": |x - xhat|", "t (s)", "|x - xhat|", false, true) +
-                         "plot " + plot_error + "\n");
-    out.emplace_back(fmt::format("lyapunov_group{}", g + 1),
-                     data + header(legend(trial) + ": V", "t (s)", "V", false, true) + "plot " + plot_v + "\n");
+    const auto state_stem = fmt::format("state_error_group{}", g + 1);
+    if (!plot_error.empty())
+      out.emplace_back(state_stem, data + header(legend(trial) + ": |x - xhat|", "t (s)",
+                                                 "|x - xhat|", false, true) +
+                                       "plot " + plot_error + "\n");
+    else
+      plan.notes.push_back(fmt::format(
+          "{}: not plotted: no trial of group {} has a positive |x - xhat| sample", state_stem, g + 1));
+    const auto lyapunov_stem = fmt::format("lyapunov_group{}", g + 1);
+    if (!plot_v.empty())
+      out.emplace_back(lyapunov_stem, data + header(legend(trial) + ": V", "t (s)", "V", false, true) +
+                                          "plot " + plot_v + "\n");
+    else
+      plan.notes.push_back(
+          fmt::format("{}: not plotted: no trial of group {} has a positive V sample", lyapunov_stem, g + 1));
   }
-  return out;
+  return plan;
 }
 
-std::vector<std::string> write_plots(const RunRecord& run, const std::filesystem::path& directory) {
+namespace {
+// gnuplot's own complaint from its log: the lines that say what went wrong, joined.
+std::string gnuplot_message(const std::filesystem::path& log) {
+  std::ifstream in(log);
+  std::string line, message;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t^") == std::string::npos) continue;  // blank or the caret line
+    if (!message.empty()) message += " ";
+    message += line.substr(line.find_first_not_of(" \t"));
+  }
+  return message.empty() ? "gnuplot exited with an error and said nothing" : message;
+}
+}  // namespace
+
+PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory) {
   const auto folder = directory / "plots";
   std::filesystem::create_directories(folder);
-  std::vector<std::string> stems;
-  for (const auto& [stem, script] : plot_scripts(run)) {
+  auto plan = plot_scripts(run);
+  PlotOutcome outcome;
+  outcome.notes = std::move(plan.notes);
+  if (plan.scripts.empty()) return outcome;
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+    outcome.failures.push_back(
+        "gnuplot is not installed (not found on PATH): no plot was rendered (Debian: apt-get "
+        "install gnuplot-nox; or run with --no-plots)");
+    return outcome;
+  }
+  for (const auto& [stem, script] : plan.scripts) {
     const auto gp = folder / (stem + ".gp");
+    const auto log = folder / (stem + ".log");
     {
       std::ofstream out(gp);
       out << "# " << stem << ": render with gnuplot (writes " << stem << ".svg and .png)\n";
@@ -205,14 +264,17 @@ std::vector<std::string> write_plots(const RunRecord& run, const std::filesystem
           << script << "set terminal pngcairo size 900,560 font 'sans,10'\nset output '"
           << (folder / (stem + ".png")).string() << "'\nreplot\n";
     }
-    const auto command = fmt::format("gnuplot '{}' 2> '{}'", gp.string(), (folder / (stem + ".log")).string());
-    if (std::system(command.c_str()) != 0)
-      throw std::runtime_error(fmt::format("gnuplot failed on {} (see {}.log; is gnuplot installed?)",
-                                           gp.string(), (folder / stem).string()));
-    std::filesystem::remove(folder / (stem + ".log"));
-    stems.push_back(stem);
+    const auto command = fmt::format("gnuplot '{}' 2> '{}'", gp.string(), log.string());
+    if (std::system(command.c_str()) != 0) {
+      outcome.failures.push_back(fmt::format("{}: {}", gp.string(), gnuplot_message(log)));
+      for (const char* extension : {".svg", ".png"})  // half-written images are not plots
+        std::filesystem::remove(folder / (stem + extension));
+      continue;
+    }
+    std::filesystem::remove(log);
+    outcome.rendered.push_back(stem);
   }
-  return stems;
+  return outcome;
 }
 
 }  // namespace rkhs

@@ -148,8 +148,12 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
   };
   auto ran = execute(study, pending, storing);
   for (std::size_t k = 0; k < pending.size(); ++k) {
-    if (ran[k].skipped) ++out.skipped;
-    else ++out.ran;
+    if (ran[k].skipped) {
+      ++out.skipped;
+      if (ran[k].stopped_while_running) ++out.stopped;
+    } else {
+      ++out.ran;
+    }
     out.results[position[k]] = std::move(ran[k]);
   }
   return out;

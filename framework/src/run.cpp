@@ -6,12 +6,18 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <memory>
 #include <mutex>
 #include <numeric>
+#include <optional>
+#include <thread>
 
 #include "rkhs/approximation.hpp"
+#include "rkhs/cancellation.hpp"
 #include "rkhs/centres.hpp"
 #include "rkhs/kernel.hpp"
 #include "rkhs/plant.hpp"
@@ -39,12 +45,22 @@ double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
 
 }  // namespace
 
-TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
+TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
+                      const std::function<bool()>& stop_requested) {
   TrialResult result;
   result.metrics.assign(study.all_metrics().size(),
                         std::numeric_limits<double>::quiet_NaN());
   const auto start = std::chrono::steady_clock::now();
+  std::optional<std::chrono::steady_clock::time_point> deadline;
+  if (study.limits.trial_seconds > 0)
+    deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(study.limits.trial_seconds));
+  const auto time_limit_reason = [&](double seconds) {
+    return fmt::format("exceeded limits.trial_seconds = {} ({:.1f} s)",
+                       format_real(study.limits.trial_seconds), seconds);
+  };
   try {
+    const CancellationScope cancellation(stop_requested, deadline);
     if (const double mb = matrix_megabytes(study, trial); mb > study.limits.matrix_megabytes)
       throw std::runtime_error(fmt::format(
           "needs {:.0f} MB of matrices, above limits.matrix_megabytes = {:.0f}", mb,
@@ -55,6 +71,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
     result.data_provenance = target->data_provenance();
     const auto placement = centre_registry().find(trial.centres.name)->factory(trial.centres.parameters);
     const auto centres = placement->place(trial.n, study.domain, trial.seed);
+    check_cancelled();
     if (study.kind == "adaptive") {
       const auto plant = plant_registry().find(trial.plant.name)->factory(trial.plant.parameters);
       const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
@@ -75,6 +92,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
       result.solve_method = std::move(measured.solve_method);
       result.flags = std::move(measured.flags);
     }
+    check_cancelled();
     // Metrics that are undefined by design in some trials: a single centre has no separation;
     // coefficient and Lyapunov metrics need a road in H_n.
     static const std::vector<std::string> may_be_undefined{
@@ -85,6 +103,14 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
           std::find(may_be_undefined.begin(), may_be_undefined.end(), names[i]) == may_be_undefined.end())
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
     result.ok = true;
+  } catch (const TrialCancelled&) {
+    result = TrialResult{};
+    result.skipped = true;
+    result.stopped_while_running = true;
+    result.reason = "not run: the run was interrupted while the trial ran";
+  } catch (const TrialTimeLimitExceeded& e) {
+    result.ok = false;
+    result.reason = time_limit_reason(e.elapsed_seconds);
   } catch (const std::exception& e) {
     result.ok = false;
     result.reason = e.what();
@@ -94,10 +120,10 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial) {
   }
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (result.skipped) return result;
   if (result.ok && study.limits.trial_seconds > 0 && result.seconds > study.limits.trial_seconds) {
     result.ok = false;
-    result.reason = fmt::format("exceeded limits.trial_seconds = {} ({:.1f} s)",
-                                format_real(study.limits.trial_seconds), result.seconds);
+    result.reason = time_limit_reason(result.seconds);
   }
   if (!result.ok)
     std::fill(result.metrics.begin(), result.metrics.end(), std::numeric_limits<double>::quiet_NaN());
@@ -115,14 +141,30 @@ std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
   return order;
 }
 
-std::vector<TrialResult> run_trials(const StudyDefinition& study,
-                                    const std::vector<TrialSpec>& trials,
-                                    const RunOptions& options) {
-  if (options.on_start) options.on_start(trials.size());
-  std::vector<TrialResult> results(trials.size());
-  const auto order = largest_first_order(study, trials);
-  std::mutex report_mutex;
-  const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+namespace {
+
+std::atomic<bool> abandoned_any{false};
+
+// What the worker threads of one run_trials call share. When trials are abandoned it outlives
+// the call (the workers hold it), so it owns copies of everything they read.
+struct RunState {
+  StudyDefinition study;
+  std::vector<TrialSpec> trials;
+  RunOptions options;
+  std::vector<TrialResult> results;
+  enum Phase : char { waiting, running, done };
+  std::vector<Phase> phase;   // by position in `trials`
+  std::mutex mutex;           // guards results, phase, finished, abandoned and the callbacks
+  std::condition_variable changed;
+  std::size_t finished = 0;   // trials done, skipped or not (the whole run ends at trials.size())
+  bool abandoned = false;     // run_trials has returned: no more writes, no more callbacks
+};
+
+void run_in_arena(RunState& state) {
+  const auto order = largest_first_order(state.study, state.trials);
+  const auto& options = state.options;
+  const int threads =
+      options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
   // Raise TBB's worker limit to the requested count (it defaults to the hardware threads).
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
@@ -133,21 +175,87 @@ std::vector<TrialResult> run_trials(const StudyDefinition& study,
         [&](const tbb::blocked_range<std::size_t>& range) {
           for (std::size_t k = range.begin(); k != range.end(); ++k) {
             const std::size_t i = order[k];
+            TrialResult result;
             if (options.stop_requested && options.stop_requested()) {
-              results[i].skipped = true;
-              results[i].reason = "not run: the run was interrupted";
-              continue;
+              result.skipped = true;
+              result.reason = "not run: the run was interrupted";
+            } else {
+              {
+                std::lock_guard lock(state.mutex);
+                if (state.abandoned) return;
+                state.phase[i] = RunState::running;
+                if (options.on_trial_started) options.on_trial_started(state.trials[i]);
+              }
+              result = run_trial(state.study, state.trials[i], options.stop_requested);
             }
-            results[i] = run_trial(study, trials[i]);
-            if (options.on_trial_finished) {
-              std::lock_guard lock(report_mutex);
-              options.on_trial_finished(trials[i], results[i]);
-            }
+            std::lock_guard lock(state.mutex);
+            if (state.abandoned) return;
+            state.phase[i] = RunState::done;
+            state.results[i] = std::move(result);
+            if (!state.results[i].skipped && options.on_trial_finished)
+              options.on_trial_finished(state.trials[i], state.results[i]);
+            ++state.finished;
+            state.changed.notify_all();
           }
         },
         tbb::simple_partitioner());
   });
-  return results;
+}
+
+}  // namespace
+
+bool trials_abandoned() noexcept {
+  return abandoned_any.load();
+}
+
+std::vector<TrialResult> run_trials(const StudyDefinition& study,
+                                    const std::vector<TrialSpec>& trials,
+                                    const RunOptions& options) {
+  if (options.on_start) options.on_start(trials.size());
+  auto state = std::make_shared<RunState>();
+  state->study = study;
+  state->trials = trials;
+  state->options = options;
+  state->results.resize(trials.size());
+  state->phase.assign(trials.size(), RunState::waiting);
+  if (options.abandon_after_seconds < 0 || trials.empty()) {
+    run_in_arena(*state);
+    return std::move(state->results);
+  }
+  // The trials run on a thread of their own, so that this one can give up waiting.
+  std::thread runner([state] { run_in_arena(*state); });
+  std::unique_lock lock(state->mutex);
+  std::optional<std::chrono::steady_clock::time_point> stop_seen;
+  const auto grace = std::chrono::duration<double>(options.abandon_after_seconds);
+  while (state->finished < trials.size()) {
+    state->changed.wait_for(lock, std::chrono::milliseconds(50));
+    if (state->finished == trials.size()) break;
+    if (!stop_seen && options.stop_requested && options.stop_requested())
+      stop_seen = std::chrono::steady_clock::now();
+    if (stop_seen && std::chrono::steady_clock::now() - *stop_seen >= grace) {
+      // Trials still running are abandoned; trials not reached yet are skipped.
+      state->abandoned = true;
+      abandoned_any = true;
+      for (std::size_t i = 0; i < trials.size(); ++i) {
+        auto& result = state->results[i];
+        if (state->phase[i] == RunState::running) {
+          result = TrialResult{};
+          result.skipped = result.stopped_while_running = true;
+          result.reason = "not run: the run was interrupted while the trial ran";
+        } else if (state->phase[i] == RunState::waiting && !result.skipped) {
+          result.skipped = true;
+          result.reason = "not run: the run was interrupted";
+        }
+      }
+      auto results = state->results;
+      lock.unlock();
+      runner.detach();
+      return results;
+    }
+  }
+  lock.unlock();
+  runner.join();
+  return std::move(state->results);
 }
 
 }  // namespace rkhs

@@ -37,14 +37,18 @@ class Reporter {
 
   [[noreturn]] void fail(const toml::source_region& where, std::string_view key,
                          std::string_view message) const {
+    throw StudyError(locate(where, key, message));
+  }
+  const std::string& source() const { return source_; }
+  /// The same position and form as fail(), for a warning.
+  std::string locate(const toml::source_region& where, std::string_view key,
+                     std::string_view message) const {
     std::string out = source_;
     if (where.begin.line > 0) out += fmt::format(":{}:{}", where.begin.line, where.begin.column);
     out += ": ";
     if (!key.empty()) out += std::string(key) + ": ";
-    out += message;
-    throw StudyError(out);
+    return out + std::string(message);
   }
-  const std::string& source() const { return source_; }
 
  private:
   std::string source_;
@@ -395,6 +399,53 @@ bool valid_study_name(const std::string& name) {
 
 }  // namespace
 
+namespace {
+
+// The metrics measured on the evaluation grid s_m = m L / M: sups and L2 norms over the domain.
+bool measured_on_grid(std::string_view metric) {
+  static constexpr std::string_view grid_metrics[] = {
+      "power_function_sup",   "power_function_floor",  "l2_error",          "sup_error",
+      "error_floor",          "interpolant_l2_error",  "interpolant_sup_error",
+      "gap_to_projection"};
+  return std::find(std::begin(grid_metrics), std::end(grid_metrics), metric) !=
+         std::end(grid_metrics);
+}
+
+// Can the evaluation grid measure what the grid metrics mean? Sups and L2 norms over the domain
+// are taken on M points; with M <= n the grid is no finer than the centres (uniform centres with
+// n a multiple of M are all on it), so it sees the power function and the error at or next to
+// the centres, where they vanish, and reports round-off as if it were the result: refused. With
+// fewer than 4 points per centre spacing the sups may miss the peaks between centres: warned.
+void check_evaluation_grid(const Reporter& report, const toml::table& header,
+                           StudyDefinition& study) {
+  std::vector<std::string> on_grid;
+  for (const auto& metric : study.metrics)
+    if (measured_on_grid(metric)) on_grid.push_back(metric);
+  if (on_grid.empty() || study.n_values.empty()) return;
+  const std::size_t largest_n = study.n_values.back();
+  const std::size_t points = study.evaluation_points;
+  const auto* node = header.get("evaluation_points");
+  const auto where = node ? node->source() : header.source();
+  const std::string given = node ? "" : " (the default)";
+  if (points <= largest_n)
+    report.fail(
+        where, "study.evaluation_points",
+        fmt::format("{} evaluation points{} for up to n = {} centres: the grid is no finer than "
+                    "the centres, so {} would be measured at or next to the centres, where they "
+                    "vanish (round-off), not over the domain; use evaluation_points >= {} (4 per "
+                    "centre spacing) or leave these metrics out of study.metrics",
+                    points, given, largest_n, list_names(on_grid), 4 * largest_n));
+  if (points < 4 * largest_n)
+    study.warnings.push_back(report.locate(
+        where, "study.evaluation_points",
+        fmt::format("warning: {} evaluation points{} give fewer than 4 per centre spacing for "
+                    "n > {}: {} are taken on the grid and may miss the peaks between centres; "
+                    "evaluation_points >= {} avoids it",
+                    points, given, points / 4, list_names(on_grid), 4 * largest_n)));
+}
+
+}  // namespace
+
 StudyDefinition parse_study(std::string_view text, const std::string& source_name) {
   const Reporter report(source_name);
   toml::table root;
@@ -532,7 +583,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     kernel_registry().find(c.name)->factory(c.parameters, study.domain);
   });
   check_instances(study.targets, "target", [&](const PluginChoice& c) {
-    target_registry().find(c.name)->factory(c.parameters, study.domain);
+    const auto target = target_registry().find(c.name)->factory(c.parameters, study.domain);
+    for (const auto& note : target->notes())
+      study.warnings.push_back(report.locate(
+          root.get("target") ? root.get("target")->source() : toml::source_region{}, "target",
+          "note: " + note));
   });
   check_instances(study.plants, "plant", [&](const PluginChoice& c) {
     const auto plant = plant_registry().find(c.name)->factory(c.parameters);
@@ -543,6 +598,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                                               Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
   });
+  check_evaluation_grid(report, *header, study);
   study.expectations = detail::parse_expectations(root, study);
   return study;
 }
@@ -568,6 +624,19 @@ std::size_t StudyDefinition::metric_index(std::string_view metric) const {
   const auto it = std::find(names.begin(), names.end(), metric);
   if (it == names.end()) throw std::out_of_range(fmt::format("unknown metric '{}'", metric));
   return static_cast<std::size_t>(it - names.begin());
+}
+
+std::vector<StudyDefinition::GridAxis> StudyDefinition::grid_axes() const {
+  std::vector<GridAxis> axes{{"kernel", "kernels", kernels.size()},
+                             {"target", "targets", targets.size()},
+                             {"centre placement", "centre placements", centres.size()}};
+  // The adaptive axes are there when the study has them (trials() nests them the same way).
+  for (const auto& axis : {GridAxis{"plant", "plants", plants.size()},
+                           GridAxis{"learning law", "learning laws", laws.size()},
+                           GridAxis{"integrator", "integrators", integrators.size()}})
+    if (axis.count) axes.push_back(axis);
+  axes.push_back({"value of n", "values of n", n_values.size()});
+  return axes;
 }
 
 std::vector<TrialSpec> StudyDefinition::trials() const {

@@ -153,3 +153,150 @@ TEST_CASE("the project's studies are valid", "[cli]") {
     CHECK(outcome.exit_code == 0);
   }
 }
+
+TEST_CASE("validate names every axis of the grid, in words that agree in number", "[cli]") {
+  const auto manufactured = run("validate " + std::string(RKHS_STUDY_SOURCE_DIR) +
+                                "/studies/manufactured.toml");
+  INFO(manufactured.output);
+  CHECK(manufactured.exit_code == 0);
+  CHECK_THAT(manufactured.output,
+             Catch::Contains("valid; 1 kernel x 1 target x 1 centre placement x 1 plant x 2 "
+                             "learning laws x 1 integrator x 4 values of n = 8 trials"));
+  const auto dir = scratch("validate_axes");
+  std::ofstream(dir / "study.toml") << small_study;
+  const auto small = run("validate " + (dir / "study.toml").string());
+  CHECK_THAT(small.output,
+             Catch::Contains("valid; 2 kernels x 1 target x 1 centre placement x 3 values of n = "
+                             "6 trials"));
+  const auto one_thread = run("run " + (dir / "study.toml").string() + " --threads 1 --no-store " +
+                              "--no-plots --out " + (dir / "out").string());
+  CHECK_THAT(one_thread.output, Catch::Contains("cli_small (6 trials, 1 thread) -> "));
+}
+
+TEST_CASE("an evaluation grid that cannot measure the metrics is refused or warned", "[cli]") {
+  const auto dir = scratch("evaluation_grid");
+  std::string coarse = small_study;
+  coarse.replace(coarse.find("evaluation_points = 256"), 23, "evaluation_points = 100");
+  std::ofstream(dir / "coarse.toml") << coarse;
+  const auto warned = run("validate " + (dir / "coarse.toml").string());
+  CHECK(warned.exit_code == 0);
+  CHECK_THAT(warned.output,
+             Catch::Contains("coarse.toml:3:21: study.evaluation_points: warning: 100 evaluation "
+                             "points give fewer than 4 per centre spacing for n > 25"));
+  std::string aliased = small_study;
+  aliased.replace(aliased.find("evaluation_points = 256"), 23, "evaluation_points = 32");
+  std::ofstream(dir / "aliased.toml") << aliased;
+  for (const std::string command : {"validate ", "run --no-store "}) {
+    const auto refused = run(command + (dir / "aliased.toml").string());
+    INFO(refused.output);
+    CHECK(refused.exit_code == 2);
+    CHECK_THAT(refused.output,
+               Catch::Contains("aliased.toml:3:21: study.evaluation_points: 32 evaluation points "
+                               "for up to n = 32 centres: the grid is no finer than the centres"));
+  }
+}
+
+TEST_CASE("a CSV line with more fields than its header is refused by validate", "[cli]") {
+  const auto dir = scratch("csv_fields");
+  fs::create_directories(dir / "data");
+  std::ofstream(dir / "data" / "road.csv") << "u_m,z_m\n0.0000,2.131593\n0.0900,0,243774178082\n"
+                                              "10.0,2.14\n";
+  std::ofstream(dir / "road.toml") << R"([study]
+name = "csv_fields"
+evaluation_points = 512
+[domain]
+length = 10.0
+periodic = false
+[grid]
+n = [8, 16]
+[[kernel]]
+name = "bspline"
+degree = 1
+[[target]]
+name = "csv"
+file = "road.csv"
+)";
+  const auto outcome = run("validate --data-dir " + (dir / "data").string() + " " +
+                           (dir / "road.toml").string());
+  INFO(outcome.output);
+  CHECK(outcome.exit_code == 2);
+  CHECK_THAT(outcome.output, Catch::Contains("road.csv:3:10: 3 fields where line 1 has 2 (u_m, "
+                                             "z_m): a decimal comma (0,5 for 0.5)"));
+}
+
+namespace {
+
+// A small adaptive study whose road is f itself (not in H_n): coefficient_error has no value.
+const char* const target_road_study = R"([study]
+name = "cli_target_road"
+kind = "adaptive"
+evaluation_points = 256
+metrics = ["coefficient_error", "l2_error", "final_state_error"]
+[domain]
+radius = 4.0
+[grid]
+n = [6, 8, 10]
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "gradient"
+gamma = 0.1
+[adaptive]
+speed = 0.1
+laps = 1
+road = "target"
+samples_per_lap = 20
+snapshot_laps = [1]
+snapshot_points = 64
+)";
+
+}  // namespace
+
+TEST_CASE("plots: an empty series gets a note, and one failed plot does not stop the others",
+          "[cli]") {
+  const auto dir = scratch("plots_empty");
+  std::ofstream(dir / "study.toml") << target_road_study;
+  const auto outcome = run("run " + (dir / "study.toml").string() + " --no-store --out " +
+                           (dir / "out").string());
+  INFO(outcome.output);
+  REQUIRE(outcome.exit_code == 0);
+  CHECK_THAT(outcome.output, Catch::Contains("note: convergence_coefficient_error: not plotted: no "
+                                             "trial has a finite positive coefficient_error"));
+  CHECK_THAT(outcome.output, !Catch::Contains("warning"));
+  const auto plots = dir / "out" / "plots";
+  CHECK_FALSE(fs::exists(plots / "convergence_coefficient_error.gp"));
+  for (const char* stem : {"convergence_l2_error", "convergence_final_state_error",
+                           "estimates_group1", "state_error_group1", "lyapunov_group1"})
+    CHECK(fs::exists(plots / (std::string(stem) + ".svg")));
+
+  // A gnuplot that fails on one script, as the real one does, and renders the rest.
+  const auto bin = dir / "bin";
+  fs::create_directories(bin);
+  const auto real = rkhs::test::run_command("command -v gnuplot").output;
+  std::ofstream(bin / "gnuplot")
+      << "#!/bin/sh\ncase \"$1\" in\n  *convergence_l2_error.gp)\n"
+         "    echo '\"'\"$1\"'\", line 12: x range is invalid' >&2; exit 1;;\nesac\nexec "
+      << real.substr(0, real.find('\n')) << " \"$@\"\n";
+  fs::permissions(bin / "gnuplot", fs::perms::owner_all);
+  const auto failing = rkhs::test::rkhs_study(
+      "run " + (dir / "study.toml").string() + " --no-store --out " + (dir / "failing").string(),
+      "PATH=" + bin.string() + ":$PATH");
+  INFO(failing.output);
+  REQUIRE(failing.exit_code == 0);
+  CHECK_THAT(failing.output, Catch::Contains("warning: plot not rendered: " +
+                                             (dir / "failing" / "plots").string() +
+                                             "/convergence_l2_error.gp: \"" +
+                                             (dir / "failing" / "plots").string() +
+                                             "/convergence_l2_error.gp\", line 12: x range is "
+                                             "invalid"));
+  CHECK_THAT(failing.output, !Catch::Contains("is gnuplot installed"));
+  CHECK_FALSE(fs::exists(dir / "failing" / "plots" / "convergence_l2_error.svg"));
+  for (const char* stem : {"convergence_final_state_error", "estimates_group1", "lyapunov_group1"})
+    CHECK(fs::exists(dir / "failing" / "plots" / (std::string(stem) + ".svg")));
+  CHECK(fs::exists(dir / "failing" / "report.html"));
+}

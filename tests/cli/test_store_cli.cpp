@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <fstream>
@@ -69,7 +70,7 @@ TEST_CASE("a run killed with SIGKILL resumes and equals an uninterrupted run", "
                                   store.string() + " --out " + (dir / "resumed").string());
   INFO(resumed.output);
   REQUIRE(resumed.exit_code == 0);
-  CHECK_THAT(resumed.output, Catch::Contains(std::to_string(stored_before) + " trials reused"));
+  CHECK_THAT(resumed.output, Catch::Contains(rkhs::test::trials_text(stored_before) + " reused"));
   CHECK(rkhs::ResultStore(store).size() == 10);  // every trial exactly once
 
   const auto clean = rkhs_study("run " + (dir / "study.toml").string() +
@@ -171,4 +172,109 @@ J = 5
   CHECK(read_text(dir / "from_shards" / "trials.csv") == read_text(dir / "single" / "trials.csv"));
   CHECK(rkhs_study("run " + study + " --shard 4/3").exit_code == 2);
   CHECK(rkhs_study("merge " + (dir / "x.sqlite").string() + " " + study).exit_code == 2);
+}
+
+namespace {
+
+// Starts `rkhs-study args` in the background with stdout and stderr in `log`; returns its pid.
+pid_t start_logged(const std::vector<std::string>& args, const fs::path& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
+    execv(RKHS_STUDY_EXECUTABLE, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+// Waits until `log` contains `text` (fails if the process ends or `seconds` pass first).
+void wait_for_text(const fs::path& log, const std::string& text, pid_t pid, int seconds) {
+  for (int i = 0; i < seconds * 20; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (read_text(log).find(text) != std::string::npos) return;
+    if (waitpid(pid, nullptr, WNOHANG) == pid) FAIL("the run ended first:\n" << read_text(log));
+  }
+  FAIL("'" << text << "' did not appear within " << seconds << " s:\n" << read_text(log));
+}
+
+}  // namespace
+
+TEST_CASE("SIGINT stops a single long trial at once: not stored, exit 130, resumable",
+          "[cli][store]") {
+  // One trial that computes for minutes (the eigendecomposition of a 4000 x 4000 Gram matrix,
+  // which has no cancellation point inside).
+  const auto dir = rkhs::test::scratch_directory("store_long_trial");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "long_trial"
+evaluation_points = 16384
+metrics = ["gram_condition_number", "power_function_sup"]
+[domain]
+radius = 4
+[grid]
+n = [4000]
+[[kernel]]
+name = "matern"
+nu = 2.5
+)";
+  const auto store = dir / "store.sqlite";
+  const auto log = dir / "log.txt";
+  const pid_t pid = start_logged({"run", (dir / "study.toml").string(), "--threads", "1", "--store",
+                                  store.string(), "--out", (dir / "out").string()},
+                                 log);
+  // Alive inside the long trial: the progress line shows the trial in flight and its time.
+  wait_for_text(log, "0/1 trials, 0 failed, ", pid, 30);
+  CHECK_THAT(read_text(log), Catch::Contains("; running 1: "));
+  const auto signalled = std::chrono::steady_clock::now();
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  const auto output = read_text(log);
+  INFO(output);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK(seconds < 15);  // the trial alone needs minutes; the run gives it 2 s, then ends
+  CHECK_THAT(output, Catch::Contains("rkhs-study: interrupted: 0 trials finished and stored, 1 "
+                                     "stopped while running and 0 not started (not stored). Run "
+                                     "the same command again to resume"));
+  CHECK(rkhs::ResultStore(store).size() == 0);  // never stored as failed (or as ok)
+  CHECK_FALSE(fs::exists(dir / "out" / "trials.csv"));
+}
+
+TEST_CASE("an interrupted --no-store run says that nothing was stored, and where its results are",
+          "[cli][store]") {
+  const auto dir = rkhs::test::scratch_directory("store_interrupt_no_store");
+  std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
+  const auto log = dir / "log.txt";
+  const auto journal = dir / "out" / "journal.csv";
+  const pid_t pid = start_logged({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
+                                  "--no-store", "--out", (dir / "out").string()},
+                                 log);
+  for (int i = 0; i < 600; ++i) {  // until the journal holds a finished trial (header + 1 line)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const auto text = read_text(journal);
+    if (std::count(text.begin(), text.end(), '\n') >= 2) break;
+    REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
+  }
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const auto output = read_text(log);
+  INFO(output);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK_THAT(output, Catch::Contains("rkhs-study: interrupted: "));
+  CHECK_THAT(output, Catch::Contains(" finished, "));
+  CHECK_THAT(output, !Catch::Contains("stored,"));
+  CHECK_THAT(output, Catch::Contains("Nothing was stored (--no-store); the finished trials' "
+                                     "metrics are in " +
+                                     journal.string() +
+                                     ": the same command runs every trial "
+                                     "again."));
 }

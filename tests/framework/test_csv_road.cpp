@@ -85,6 +85,44 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
               ", in the data root from --data-dir; set the data root with --data-dir DIR or "
               "RKHS_STUDY_DATA)");
   }
+  SECTION("more fields than the columns read: a decimal comma is not a silent zero") {
+    // "2,131593" with a decimal comma splits into 2 and 131593 in a two-column file.
+    const auto comma = data.write("comma.csv", "u_m,z_m\n0.0000,2.131593\n0.0900,0,243774178082\n");
+    CHECK(error_of({{"file", std::string("comma.csv")}}) ==
+          comma +
+              ":3:10: 3 fields where line 1 has 2 (u_m, z_m): a decimal comma (0,5 for 0.5) "
+              "or a delimiter inside a number?");
+    // The same with the columns named: the header still says how many fields a line has.
+    CHECK_THAT(error_of({{"file", std::string("comma.csv")},
+                         {"arc_length_column", std::string("u_m")},
+                         {"elevation_column", std::string("z_m")}}),
+               Catch::StartsWith(comma + ":3:10: 3 fields where line 1 has 2"));
+    // Without a header the first line sets the number of fields.
+    const auto plain = data.write("plain3.csv", "0,2.5\n1,2,5\n");
+    CHECK(error_of({{"file", std::string("plain3.csv")}, {"header", false}}) ==
+          plain +
+              ":2:5: 3 fields where line 1 has 2: a decimal comma (0,5 for 0.5) or a "
+              "delimiter inside a number?");
+    // A file with a third column, read with the default columns: the study must say which.
+    const auto wide = data.write("wide.csv", "u,z,quality\n0,1,ok\n10,1,ok\n");
+    CHECK(error_of({{"file", std::string("wide.csv")}}) ==
+          wide +
+              ":1:1: the header has 3 fields and the study reads two (arc length from column "
+              "1, elevation from column 2, the defaults): name both in the [[target]] entry "
+              "(arc_length_column, elevation_column) to read this file");
+    const auto decimal_commas = data.write("commas.csv", "0,0,5\n10,1,5\n");
+    CHECK_THAT(error_of({{"file", std::string("commas.csv")}, {"header", false}}),
+               Catch::StartsWith(decimal_commas + ":1:1: the first line has 3 fields"));
+    // Named columns: the rest is read past, and said once.
+    const auto f = road({{"file", std::string("wide.csv")},
+                         {"arc_length_column", std::string("u")},
+                         {"elevation_column", std::string("z")}});
+    CHECK(f->notes() ==
+          std::vector<std::string>{wide + ": column 3 (quality) not read (arc length: column 1, "
+                                          "elevation: column 2)"});
+    data.write("two.csv", "u_m,z_m\n0,1\n10,1\n");
+    CHECK(road({{"file", std::string("two.csv")}})->notes().empty());
+  }
   SECTION("missing column by name, with a suggestion") {
     const auto file = data.write("columns.csv", "u_m,z_m\n0,1\n10,1\n");
     CHECK(error_of(

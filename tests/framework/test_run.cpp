@@ -1,10 +1,14 @@
 // The scheduler: bit-identical results for any thread count; failures recorded, study goes on.
 #include <catch2/catch.hpp>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <thread>
 
 #include "rkhs/approximation.hpp"
+#include "rkhs/cancellation.hpp"
 #include "rkhs/kernel_algorithms.hpp"
 #include "rkhs/run.hpp"
 #include "rkhs/study.hpp"
@@ -154,4 +158,77 @@ sigma = [0.5, 1.0]
   auto sorted = order;
   std::sort(sorted.begin(), sorted.end());
   CHECK(sorted == std::vector<std::size_t>{0, 1, 2, 3, 4, 5});
+}
+
+namespace {
+
+// One adaptive trial that takes tens of seconds when left alone (the Gaussian with the rkhs law
+// at n = 100 in the learning configuration of studies/paper_synthetic.toml).
+rkhs::StudyDefinition long_adaptive_trial(const std::string& limits = "") {
+  return rkhs::parse_study(R"(
+[study]
+name = "long"
+kind = "adaptive"
+metrics = ["l2_error"]
+[domain]
+radius = 4.0
+[grid]
+n = [100]
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+[[law]]
+name = "rkhs"
+gamma = 2e4
+[adaptive]
+speed = 1e-4
+laps = 10
+)" + limits,
+                           "long.toml");
+}
+
+}  // namespace
+
+TEST_CASE("a stop request ends a running trial at its next cancellation point: not run, not failed",
+          "[run]") {
+  const auto study = long_adaptive_trial();
+  const auto trials = study.trials();
+  std::atomic<bool> stop{false};
+  rkhs::RunOptions options;
+  options.threads = 1;
+  options.stop_requested = [&] { return stop.load(); };
+  std::size_t started = 0, finished = 0;
+  options.on_trial_started = [&](const rkhs::TrialSpec&) { ++started; };
+  options.on_trial_finished = [&](const rkhs::TrialSpec&, const rkhs::TrialResult&) { ++finished; };
+  std::thread interrupter([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    stop = true;
+  });
+  // No abandonment: run_trials returns only when the trial itself has stopped.
+  const auto results = rkhs::run_trials(study, trials, options);
+  interrupter.join();
+  REQUIRE(results.size() == 1);
+  CHECK(results[0].skipped);
+  CHECK(results[0].stopped_while_running);
+  CHECK_FALSE(results[0].ok);
+  CHECK(results[0].reason == "not run: the run was interrupted while the trial ran");
+  CHECK(started == 1);
+  CHECK(finished == 0);  // a stopped trial is not reported as finished (so never stored)
+  CHECK_FALSE(rkhs::trials_abandoned());
+
+  // Outside a trial check_cancelled() does nothing; inside a scope it throws once asked to.
+  CHECK_NOTHROW(rkhs::check_cancelled());
+  const std::function<bool()> always = [] { return true; };
+  const rkhs::CancellationScope scope(always, std::nullopt);
+  CHECK_THROWS_AS(rkhs::check_cancelled(), rkhs::TrialCancelled);
+}
+
+TEST_CASE("limits.trial_seconds stops a trial as it runs, and it fails with the reason", "[run]") {
+  const auto study = long_adaptive_trial("[limits]\ntrial_seconds = 0.3\n");
+  const auto result = rkhs::run_trial(study, study.trials().front());
+  CHECK_FALSE(result.ok);
+  CHECK_FALSE(result.skipped);
+  CHECK_THAT(result.reason, Catch::StartsWith("exceeded limits.trial_seconds = 0.3 ("));
+  // It was stopped near its limit, not left to end (it takes tens of seconds unlimited).
+  CHECK(result.seconds < 10);
 }

@@ -183,3 +183,83 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
                       "no/such/study.toml: cannot open the study file");
   }
 }
+
+TEST_CASE("the grid's axes multiply to its trials, adaptive axes included", "[study]") {
+  const auto approximation = parse_study(minimal, "s.toml");
+  std::size_t product = 1;
+  std::vector<std::string> names;
+  for (const auto& axis : approximation.grid_axes()) {
+    product *= axis.count;
+    names.push_back(axis.plural);
+  }
+  CHECK(names == std::vector<std::string>{"kernels", "targets", "centre placements", "values of n"});
+  CHECK(product == approximation.trials().size());
+
+  const auto adaptive = parse_study(R"(
+[study]
+name = "a"
+kind = "adaptive"
+[domain]
+radius = 4.0
+[grid]
+n = [6, 8]
+[[kernel]]
+name = "gaussian"
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "gradient"
+[[law]]
+name = "rkhs"
+[[integrator]]
+name = "rosenbrock4"
+[[integrator]]
+name = "rodas4"
+[[integrator]]
+name = "dopri5"
+[adaptive]
+speed = 0.1
+laps = 1
+)",
+                                    "a.toml");
+  product = 1;
+  names.clear();
+  for (const auto& axis : adaptive.grid_axes()) {
+    product *= axis.count;
+    names.push_back(axis.singular);
+  }
+  CHECK(names == std::vector<std::string>{"kernel", "target", "centre placement", "plant",
+                                          "learning law", "integrator", "value of n"});
+  CHECK(product == 2 * 3 * 2);
+  CHECK(product == adaptive.trials().size());
+}
+
+TEST_CASE("an evaluation grid no finer than the centres is refused, a coarse one warned",
+          "[study]") {
+  const auto study_with = [](const std::string& points, const std::string& metrics) {
+    return "[study]\nname = \"g\"\n" + points + metrics +
+           "[domain]\nradius = 4.0\n[grid]\nn = [16, 32, 64]\n[[kernel]]\nname = \"bspline\"\n";
+  };
+  // 64 points for n = 64 uniform centres: every evaluation point is a centre, P_n = 0 there.
+  CHECK(error_of(study_with("evaluation_points = 64\n", "")) ==
+        "s.toml:3:21: study.evaluation_points: 64 evaluation points for up to n = 64 centres: the "
+        "grid is no finer than the centres, so power_function_sup, power_function_floor, "
+        "l2_error, sup_error, error_floor would be measured at or next to the centres, where they "
+        "vanish (round-off), not over the domain; use evaluation_points >= 256 (4 per centre "
+        "spacing) or leave these metrics out of study.metrics");
+  CHECK_THAT(error_of(study_with("evaluation_points = 40\n", "")),
+             Catch::Contains("40 evaluation points for up to n = 64 centres"));
+  // Only the grid metrics need the grid: a study of condition numbers may use any.
+  const auto conditioning = parse_study(
+      study_with("evaluation_points = 16\n", "metrics = [\"gram_condition_number\"]\n"), "s.toml");
+  CHECK(conditioning.warnings.empty());
+  // Fewer than 4 points per centre spacing: valid, with a warning at the same place.
+  const auto coarse = parse_study(study_with("evaluation_points = 200\n", ""), "s.toml");
+  REQUIRE(coarse.warnings.size() == 1);
+  CHECK_THAT(coarse.warnings[0],
+             Catch::StartsWith("s.toml:3:21: study.evaluation_points: warning: 200 evaluation "
+                               "points give fewer than 4 per centre spacing for n > 50"));
+  CHECK(parse_study(study_with("evaluation_points = 256\n", ""), "s.toml").warnings.empty());
+}

@@ -173,6 +173,15 @@ TEST_CASE("[[expect]] mistakes are errors with file:line:column", "[verification
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ndegree = 3\ntheory = true\n")),
              Catch::Contains("s.toml:16:1: expect: degree=3 selects no group of this study "
                              "(values in the study: degree: 1, 2)"));
+  // Every value of a list selects something: a typo in one is not silently dropped.
+  CHECK(error_of(with("metric = \"power_function_sup\"\ndegree = [1, 5]\ntheory = true\n")) ==
+        "s.toml:18:14: expect.degree: degree=5 selects no group of this study (the groups it "
+        "selects have degree: 1)");
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nkernel = [\"bspline\", \"gausian\"]\n"
+                           "theory = true\n")),
+             Catch::Contains("s.toml:18:22: expect.kernel: kernel=gausian selects no group"));
+  CHECK_NOTHROW(parse_study(with("metric = \"power_function_sup\"\ndegree = [1, 2]\ntheory = true\n"),
+                            "s.toml"));
   CHECK_THAT(error_of(with("metric = \"fill_distance\"\ntheory = true\n")),
              Catch::Contains("s.toml:18:10: expect.theory:") &&
                  Catch::Contains("no theory rate for metric 'fill_distance'"));

@@ -42,6 +42,7 @@ struct StoredRun {
   std::size_t reused = 0;            ///< trials taken from the store
   std::size_t ran = 0;               ///< trials run (and stored) now
   std::size_t skipped = 0;           ///< trials not run because the run was interrupted
+  std::size_t stopped = 0;           ///< of those, trials stopped while they ran (not stored)
 };
 
 /// What runs the trials the store does not hold: run_trials by default, the MPI coordinator in

@@ -74,10 +74,23 @@ struct StudyDefinition {
   StudyLimits limits;
   AdaptiveSettings adaptive;  ///< kind = "adaptive" only
   std::vector<Expectation> expectations;  ///< [[expect]] tables (rkhs/expectation.hpp)
+  /// What the file asks for that is valid but doubtful, as "file:line:column: key: why" (e.g. an
+  /// evaluation grid too coarse for the largest n); `validate`, `run` and `check` print them.
+  std::vector<std::string> warnings;
 
   /// The Cartesian product kernels x targets x centres [x plants x laws x integrators] x n,
   /// n varying fastest.
   std::vector<TrialSpec> trials() const;
+
+  /// One axis of the trial grid: what it is called (singular and plural) and how many values
+  /// it has. grid_axes() lists the axes this study's kind has, in the order trials() nests
+  /// them (n last); the product of the counts is trials().size().
+  struct GridAxis {
+    const char* singular;
+    const char* plural;
+    std::size_t count;
+  };
+  std::vector<GridAxis> grid_axes() const;
 
   /// Every metric a trial of this study's kind measures (TrialResult::metrics is aligned with
   /// it), and the position of one of them (throws std::out_of_range for an unknown name).

@@ -27,6 +27,9 @@ class TargetFunction {
   /// piecewise-linear profile, or the seam of a closed profile). An adaptive integrator that
   /// restarts at kinks (Integrator::restarts_at_kinks) also stops there. Default: none.
   virtual std::vector<double> kink_points() const { return {}; }
+  /// Remarks on how the target read its data, said once when the study is loaded (e.g. the
+  /// columns of a CSV file it does not read). Default: none.
+  virtual std::vector<std::string> notes() const { return {}; }
 };
 
 using TargetRegistry = Registry<TargetFunction, const Domain&>;

@@ -107,7 +107,11 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
   job.threads = options.threads > 0 ? options.threads : session.default_threads();
   job.stop_requested = options.stop_requested;
   job.rank_timeout_seconds = rank_timeout_seconds;
-  job.run = [&](std::uint64_t id) { return serialize_result(run_trial(study, *by_index.at(id))); };
+  job.run = [&](std::uint64_t id) -> std::optional<std::string> {
+    const auto result = run_trial(study, *by_index.at(id), options.stop_requested);
+    if (result.skipped) return std::nullopt;  // stopped while it ran: not stored, run again later
+    return serialize_result(result);
+  };
   if (!session.is_root()) {
     distribute(session, job);
     return std::nullopt;

@@ -175,10 +175,10 @@ class LocalPool {
       report.id = id;
       std::exception_ptr error;
       try {
-        if (job_.stop_requested && job_.stop_requested())
-          report.skipped = true;
-        else
-          report.payload = job_.run(id);
+        std::optional<std::string> payload;
+        if (!(job_.stop_requested && job_.stop_requested())) payload = job_.run(id);
+        report.skipped = !payload;
+        if (payload) report.payload = std::move(*payload);
       } catch (...) {
         error = std::current_exception();
       }

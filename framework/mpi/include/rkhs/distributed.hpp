@@ -106,9 +106,10 @@ struct TaskReport {
 struct Job {
   /// The ids of the tasks in hand-out order (read on rank 0 only).
   std::vector<std::uint64_t> order;
-  /// Runs one task on this rank and returns its result; called concurrently from this rank's
-  /// worker threads. It must not throw (an exception aborts the MPI job).
-  std::function<std::string(std::uint64_t)> run;
+  /// Runs one task on this rank and returns its result, or std::nullopt when the task was
+  /// stopped by a stop request while it ran (reported as skipped); called concurrently from
+  /// this rank's worker threads. It must not throw (an exception aborts the MPI job).
+  std::function<std::optional<std::string>(std::uint64_t)> run;
   /// Rank 0: called for each task that finished or was skipped, in arrival order, from the
   /// thread that called distribute(). An exception thrown here aborts the MPI job.
   std::function<void(const TaskReport&)> on_report;
