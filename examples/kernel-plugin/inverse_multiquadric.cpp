@@ -3,14 +3,24 @@
 // two lines that make it a plugin. The formulas are in inverse_multiquadric.hpp.
 #include "inverse_multiquadric.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 #include <string>
+#include <type_traits>
 
 #include "rkhs/kernel_algorithms.hpp"  // RKHS_REGISTER_KERNEL
 #include "rkhs/plugin.hpp"             // RKHS_PLUGIN_MODULE
 
 namespace imq {
+
+// What makes the class a kernel: the KernelFunction concept of rkhs/kernel.hpp (info(), k(x, y),
+// properties()) and a constructor from the parameters and the domain (one instance per trial).
+// RKHS_REGISTER_KERNEL needs both; asserting them here reports a mistake at the class.
+static_assert(rkhs::KernelFunction<InverseMultiquadric>);
+static_assert(
+    std::is_constructible_v<InverseMultiquadric, const rkhs::ParameterSet&, const rkhs::Domain&>);
 
 rkhs::PluginInfo InverseMultiquadric::info() {
   return {

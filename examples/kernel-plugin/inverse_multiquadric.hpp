@@ -25,6 +25,7 @@
 // would be needed (c < ~ L / 10^5).
 
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 #include "rkhs/domain.hpp"
