@@ -9,7 +9,7 @@
 namespace rkhs {
 namespace {
 
-/// c_i = (i + offset) L / n on a periodic domain (model section 4 with offset 0);
+/// c_i = (i + offset) L / n on a periodic domain (docs/model.md section 4 with offset 0);
 /// c_i = i L / (n - 1) on an interval (end points included), the midpoint for n = 1.
 class UniformCentres final : public CentrePlacement {
  public:

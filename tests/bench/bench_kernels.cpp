@@ -30,7 +30,7 @@
 namespace {
 
 constexpr double track_length = 2 * 3.14159265358979323846 * 4;
-constexpr std::size_t evaluation_points = 4096;  // M of model.md section 5
+constexpr std::size_t evaluation_points = 4096;  // M of docs/model.md section 5
 
 std::vector<double> uniform(std::size_t n, double length) {
   std::vector<double> out(n);

@@ -1,4 +1,4 @@
-// The multiscale B-spline kernel against an independent evaluation of model.md section 3.
+// The multiscale B-spline kernel against an independent evaluation of docs/model.md section 3.
 
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -28,7 +28,7 @@ struct Setting {
   int levels;
 };
 
-// k(u, v) by the double sum of model.md section 3, every spline of every level, dense.
+// k(u, v) by the double sum of docs/model.md section 3, every spline of every level, dense.
 double reference_kernel(const Setting& s, double length, bool periodic, double u, double v) {
   const double h0 = length / s.n0;
   double sum = 0;

@@ -1,6 +1,7 @@
-// The kernel contract, checked for every kernel in the registry (STYLE.md practice 6): a kernel
-// registered tomorrow is tested with its default parameters the moment it registers; the built-in
-// ones also with a few variants that stress their code paths (images, few features, wide support).
+// The kernel contract, checked for every kernel in the registry (docs/style.md practice 6): a
+// kernel registered tomorrow is tested with its default parameters the moment it registers; the
+// built-in ones also with a few variants that stress their code paths (images, few features, wide
+// support).
 
 #include <catch2/catch.hpp>
 #include <string>

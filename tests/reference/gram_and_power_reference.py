@@ -2,7 +2,7 @@
 """Independent check of an approximation study's Gram condition numbers and power-function sups.
 
 Runs `rkhs-study run STUDY --out DIR`, then recomputes every trial of the study with NumPy from
-the formulas of the model (shared/spec/model.md, sections 3-5), written independently of the C++
+the formulas of the model (docs/model.md, sections 3-5), written independently of the C++
 code: B-splines by the Cox-de Boor recursion and an explicit sum over levels and wrapped
 indices, the periodised Gaussian by its Fourier series, eigenvalues by LAPACK's eigh. Values
 that double precision cannot resolve are not compared, and the script says so: condition
@@ -91,7 +91,7 @@ def main():
             centres = L * np.arange(n) / n
             gram, cross, diagonal = kernel_matrices(row, L, points, centres)
             eigenvalues = np.linalg.eigvalsh(gram)
-            threshold = n * np.finfo(float).eps * eigenvalues[-1]  # model section 5
+            threshold = n * np.finfo(float).eps * eigenvalues[-1]  # docs/model.md section 5
             condition = eigenvalues[-1] / eigenvalues[0] if eigenvalues[0] > threshold else math.inf
             label = f"{row['kernel']} {row.get('degree') or row.get('sigma')} n={n}"
             if eigenvalues[0] < 0.1 * threshold:

@@ -1,5 +1,5 @@
 #pragma once
-// Adaptive-estimation trials (model sections 1-5 and 8): a plant x' = A x + B f(s(t)), the
+// Adaptive-estimation trials (docs/model.md sections 1-5 and 8): a plant x' = A x + B f(s(t)), the
 // estimator xhat' = A xhat + B fhat(s(t)) and a learning law for the coefficients alpha of
 // fhat = sum_i alpha_i k(c_i, .), integrated in time along a closed track s(t) = (v t) mod L.
 

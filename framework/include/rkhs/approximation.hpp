@@ -1,6 +1,6 @@
 #pragma once
 // Approximation trials: the space H_n of kernel sections at n centres and the projection Pi_n
-// (model sections 4 and 5). No ODE is involved: Pi_n f is the kernel interpolant of f.
+// (docs/model.md sections 4 and 5). No ODE is involved: Pi_n f is the kernel interpolant of f.
 
 #include <span>
 #include <string>

@@ -1,7 +1,7 @@
 #pragma once
 // A console convergence table for one metric of one group of trials, in the shape of deal.II's
 // ConvergenceTable: the refinement axis, the metric, the pairwise (local) rate, and a footer
-// with the fitted rate and its confidence interval (STYLE.md, practice 12).
+// with the fitted rate and its confidence interval (docs/style.md practice 15).
 //
 //   l2_error, group gaussian/eps=2
 //    n   l2_error    rate

@@ -27,7 +27,7 @@ struct Domain {
   /// |x - y|, on a periodic domain the distance along the circle.
   double distance(double x, double y) const noexcept { return std::abs(difference(x, y)); }
 
-  /// M evaluation points: s_m = m L / M on a periodic domain (section 5 of the model),
+  /// M evaluation points: s_m = m L / M on a periodic domain (docs/model.md section 5),
   /// m L / (M - 1) on an interval (both end points included).
   std::vector<double> uniform_points(std::size_t count) const;
   /// Quadrature weights for the L2(Omega) norm on uniform_points(count): L / M each on a

@@ -2,7 +2,8 @@
 // Solves with a kernel Gram matrix G, saying what it did.
 //
 // The spectrum of G is computed once (symmetric eigen-decomposition) and decides the method:
-//   - G is singular to working precision when lambda_min <= n eps lambda_max (model section 5);
+//   - G is singular to working precision when lambda_min <= n eps lambda_max (docs/model.md
+//     section 5);
 //   - otherwise a Cholesky factorisation G = L L^T is used;
 //   - a singular G is handled by the policy: a pseudo-inverse that drops the eigenvalues below
 //     the cutoff n eps lambda_max, a Tikhonov-regularised Cholesky factorisation of

@@ -1,5 +1,5 @@
 #pragma once
-// The kernel contract (STYLE.md practice 6): what every kernel plugin must satisfy, as named
+// The kernel contract (docs/style.md practice 6): what every kernel plugin must satisfy, as named
 // checks with measured values. The contract test (tests/kernels/test_kernel_contract.cpp) runs it
 // on every registered kernel; `rkhs-study verify-plugin` runs it on a plugin's kernels
 // (plugin_verification.hpp).

@@ -1,5 +1,5 @@
 #pragma once
-// The Lyapunov equation A^T P + P A = -Q of the estimator (model section 1).
+// The Lyapunov equation A^T P + P A = -Q of the estimator (docs/model.md section 1).
 
 #include <Eigen/Dense>
 

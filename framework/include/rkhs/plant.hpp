@@ -1,5 +1,5 @@
 #pragma once
-// Plants x' = A x + B f(s(t)) (model sections 1-2) and learning laws (eq. a3 and 4.2).
+// Plants x' = A x + B f(s(t)) (docs/model.md sections 1-2) and learning laws (eq. a3 and 4.2).
 
 #include <Eigen/Dense>
 #include <memory>

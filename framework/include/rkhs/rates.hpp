@@ -1,6 +1,7 @@
 #pragma once
 // Convergence rates of a metric along a refinement axis: pairwise (local) rates and
-// least-squares fitted rates with standard errors and confidence intervals (spec/model.md, 5).
+// least-squares fitted rates with standard errors and confidence intervals (docs/model.md
+// section 5).
 //
 // Two models, both linear regressions of ln(y) (natural logarithm) on a transformed abscissa u:
 //   power law    ln y = a + b ln x   algebraic convergence, x = n or fill distance h;

@@ -17,7 +17,7 @@
 // kernel on a bounded domain lambda_max grows like n (Gershgorin bounds it by n max k, the
 // Rayleigh quotient of the all-ones vector by n times the mean of k), so the condition number
 // grows like n q^-(2 tau - d) = q^-(2 tau) for quasi-uniform centres: n^(2 tau) in one dimension
-// (measured: +2.0 for tau = 1 and +3.9 for tau = 2, model.md section 8).
+// (measured: +2.0 for tau = 1 and +3.9 for tau = 2, docs/model.md section 8).
 //
 // Analytic kernels (Gaussian): every metric above converges (or grows) at least exponentially,
 // so the theory is one-sided and qualitative: the exponential model describes the series

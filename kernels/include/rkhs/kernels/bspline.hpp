@@ -1,5 +1,5 @@
 #pragma once
-// The multiscale B-spline kernel (model.md section 3; paper Sec. 2.1), d = 1:
+// The multiscale B-spline kernel (docs/model.md section 3; paper Sec. 2.1), d = 1:
 //
 //   k(u, v) = sum_{j=0}^{J} 2^{j (d - 2r)} sum_k N_p(2^j u / h0 - k) N_p(2^j v / h0 - k),
 //
@@ -119,7 +119,7 @@ class MultiscaleBSpline {
   KernelProperties properties() const noexcept;
 
   /// Arc lengths in [0, L) where the kernel sections are not smooth: the knots of the finest
-  /// level, s = k L / (n0 2^J). An integrator restarts there (model section 8).
+  /// level, s = k L / (n0 2^J). An integrator restarts there (docs/model.md section 8).
   std::vector<double> kink_points() const {
     const std::int64_t cells = std::int64_t{n0_} << levels_;
     std::vector<double> out(static_cast<std::size_t>(cells));

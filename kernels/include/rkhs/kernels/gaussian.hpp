@@ -1,5 +1,5 @@
 #pragma once
-// The Gaussian kernel (model.md section 3; paper Sec. 5 and Sec. 2).
+// The Gaussian kernel (docs/model.md section 3; paper Sec. 5 and Sec. 2).
 //
 //   k0(x, y) = exp(-|x - y|^2 / (2 sigma^2))    convention = "2sigma2" (default, paper Sec. 5)
 //   k0(x, y) = exp(-|x - y|^2 / sigma^2)        convention = "sigma2"  (paper Sec. 2)
