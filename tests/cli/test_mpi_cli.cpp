@@ -270,8 +270,7 @@ TEST_CASE("with mpirun --enable-recovery the other ranks finish a killed rank's 
   CHECK(read_text(dir / "out" / "rates.csv") == read_text(dir / "clean" / "rates.csv"));
 }
 
-TEST_CASE("Ctrl-C to mpirun: trials in flight finish and are stored, rank 0 says how to resume",
-          "[cli][mpi]") {
+TEST_CASE("Ctrl-C to mpirun: finished trials are stored, rank 0 says how to resume", "[cli][mpi]") {
   const auto dir = rkhs::test::scratch_directory("mpi_sigint");
   // 39 trials, so that the run is far from its end when the first trial is stored.
   std::string study = rkhs::test::slow_study("mpi_sigint", "[0.5, 0.7, 0.9]");

@@ -1,6 +1,7 @@
 // Runs that survive: a study killed with SIGKILL midway resumes where it stopped and gives
-// exactly the trials of an uninterrupted run; SIGINT stops cleanly and says how to resume; a
-// changed parameter re-runs only the affected trials.
+// exactly the trials of an uninterrupted run; SIGINT stops cleanly (also inside a long trial),
+// stores only finished trials and says how to resume; a changed parameter re-runs only the
+// affected trials.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -25,16 +26,16 @@ std::string slow_study(const std::string& sigmas) {
   return rkhs::test::slow_study("store_cli", sigmas);
 }
 
-// Starts `rkhs-study args` in the background; returns its pid.
-pid_t start(const std::vector<std::string>& args) {
+// Starts `rkhs-study args` in the background with stdout and stderr in `log`; returns its pid.
+pid_t start(const std::vector<std::string>& args, const fs::path& log = "/dev/null") {
   const pid_t pid = fork();
   if (pid == 0) {
     std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    const int devnull = ::open("/dev/null", O_WRONLY);
-    dup2(devnull, 1);
-    dup2(devnull, 2);
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
     execv(RKHS_STUDY_EXECUTABLE, argv.data());
     _exit(127);
   }
@@ -80,21 +81,15 @@ TEST_CASE("a run killed with SIGKILL resumes and equals an uninterrupted run", "
   CHECK(read_text(dir / "resumed" / "rates.csv") == read_text(dir / "clean" / "rates.csv"));
 }
 
-TEST_CASE("SIGINT finishes the trials in flight and says how to resume", "[cli][store]") {
+TEST_CASE("SIGINT stops the run; what finished is stored, and it says how to resume",
+          "[cli][store]") {
   const auto dir = rkhs::test::scratch_directory("store_sigint");
   std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
   const auto store = dir / "store.sqlite";
   const auto log = dir / "log.txt";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out, 1);
-    dup2(out, 2);
-    execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "run", (dir / "study.toml").c_str(),
-          "--threads", "1", "--quiet", "--store", store.c_str(), "--out", (dir / "out").c_str(),
-          static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
+                           "--store", store.string(), "--out", (dir / "out").string()},
+                          log);
   wait_for_stored(store, 1, pid);
   kill(pid, SIGINT);
   int status = 0;
@@ -102,6 +97,11 @@ TEST_CASE("SIGINT finishes the trials in flight and says how to resume", "[cli][
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 130);
   CHECK_THAT(read_text(log), Catch::Contains("Run the same command again to resume"));
+  // Exactly the finished trials are stored, and the message says how many.
+  CHECK_THAT(
+      read_text(log),
+      Catch::Contains("interrupted: " + rkhs::test::trials_text(rkhs::ResultStore(store).size()) +
+                      " finished and stored"));
   CHECK_FALSE(fs::exists(dir / "out" / "trials.csv"));  // outputs are for complete runs
   const auto resumed = rkhs_study("run " + (dir / "study.toml").string() + " --store " +
                                   store.string() + " --out " + (dir / "out").string());
@@ -176,22 +176,6 @@ J = 5
 
 namespace {
 
-// Starts `rkhs-study args` in the background with stdout and stderr in `log`; returns its pid.
-pid_t start_logged(const std::vector<std::string>& args, const fs::path& log) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out, 1);
-    dup2(out, 2);
-    execv(RKHS_STUDY_EXECUTABLE, argv.data());
-    _exit(127);
-  }
-  return pid;
-}
-
 // Waits until `log` contains `text` (fails if the process ends or `seconds` pass first).
 void wait_for_text(const fs::path& log, const std::string& text, pid_t pid, int seconds) {
   for (int i = 0; i < seconds * 20; ++i) {
@@ -223,9 +207,9 @@ nu = 2.5
 )";
   const auto store = dir / "store.sqlite";
   const auto log = dir / "log.txt";
-  const pid_t pid = start_logged({"run", (dir / "study.toml").string(), "--threads", "1", "--store",
-                                  store.string(), "--out", (dir / "out").string()},
-                                 log);
+  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--store",
+                           store.string(), "--out", (dir / "out").string()},
+                          log);
   // Alive inside the long trial: the progress line shows the trial in flight and its time.
   wait_for_text(log, "0/1 trials, 0 failed, ", pid, 30);
   CHECK_THAT(read_text(log), Catch::Contains("; running 1: "));
@@ -253,9 +237,9 @@ TEST_CASE("an interrupted --no-store run says that nothing was stored, and where
   std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
   const auto log = dir / "log.txt";
   const auto journal = dir / "out" / "journal.csv";
-  const pid_t pid = start_logged({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
-                                  "--no-store", "--out", (dir / "out").string()},
-                                 log);
+  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
+                           "--no-store", "--out", (dir / "out").string()},
+                          log);
   for (int i = 0; i < 600; ++i) {  // until the journal holds a finished trial (header + 1 line)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const auto text = read_text(journal);
