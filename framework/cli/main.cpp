@@ -421,8 +421,11 @@ int command_run(const std::string& study_file, std::string out_dir, int threads,
       std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
     }
   }
-  rkhs::write_file_atomically(std::filesystem::path(out_dir) / "report.html",
-                              rkhs::html_report(record, std::filesystem::path(out_dir) / "plots"));
+  // Without plots this run, the page embeds none (not those an earlier run left in plots/).
+  rkhs::write_file_atomically(
+      std::filesystem::path(out_dir) / "report.html",
+      rkhs::html_report(
+          record, plots ? std::filesystem::path(out_dir) / "plots" : std::filesystem::path()));
 
   if (!quiet) std::cout << rkhs::console_tables(record);
   std::cout << fmt::format(

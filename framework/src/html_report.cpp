@@ -127,7 +127,7 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
   for (const auto& metric : study.metrics) {
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
     const auto svg = plots / ("convergence_" + metric + ".svg");
-    if (std::filesystem::exists(svg))
+    if (!plots.empty() && std::filesystem::exists(svg))
       page += fmt::format(
           "<p><img class=\"plot\" alt=\"convergence of {}\" "
           "src=\"data:image/svg+xml;base64,{}\"></p>\n",
@@ -163,7 +163,7 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
   }
   // Other plots (adaptive studies).
   std::string others;
-  if (std::filesystem::exists(plots))
+  if (!plots.empty() && std::filesystem::exists(plots))
     for (const auto& entry : std::filesystem::directory_iterator(plots)) {
       const auto name = entry.path().filename().string();
       if (entry.path().extension() == ".svg" && !name.starts_with("convergence_"))

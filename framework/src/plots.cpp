@@ -243,6 +243,12 @@ std::string gnuplot_message(const std::filesystem::path& log) {
 PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory) {
   const auto folder = directory / "plots";
   std::filesystem::create_directories(folder);
+  // The folder shows this run only: plots of an earlier run into the same directory (a metric
+  // no longer plotted, a plot that fails now) must not be taken for this one's.
+  for (const auto& entry : std::filesystem::directory_iterator(folder))
+    for (const char* extension : {".gp", ".svg", ".png", ".log"})
+      if (entry.is_regular_file() && entry.path().extension() == extension)
+        std::filesystem::remove(entry.path());
   auto plan = plot_scripts(run);
   PlotOutcome outcome;
   outcome.notes = std::move(plan.notes);

@@ -283,20 +283,28 @@ TEST_CASE("plots: an empty series gets a note, and one failed plot does not stop
          "    echo '\"'\"$1\"'\", line 12: x range is invalid' >&2; exit 1;;\nesac\nexec "
       << real.substr(0, real.find('\n')) << " \"$@\"\n";
   fs::permissions(bin / "gnuplot", fs::perms::owner_all);
+  // Into the same folder: what the first run rendered must not pass for this run's plots.
   const auto failing = rkhs::test::rkhs_study(
-      "run " + (dir / "study.toml").string() + " --no-store --out " + (dir / "failing").string(),
+      "run " + (dir / "study.toml").string() + " --no-store --out " + (dir / "out").string(),
       "PATH=" + bin.string() + ":$PATH");
   INFO(failing.output);
   REQUIRE(failing.exit_code == 0);
   CHECK_THAT(failing.output, Catch::Contains("warning: plot not rendered: " +
-                                             (dir / "failing" / "plots").string() +
+                                             (dir / "out" / "plots").string() +
                                              "/convergence_l2_error.gp: \"" +
-                                             (dir / "failing" / "plots").string() +
+                                             (dir / "out" / "plots").string() +
                                              "/convergence_l2_error.gp\", line 12: x range is "
                                              "invalid"));
   CHECK_THAT(failing.output, !Catch::Contains("is gnuplot installed"));
-  CHECK_FALSE(fs::exists(dir / "failing" / "plots" / "convergence_l2_error.svg"));
+  CHECK_FALSE(fs::exists(dir / "out" / "plots" / "convergence_l2_error.svg"));
   for (const char* stem : {"convergence_final_state_error", "estimates_group1", "lyapunov_group1"})
-    CHECK(fs::exists(dir / "failing" / "plots" / (std::string(stem) + ".svg")));
-  CHECK(fs::exists(dir / "failing" / "report.html"));
+    CHECK(fs::exists(dir / "out" / "plots" / (std::string(stem) + ".svg")));
+  const auto report = read(dir / "out" / "report.html");
+  CHECK(report.find("alt=\"convergence of l2_error\"") == std::string::npos);  // it failed
+  CHECK(report.find("alt=\"convergence of final_state_error\"") != std::string::npos);
+  // --no-plots: the page embeds no plot, not even those left in plots/.
+  REQUIRE(run("run " + (dir / "study.toml").string() + " --no-store --no-plots --out " +
+              (dir / "out").string())
+              .exit_code == 0);
+  CHECK(read(dir / "out" / "report.html").find("<img") == std::string::npos);
 }

@@ -10,8 +10,8 @@
 
 namespace rkhs {
 
-/// The page. `plots` is the folder write_plots rendered into (its SVGs are embedded; a missing
-/// folder gives a page without plots).
+/// The page. `plots` is the folder write_plots rendered into (its SVGs are embedded; an empty
+/// path or a missing folder gives a page without plots).
 std::string html_report(const RunRecord& run, const std::filesystem::path& plots);
 
 }  // namespace rkhs

@@ -32,8 +32,9 @@ struct PlotOutcome {
 };
 
 /// Writes plots/<stem>.gp and renders plots/<stem>.svg and .png with `gnuplot` (found on PATH),
-/// each plot on its own. A failed plot keeps its script and its log (plots/<stem>.log). Throws
-/// only when the plots folder cannot be written.
+/// each plot on its own, after removing the plot files (.gp, .svg, .png, .log) an earlier run
+/// left in plots/. A failed plot keeps its script and its log (plots/<stem>.log). Throws only
+/// when the plots folder cannot be written.
 PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory);
 
 }  // namespace rkhs
