@@ -291,6 +291,7 @@ void coordinate(const Session& session, const Job& job, JobStatistics& statistic
   auto lose = [&](std::size_t r, const std::string& why) {
     auto& peer = peers[r];
     peer.lost = true;
+    session.mark_rank_lost();
     statistics.ranks[r].lost = true;
     std::cerr << fmt::format(
         "rkhs-study: warning: MPI rank {} ({}) {}: taken as lost; its {} trial{} in flight go "
@@ -468,7 +469,7 @@ Session::Session(int& argc, char**& argv) {
 // The communicator is not freed (a collective call, which a lost rank would never join):
 // MPI_Finalize releases it.
 Session::~Session() {
-  MPI_Finalize();
+  if (!rank_lost_) MPI_Finalize();  // see mark_rank_lost()
 }
 
 int Session::default_threads() const noexcept {
