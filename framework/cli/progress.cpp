@@ -69,11 +69,6 @@ void Progress::stop() {
   if (display_.joinable()) display_.join();
 }
 
-std::string Progress::line() const {
-  std::lock_guard lock(mutex_);
-  return line_locked(Clock::now());
-}
-
 std::string Progress::line_locked(Clock::time_point now) const {
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const std::size_t total = std::max<std::size_t>(total_, 1);

@@ -34,9 +34,6 @@ class Progress {
   /// Ends the display: no line is written after this returns.
   void stop();
 
-  /// The line as it would be shown now (without the leading carriage return), for tests.
-  std::string line() const;
-
  private:
   using Clock = std::chrono::steady_clock;
   std::string line_locked(Clock::time_point now) const;
@@ -44,7 +41,7 @@ class Progress {
 
   std::ostream& out_;
   const bool terminal_;
-  mutable std::mutex mutex_;
+  std::mutex mutex_;
   std::condition_variable wake_;
   std::thread display_;
   Clock::time_point start_ = Clock::now();

@@ -43,6 +43,22 @@ double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
   return 8.0 * (3 * n * n + 2 * n * static_cast<double>(study.evaluation_points)) / 1048576.0;
 }
 
+// The two results of a trial that did not run to its end: never started, or stopped while it ran
+// (neither is reported as finished, so neither is stored).
+TrialResult not_started() {
+  TrialResult result;
+  result.skipped = true;
+  result.reason = "not run: the run was interrupted";
+  return result;
+}
+
+TrialResult stopped_while_running() {
+  TrialResult result = not_started();
+  result.stopped_while_running = true;
+  result.reason = "not run: the run was interrupted while the trial ran";
+  return result;
+}
+
 }  // namespace
 
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
@@ -104,10 +120,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
     result.ok = true;
   } catch (const TrialCancelled&) {
-    result = TrialResult{};
-    result.skipped = true;
-    result.stopped_while_running = true;
-    result.reason = "not run: the run was interrupted while the trial ran";
+    result = stopped_while_running();
   } catch (const TrialTimeLimitExceeded& e) {
     result.ok = false;
     result.reason = time_limit_reason(e.elapsed_seconds);
@@ -177,8 +190,7 @@ void run_in_arena(RunState& state) {
             const std::size_t i = order[k];
             TrialResult result;
             if (options.stop_requested && options.stop_requested()) {
-              result.skipped = true;
-              result.reason = "not run: the run was interrupted";
+              result = not_started();
             } else {
               {
                 std::lock_guard lock(state.mutex);
@@ -237,15 +249,10 @@ std::vector<TrialResult> run_trials(const StudyDefinition& study,
       state->abandoned = true;
       abandoned_any = true;
       for (std::size_t i = 0; i < trials.size(); ++i) {
-        auto& result = state->results[i];
-        if (state->phase[i] == RunState::running) {
-          result = TrialResult{};
-          result.skipped = result.stopped_while_running = true;
-          result.reason = "not run: the run was interrupted while the trial ran";
-        } else if (state->phase[i] == RunState::waiting && !result.skipped) {
-          result.skipped = true;
-          result.reason = "not run: the run was interrupted";
-        }
+        if (state->phase[i] == RunState::running)
+          state->results[i] = stopped_while_running();
+        else if (state->phase[i] == RunState::waiting)
+          state->results[i] = not_started();
       }
       auto results = state->results;
       lock.unlock();
