@@ -1,0 +1,144 @@
+#!/usr/bin/env python3
+"""Behaviour of every shipped study, pinned: trials.csv, rates.csv and the verdicts of
+`rkhs-study check` for each studies/*.toml are compared with the golden files in
+tests/golden/studies/<study>/.
+
+Adaptive studies run on a short horizon (one lap, one snapshot) so the whole check takes about
+two minutes on two cores; approximation studies run as shipped. Every number must be
+bit-identical (compared as the text the CSV writer printed). Columns may be added, never removed,
+renamed or changed; rows must match in number and order. Verdicts must match line for line,
+except the first line's wall time.
+
+Usage:
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR            compare (ctest)
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --record   write the golden files
+
+Record only when a change of behaviour is intended, and say why in the commit.
+Standard library only.
+"""
+import csv
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+
+# The first line of `check` output: "<study>: 8 trials, 8 ok, 0 failed in 0.24 s".
+WALL_TIME = re.compile(r" in [0-9.e+-]+ s$")
+
+
+def shortened(text):
+    """The study with adaptive horizons cut to one lap (approximation studies unchanged)."""
+    if not re.search(r'^kind = "adaptive"', text, re.M):
+        return text
+    text, laps = re.subn(r"^laps = \d+", "laps = 1", text, flags=re.M)
+    text, snapshots = re.subn(r"^snapshot_laps = \[.*\]", "snapshot_laps = [1]", text, flags=re.M)
+    if laps != 1 or snapshots > 1:
+        raise SystemExit(f"cannot shorten the horizon: {laps} 'laps =' lines, {snapshots} "
+                         "'snapshot_laps =' lines (expected one each)")
+    return text
+
+
+def run_study(exe, source, work, study):
+    """Runs `check` on the (shortened) study; returns the output folder and the verdict lines."""
+    name = study.stem
+    work.mkdir(parents=True, exist_ok=True)
+    definition = work / f"{name}.toml"
+    definition.write_text(shortened(study.read_text()))
+    out = work / name
+    shutil.rmtree(out, ignore_errors=True)
+    result = subprocess.run(
+        [exe, "check", "--no-store", "--quiet", "--threads", "2", "--out", name,
+         "--data-dir", str(source / "studies" / "data"), definition.name],
+        cwd=work, capture_output=True, text=True, check=False)
+    # 0 all pass, 1 a failure, 3 inconclusive: short horizons fail some expectations, and that
+    # is pinned too. 2 (bad input) or a crash is an error of this check.
+    if result.returncode not in (0, 1, 3):
+        raise SystemExit(f"{name}: rkhs-study check exited {result.returncode}\n{result.stderr}")
+    lines = result.stdout.splitlines()
+    if lines:
+        lines[0] = WALL_TIME.sub("", lines[0])
+    return out, lines
+
+
+def read_csv(path):
+    with open(path, newline="", encoding="utf-8") as handle:
+        rows = list(csv.reader(handle))
+    if not rows:
+        raise SystemExit(f"{path}: empty")
+    return rows[0], rows[1:]
+
+
+def compare_csv(golden_path, actual_path):
+    """Differences between two CSV files, golden columns only (added columns are allowed)."""
+    golden_header, golden_rows = read_csv(golden_path)
+    actual_header, actual_rows = read_csv(actual_path)
+    problems = []
+    missing = [c for c in golden_header if c not in actual_header]
+    if missing:
+        problems.append(f"{actual_path}: columns removed or renamed: {', '.join(missing)}")
+        return problems
+    if len(golden_rows) != len(actual_rows):
+        problems.append(f"{actual_path}: {len(actual_rows)} rows, golden has {len(golden_rows)}")
+        return problems
+    where = {c: actual_header.index(c) for c in golden_header}
+    for number, (golden, actual) in enumerate(zip(golden_rows, actual_rows), start=2):
+        for column, value in zip(golden_header, golden):
+            found = actual[where[column]]
+            if found != value:
+                problems.append(f"{actual_path}:{number}: column {column}: found '{found}', "
+                                f"golden '{value}'")
+                if len(problems) >= 20:
+                    return problems + ["(more differences not shown)"]
+    return problems
+
+
+def main(argv):
+    if len(argv) not in (4, 5) or (len(argv) == 5 and argv[4] != "--record"):
+        raise SystemExit(__doc__)
+    exe = str(pathlib.Path(argv[1]).resolve())
+    source, work = pathlib.Path(argv[2]).resolve(), pathlib.Path(argv[3]).resolve()
+    record = len(argv) == 5
+    golden_root = source / "tests" / "golden" / "studies"
+    studies = sorted((source / "studies").glob("*.toml"))
+    if not studies:
+        raise SystemExit(f"no studies in {source / 'studies'}")
+    failures = []
+    for study in studies:
+        out, verdicts = run_study(exe, source, work, study)
+        golden = golden_root / study.stem
+        if record:
+            golden.mkdir(parents=True, exist_ok=True)
+            for name in ("trials.csv", "rates.csv"):
+                shutil.copyfile(out / name, golden / name)
+            (golden / "verdicts.txt").write_text("\n".join(verdicts) + "\n")
+            print(f"recorded {golden}")
+            continue
+        if not golden.is_dir():
+            failures.append(f"{study.stem}: no golden files in {golden} (record them with --record)")
+            continue
+        problems = []
+        for name in ("trials.csv", "rates.csv"):
+            problems += compare_csv(golden / name, out / name)
+        expected = (golden / "verdicts.txt").read_text().splitlines()
+        if verdicts != expected:
+            for number, (want, got) in enumerate(zip(expected, verdicts), start=1):
+                if want != got:
+                    problems.append(f"verdicts line {number}: found '{got}', golden '{want}'")
+                    break
+            if len(verdicts) != len(expected):
+                problems.append(f"verdicts: {len(verdicts)} lines, golden has {len(expected)}")
+        status = "ok" if not problems else "DIFFERS"
+        print(f"{study.stem}: {status}")
+        failures += [f"{study.stem}: {p}" for p in problems]
+    for stale in sorted(p.name for p in golden_root.iterdir() if p.is_dir()) if not record else []:
+        if stale not in {s.stem for s in studies}:
+            failures.append(f"{stale}: golden files for a study that is no longer shipped")
+    if failures:
+        print("\n".join(failures), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
