@@ -2,7 +2,7 @@
 #
 # Builds an rkhs-study plugin module <target>.so (no "lib" prefix) from the sources: a MODULE
 # library linked against rkhs_study::plugin, i.e. against librkhs_study with RKHS_BUILDING_PLUGIN
-# defined, so that RKHS_REGISTER_KERNEL waits for the loader's ABI check (rkhs/plugin.hpp).
+# defined, so that RKHS_REGISTER_KERNEL waits for the loader's ABI check (rkhs/plugin/module.hpp).
 # Symbols are hidden except the module's extern "C" entry points (RKHS_PLUGIN_MODULE), so two
 # plugins never see each other's code.
 function(rkhs_study_add_plugin target)

@@ -6,8 +6,8 @@
 #include <string_view>
 #include <vector>
 
-#include "rkhs/run.hpp"
-#include "rkhs/study.hpp"
+#include "rkhs/run/run.hpp"
+#include "rkhs/study/study.hpp"
 
 namespace rkhs::test {
 

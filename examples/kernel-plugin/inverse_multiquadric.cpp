@@ -10,12 +10,12 @@
 #include <string>
 #include <type_traits>
 
-#include "rkhs/kernel_algorithms.hpp"  // RKHS_REGISTER_KERNEL
-#include "rkhs/plugin.hpp"             // RKHS_PLUGIN_MODULE
+#include "rkhs/kernel/kernel_algorithms.hpp"  // RKHS_REGISTER_KERNEL
+#include "rkhs/plugin/module.hpp"             // RKHS_PLUGIN_MODULE
 
 namespace imq {
 
-// What makes the class a kernel: the KernelFunction concept of rkhs/kernel.hpp (info(), k(x, y),
+// What makes the class a kernel: the KernelFunction concept of rkhs/kernel/kernel.hpp (info(), k(x, y),
 // properties()) and a constructor from the parameters and the domain (one instance per trial).
 // RKHS_REGISTER_KERNEL needs both; asserting them here reports a mistake at the class.
 static_assert(rkhs::KernelFunction<InverseMultiquadric>);

@@ -28,10 +28,10 @@
 #include <cstddef>
 #include <vector>
 
-#include "rkhs/domain.hpp"
-#include "rkhs/kernel.hpp"
-#include "rkhs/parameters.hpp"
-#include "rkhs/registry.hpp"
+#include "rkhs/core/domain.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/core/parameters.hpp"
+#include "rkhs/core/registry.hpp"
 
 namespace imq {
 

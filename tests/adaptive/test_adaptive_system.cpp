@@ -2,9 +2,9 @@
 #include <catch2/catch.hpp>
 #include <numbers>
 
-#include "rkhs/adaptive.hpp"
-#include "rkhs/lyapunov.hpp"
-#include "rkhs/plant.hpp"
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/lyapunov.hpp"
+#include "rkhs/adaptive/plant.hpp"
 
 using namespace rkhs;
 

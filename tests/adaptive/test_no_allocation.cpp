@@ -7,10 +7,10 @@
 #include <new>
 #include <numbers>
 
-#include "rkhs/adaptive.hpp"
-#include "rkhs/gram_solver.hpp"
-#include "rkhs/lyapunov.hpp"
-#include "rkhs/plant.hpp"
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/adaptive/lyapunov.hpp"
+#include "rkhs/adaptive/plant.hpp"
 
 namespace {
 std::atomic<long> allocations{0};

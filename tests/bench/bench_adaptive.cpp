@@ -6,12 +6,12 @@
 
 #include <numbers>
 
-#include "rkhs/adaptive.hpp"
-#include "rkhs/gram_solver.hpp"
-#include "rkhs/lyapunov.hpp"
-#include "rkhs/plant.hpp"
-#include "rkhs/run.hpp"
-#include "rkhs/study.hpp"
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/adaptive/lyapunov.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/run/run.hpp"
+#include "rkhs/study/study.hpp"
 
 namespace {
 

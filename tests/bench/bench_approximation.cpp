@@ -6,9 +6,9 @@
 
 #include <numbers>
 
-#include "rkhs/approximation.hpp"
-#include "rkhs/kernel.hpp"
-#include "rkhs/target.hpp"
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/approx/target.hpp"
 
 namespace {
 

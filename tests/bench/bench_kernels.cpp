@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "rkhs/domain.hpp"
-#include "rkhs/kernel.hpp"
+#include "rkhs/core/domain.hpp"
+#include "rkhs/kernel/kernel.hpp"
 #include "rkhs/kernels/bspline.hpp"
 #include "rkhs/kernels/gaussian.hpp"
 #include "rkhs/kernels/matern.hpp"

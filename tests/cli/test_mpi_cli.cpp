@@ -14,8 +14,8 @@
 #include <thread>
 
 #include "cli_support.hpp"
-#include "rkhs/result_store.hpp"
-#include "rkhs/study.hpp"
+#include "rkhs/run/result_store.hpp"
+#include "rkhs/study/study.hpp"
 
 namespace fs = std::filesystem;
 using rkhs::test::read_text;

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "cli_support.hpp"
-#include "rkhs/sha256.hpp"
+#include "rkhs/core/sha256.hpp"
 
 namespace fs = std::filesystem;
 

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "cli_support.hpp"
-#include "rkhs/result_store.hpp"
+#include "rkhs/run/result_store.hpp"
 
 namespace fs = std::filesystem;
 using rkhs::test::read_text;

@@ -8,7 +8,7 @@ checked according to its language tag:
 
   cpp, cmake, toml   an excerpt of one such file. The block's first line may name the file in a
                      comment (`// inverse_multiquadric.hpp`, `# CMakeLists.txt`,
-                     `// rkhs/kernel.hpp`), resolved against examples/kernel-plugin/ and then
+                     `// rkhs/kernel/kernel.hpp`), resolved against examples/kernel-plugin/ and then
                      framework/include/; without it every file of examples/kernel-plugin/ is
                      tried. A marker line (`// ...` in C++, optionally followed by a remark, or
                      `# ...` in CMake and TOML) stands for any number of skipped lines of the
@@ -17,7 +17,7 @@ checked according to its language tag:
                      file's lines, in order.
   sh                 not compiled: shell commands a reader types. The same steps (install,
                      configure, build, verify-plugin, list, run) are run by
-                     tests/plugins/install_and_build_plugin.sh.
+                     tests/plugin/install_and_build_plugin.sh.
   (none), text,      not compiled: sample output of rkhs-study, pasted from a real run.
   console
   anything else      an error: a new kind of block needs a rule here first.
@@ -45,7 +45,7 @@ EXAMPLE_DIR = "examples/kernel-plugin"
 SEARCH_ROOTS = [EXAMPLE_DIR, "framework/include"]
 EXCERPT_TAGS = {"cpp": "//", "c++": "//", "cmake": "#", "toml": "#"}
 NOT_COMPILED = {
-    "sh": "shell commands; tests/plugins/install_and_build_plugin.sh runs the same steps",
+    "sh": "shell commands; tests/plugin/install_and_build_plugin.sh runs the same steps",
     "": "sample output of a real run",
     "text": "sample output of a real run",
     "console": "sample output of a real run",

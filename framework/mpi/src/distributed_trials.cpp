@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 
 #include <cstdlib>
+#include <exception>
 #include <map>
+#include <string_view>
 
 #include "rkhs/distributed.hpp"
-#include "rkhs/sha256.hpp"
+#include "rkhs/core/sha256.hpp"
 
 namespace rkhs::distributed {
 
@@ -141,6 +143,47 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
     return results;
   };
   return rkhs::run_with_store(study, trials, options, store, fresh, coordinate, agreed.hashes);
+}
+
+bool launched_first() noexcept {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMI_RANK"})
+    if (const char* value = std::getenv(name)) return std::string_view(value) == "0";
+  return true;
+}
+
+void MpiExecutor::on_every_process(const std::function<void()>& action) const {
+  std::string error;
+  std::exception_ptr own_error;
+  try {
+    action();
+  } catch (const std::exception& e) {
+    error = e.what();
+    own_error = std::current_exception();
+  }
+  try {
+    require_no_errors(session_, error);
+  } catch (const std::runtime_error& verdict) {
+    if (own_error && verdict.what() == error) std::rethrow_exception(own_error);
+    throw;
+  }
+}
+
+void MpiExecutor::agree_on(const StudyDefinition& study, const std::vector<TrialSpec>& trials) {
+  agreed_ = require_same_trials(session_, study, trials);
+}
+
+std::optional<StoredRun> MpiExecutor::run(const StudyDefinition& study,
+                                          const std::vector<TrialSpec>& trials,
+                                          RunOptions options, ResultStore* store, bool fresh) {
+  if (!agreed_) agree_on(study, trials);
+  // A rank's trials in flight finish: the coordinator reports them (no abandoning).
+  options.abandon_after_seconds = -1;
+  return run_with_store(session_, study, trials, *agreed_, options, store, fresh, &statistics_,
+                        rank_timeout_seconds_);
+}
+
+std::string MpiExecutor::where() const {
+  return fmt::format(" on rank 0 of {} MPI ranks", session_.size());
 }
 
 }  // namespace rkhs::distributed

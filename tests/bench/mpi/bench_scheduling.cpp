@@ -17,7 +17,7 @@
 #include <sstream>
 
 #include "rkhs/distributed.hpp"
-#include "rkhs/plugins.hpp"
+#include "rkhs/plugin/builtins.hpp"
 
 namespace {
 

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "rkhs/output.hpp"
-#include "rkhs/result_store.hpp"
-#include "rkhs/run.hpp"
-#include "rkhs/study.hpp"
+#include "rkhs/pipeline/executor.hpp"
+#include "rkhs/run/result_store.hpp"
+#include "rkhs/run/run.hpp"
+#include "rkhs/study/study.hpp"
 
 namespace rkhs::distributed {
 
@@ -36,6 +36,11 @@ int usable_cpus() noexcept;
 /// launcher's environment before MPI is initialised (OMPI_COMM_WORLD_SIZE of Open MPI's mpirun,
 /// PMI_SIZE of MPICH's launchers and srun --mpi=pmi2); 1 when not started by one.
 int launched_process_count() noexcept;
+
+/// True when this process is the first of those (rank 0 by the launcher's environment,
+/// OMPI_COMM_WORLD_RANK or PMI_RANK), or was not started by a launcher: the process that prints
+/// a refusal before MPI is initialised.
+bool launched_first() noexcept;
 
 /// Thrown on ranks other than 0 for an error that rank 0 reports: the rank exits with `code`
 /// without printing anything, so the user sees each error once.
@@ -152,5 +157,28 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
                                         ResultStore* store, bool fresh,
                                         JobStatistics* statistics = nullptr,
                                         double rank_timeout_seconds = 60);
+
+/// The study pipeline's executor over the ranks of an MPI job (rkhs/pipeline/executor.hpp):
+/// agree_on() is require_same_trials, run() is run_with_store above, on_every_process() is
+/// require_no_errors around the action. Every rank makes the same calls in the same order.
+class MpiExecutor final : public pipeline::Executor {
+ public:
+  MpiExecutor(const Session& session, double rank_timeout_seconds)
+      : session_(session), rank_timeout_seconds_(rank_timeout_seconds) {}
+  bool is_root() const override { return session_.is_root(); }
+  void on_every_process(const std::function<void()>& action) const override;
+  int default_threads() const override { return session_.default_threads(); }
+  void agree_on(const StudyDefinition& study, const std::vector<TrialSpec>& trials) override;
+  std::optional<StoredRun> run(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
+                               RunOptions options, ResultStore* store, bool fresh) override;
+  std::vector<RankRecord> ranks() const override { return statistics_.ranks; }
+  std::string where() const override;
+
+ private:
+  const Session& session_;
+  double rank_timeout_seconds_;
+  std::optional<AgreedTrials> agreed_;
+  JobStatistics statistics_;
+};
 
 }  // namespace rkhs::distributed

@@ -1,0 +1,44 @@
+#pragma once
+// The commands of rkhs-study, one file each (commands/<name>.cpp); main.cpp parses the command
+// line into these arguments and calls one of them. Each returns the process exit code.
+
+#include <string>
+#include <vector>
+
+#include "rkhs/pipeline/executor.hpp"
+#include "rkhs/pipeline/study_pipeline.hpp"
+
+namespace rkhs::cli {
+
+constexpr int exit_ok = 0, exit_failed_trials = 1, exit_bad_input = 2, exit_interrupted = 130;
+
+/// Options of the commands that run trials.
+struct RunArguments {
+  std::string study_file;
+  int threads = 0;     ///< 0: the executor's default (all cores)
+  bool quiet = false;  ///< no progress line, no per-run messages
+  pipeline::StoreOptions store;
+};
+
+struct RunCommand : RunArguments {
+  std::string out_dir;  ///< "" : results/<study name>
+  bool plots = true;
+  std::string shard;    ///< "K/N" or ""
+};
+int command_run(const RunCommand& arguments, pipeline::Executor& executor);
+
+struct CheckCommand : RunArguments {
+  std::string tier, junit_file, out_dir;
+  bool strict = false;
+};
+int command_check(const CheckCommand& arguments, pipeline::Executor& executor);
+
+int command_report(const std::string& directory, const std::string& format,
+                   const pipeline::StoreOptions& store);
+int command_validate(const std::string& study_file);
+/// `kind`: a plugin kind (singular or plural), "metric(s)", or "" for everything.
+int command_list(const std::string& kind);
+int command_merge(const std::string& into, const std::vector<std::string>& from);
+int command_verify_plugin(const std::string& file);
+
+}  // namespace rkhs::cli

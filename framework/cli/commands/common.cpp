@@ -1,0 +1,88 @@
+#include "commands/common.hpp"
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <csignal>
+#include <iostream>
+
+#include "commands/commands.hpp"
+
+namespace rkhs::cli {
+
+namespace {
+
+std::atomic<bool> interrupted{false};
+// A trial busy in a call without cancellation points (a large eigendecomposition) is given this
+// long after Ctrl-C, then abandoned.
+constexpr double abandon_after_seconds = 2.0;
+
+extern "C" void request_stop(int) {
+  interrupted = true;
+}
+
+}  // namespace
+
+std::string counted(std::size_t count, const char* singular, const char* plural) {
+  return fmt::format("{} {}", count, count == 1 ? singular : plural);
+}
+
+void print_warnings(const StudyDefinition& study) {
+  for (const auto& warning : study.warnings) std::cerr << warning << "\n";
+}
+
+void stop_on_signals(RunOptions& options) {
+  std::signal(SIGINT, request_stop);
+  std::signal(SIGTERM, request_stop);
+  options.stop_requested = [] { return interrupted.load(); };
+  options.abandon_after_seconds = abandon_after_seconds;
+}
+
+bool stop_was_requested() noexcept {
+  return interrupted.load();
+}
+
+int report_interruption(const StoredRun& run, const pipeline::StoreOptions& store,
+                        const std::string& journal) {
+  const auto trials = [](std::size_t count) { return counted(count, "trial", "trials"); };
+  const std::size_t not_started = run.skipped - run.stopped;
+  const std::string undone =
+      run.stopped
+          ? fmt::format("{} stopped while running and {} not started", run.stopped, not_started)
+          : fmt::format("{} not started", not_started);
+  if (store.disabled) {
+    std::cerr << fmt::format(
+        "rkhs-study: interrupted: {} finished, {}. Nothing was stored (--no-store){}: the same "
+        "command runs every trial again.\n",
+        trials(run.ran), undone,
+        journal.empty() || !run.ran
+            ? std::string()
+            : fmt::format("; the finished trials' metrics are in {}", journal));
+  } else {
+    std::cerr << fmt::format(
+        "rkhs-study: interrupted: {} finished and stored, {} (not stored). Run the same command "
+        "again to resume: stored trials are reused.\n",
+        trials(run.ran), undone);
+  }
+  return exit_interrupted;
+}
+
+void print_run_sources(const pipeline::PipelineOutcome& outcome,
+                       const pipeline::Executor& executor) {
+  if (!outcome.completed && !outcome.interrupted) return;  // not the root
+  const auto ranks = executor.ranks();
+  if (!ranks.empty()) {
+    std::string per_rank;
+    for (std::size_t r = 0; r < ranks.size(); ++r)
+      per_rank += fmt::format("{}rank {} ({}, {} thread{}): {}{}", r ? "; " : "", r,
+                              ranks[r].host, ranks[r].threads, ranks[r].threads == 1 ? "" : "s",
+                              ranks[r].trials, ranks[r].lost ? " (lost)" : "");
+    std::cerr << fmt::format("  trials run per MPI rank: {}\n", per_rank);
+  }
+  if (outcome.completed && !outcome.store_file.empty())
+    std::cerr << fmt::format("  {} reused from {}, {} run now\n",
+                             counted(outcome.completed->stored.reused, "trial", "trials"),
+                             outcome.store_file, outcome.completed->stored.ran);
+}
+
+}  // namespace rkhs::cli

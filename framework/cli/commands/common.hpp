@@ -1,0 +1,40 @@
+#pragma once
+// What the commands print alike: counts with their noun, a study's warnings, how an interrupted
+// run ended; and the SIGINT / SIGTERM handling every command that runs trials installs.
+
+#include <cstddef>
+#include <string>
+
+#include "rkhs/pipeline/study_pipeline.hpp"
+#include "rkhs/run/run.hpp"
+#include "rkhs/study/study.hpp"
+
+namespace rkhs::cli {
+
+/// "1 trial", "3 trials".
+std::string counted(std::size_t count, const char* singular, const char* plural);
+
+/// A study file's warnings (valid but doubtful settings), one line each, on stderr.
+void print_warnings(const StudyDefinition& study);
+
+/// Installs the SIGINT / SIGTERM handlers and makes `options` stop at them: no new trial
+/// starts, trials in flight stop at their next cancellation point (rkhs/core/cancellation.hpp)
+/// or are abandoned 2 s later (in this process; main() then ends at once). Neither kind is
+/// stored.
+void stop_on_signals(RunOptions& options);
+
+/// True once SIGINT or SIGTERM arrived.
+bool stop_was_requested() noexcept;
+
+/// What an interrupted run did and kept, in words that are true with and without a store;
+/// returns exit_interrupted. `journal`: where `run` kept the finished trials' metrics (empty
+/// for other commands).
+int report_interruption(const StoredRun& run, const pipeline::StoreOptions& store,
+                        const std::string& journal = {});
+
+/// "  N trials reused from FILE, M run now" and, in an MPI job, the trials of each rank
+/// (stderr), after a run whose every trial has a result.
+void print_run_sources(const pipeline::PipelineOutcome& outcome,
+                       const pipeline::Executor& executor);
+
+}  // namespace rkhs::cli

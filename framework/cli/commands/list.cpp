@@ -1,0 +1,69 @@
+// `rkhs-study list [KIND]`: the registered plugins with their parameters, and the metrics.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <iostream>
+
+#include "commands/commands.hpp"
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/target.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/plugin/plugin_loader.hpp"
+#include "rkhs/run/run.hpp"
+
+namespace rkhs::cli {
+
+namespace {
+
+std::string describe_parameter(const ParameterSpec& spec) {
+  std::string detail =
+      "default " + (spec.default_doc.empty() ? format_value(spec.default_value) : spec.default_doc);
+  if (spec.type == ParameterType::choice)
+    detail += fmt::format("; one of {}", fmt::join(spec.choices, ", "));
+  else if (spec.type == ParameterType::real || spec.type == ParameterType::integer)
+    if (const auto range = describe_range(spec); range != "any number") detail += "; " + range;
+  return fmt::format("    {:<14} {} ({})", spec.name, spec.doc, detail);
+}
+
+template <class RegistryType>
+void list_registry(const RegistryType& registry, std::ostream& out) {
+  out << registry.kind() << " plugins:\n";
+  for (const auto& name : registry.names()) {
+    const auto& info = registry.find(name)->info;
+    out << fmt::format("  {:<10} {}\n", name, info.doc);
+    for (const auto& spec : info.parameters) out << describe_parameter(spec) << "\n";
+    for (const auto& [key, value] : info.traits) out << fmt::format("    [{}] {}\n", key, value);
+  }
+  out << "\n";
+}
+
+}  // namespace
+
+int command_list(const std::string& kind) {
+  const bool all = kind.empty();
+  if (all || kind == "kernel" || kind == "kernels") list_registry(kernel_registry(), std::cout);
+  if (all || kind == "centres") list_registry(centre_registry(), std::cout);
+  if (all || kind == "target" || kind == "targets") list_registry(target_registry(), std::cout);
+  if (all || kind == "plant" || kind == "plants") list_registry(plant_registry(), std::cout);
+  if (all || kind == "law" || kind == "laws") list_registry(law_registry(), std::cout);
+  if (all || kind == "integrator" || kind == "integrators")
+    list_registry(integrator_registry(), std::cout);
+  if (all || kind == "metric" || kind == "metrics") {
+    for (const char* study_kind : {"approximation", "adaptive"}) {
+      std::cout << "metrics (" << study_kind << " trials):\n";
+      for (const auto& name : metric_names(study_kind)) std::cout << "  " << name << "\n";
+    }
+  }
+  if (const auto plugins = loaded_plugins(); all && !plugins.empty()) {
+    std::cout << "\nplugin modules:\n";
+    for (const auto& p : plugins)
+      std::cout << fmt::format("  {:<10} {} (built against rkhs-study {})\n", p.name,
+                               p.file.string(), p.rkhs_study_version);
+  }
+  return exit_ok;
+}
+
+}  // namespace rkhs::cli

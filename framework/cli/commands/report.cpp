@@ -1,0 +1,40 @@
+// `rkhs-study report DIR`: the tables of the run in DIR again, from the study file its
+// summary.json names and the result store (trials not stored are run).
+#include <iostream>
+
+#include "commands/commands.hpp"
+#include "commands/common.hpp"
+#include "rkhs/report/html_report.hpp"
+#include "rkhs/report/output.hpp"
+#include "rkhs/report/run_summary.hpp"
+
+namespace rkhs::cli {
+
+int command_report(const std::string& directory, const std::string& format,
+                   const pipeline::StoreOptions& store) {
+  const auto summary = read_run_summary(std::filesystem::path(directory) / "summary.json");
+  const auto study = load_study(summary.source);
+  const auto trials = study.trials();
+  pipeline::LocalExecutor executor;
+  RunOptions options;
+  stop_on_signals(options);
+  auto outcome = pipeline::run_study(executor, study, trials, options, store);
+  if (outcome.interrupted) return report_interruption(*outcome.interrupted, store);
+  auto& run = *outcome.completed;
+  // The tables describe the stored results, not this process: one thread, no wall time.
+  run.threads = 1;
+  run.seconds = 0.0;
+  const auto record = run.record();
+  if (format == "md") {
+    std::cout << markdown_tables(record);
+  } else if (format == "tex") {
+    std::cout << latex_tables(record);
+  } else {
+    const auto file = std::filesystem::path(directory) / "report.html";
+    write_file_atomically(file, html_report(record, std::filesystem::path(directory) / "plots"));
+    std::cout << "wrote " << file.string() << "\n";
+  }
+  return exit_ok;
+}
+
+}  // namespace rkhs::cli

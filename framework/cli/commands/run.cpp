@@ -1,0 +1,155 @@
+// `rkhs-study run STUDY`: every trial, then trials.csv, rates.csv, summary.json, rates.md,
+// rates.tex, plots and report.html (docs/results.md); `--shard K/N` runs a subset into the
+// store only.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <stdexcept>
+
+#include "commands/commands.hpp"
+#include "commands/common.hpp"
+#include "progress.hpp"
+#include "rkhs/pipeline/journal.hpp"
+#include "rkhs/report/html_report.hpp"
+#include "rkhs/report/output.hpp"
+#include "rkhs/report/plots.hpp"
+
+namespace rkhs::cli {
+
+namespace {
+
+// "K/N" -> (K, N) with 1 <= K <= N; throws std::invalid_argument otherwise.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  std::size_t k = 0, n = 0;
+  try {
+    if (slash != std::string::npos) {
+      k = std::stoul(text.substr(0, slash));
+      n = std::stoul(text.substr(slash + 1));
+    }
+  } catch (const std::exception&) {
+  }
+  if (n == 0 || k == 0 || k > n)
+    throw std::invalid_argument("--shard must be K/N with 1 <= K <= N, found '" + text + "'");
+  return {k, n};
+}
+
+// A shard runs the trials whose grid index is K - 1 modulo N into its own store; `merge`
+// combines the stores and a run over the merged store writes the outputs.
+int run_shard(const RunCommand& arguments, const StudyDefinition& study,
+              const std::vector<TrialSpec>& trials, pipeline::Executor& executor) {
+  const auto [k, n] = parse_shard(arguments.shard);
+  if (arguments.store.disabled)
+    throw std::invalid_argument("--shard needs a result store (not --no-store)");
+  std::vector<TrialSpec> mine;
+  for (const auto& trial : trials)
+    if (trial.index % n == k - 1) mine.push_back(trial);
+  RunOptions options;
+  options.threads = arguments.threads;
+  stop_on_signals(options);
+  const auto outcome = pipeline::run_study(executor, study, mine, options, arguments.store);
+  if (!arguments.quiet) print_run_sources(outcome, executor);
+  if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments.store);
+  const auto& stored = outcome.completed->stored;
+  std::cout << fmt::format(
+      "{}: shard {}/{}: {} of {} trials ({} reused, {} run) in {}; combine "
+      "the shards' stores with `rkhs-study merge`\n",
+      study.name, k, n, mine.size(), trials.size(), stored.reused, stored.ran,
+      arguments.store.file);
+  return exit_ok;
+}
+
+// Plots into <out>/plots; what could not be rendered is a warning, never an error.
+std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bool quiet) {
+  try {
+    const auto outcome = write_plots(record, out_dir);
+    if (!quiet) {
+      std::cerr << fmt::format("  {} in {}/plots (SVG and PNG)\n",
+                               counted(outcome.rendered.size(), "plot", "plots"), out_dir);
+      for (const auto& note : outcome.notes) std::cerr << "  note: " << note << "\n";
+    }
+    for (const auto& failure : outcome.failures)
+      std::cerr << "rkhs-study: warning: plot not rendered: " << failure << "\n";
+    return outcome.rendered.size();
+  } catch (const std::exception& e) {
+    std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
+    return 0;
+  }
+}
+
+}  // namespace
+
+int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
+  const auto study =
+      pipeline::load_everywhere(executor, [&] { return load_study(arguments.study_file); });
+  if (executor.is_root()) print_warnings(study);
+  const std::string out_dir = arguments.out_dir.empty()
+                                  ? (std::filesystem::path("results") / study.name).string()
+                                  : arguments.out_dir;
+  const auto trials = study.trials();
+  executor.agree_on(study, trials);
+  if (!arguments.shard.empty()) return run_shard(arguments, study, trials, executor);
+  const bool root = executor.is_root();
+  const bool quiet = arguments.quiet || !root;
+  const int thread_count = arguments.threads > 0 ? arguments.threads : executor.default_threads();
+
+  std::optional<pipeline::Journal> journal;
+  if (root) {
+    std::filesystem::create_directories(out_dir);
+    journal.emplace(std::filesystem::path(out_dir) / "journal.csv", study);
+  }
+  if (!quiet)
+    std::cerr << fmt::format("rkhs-study: {} ({}, {}{}) -> {}\n", study.name,
+                             counted(trials.size(), "trial", "trials"),
+                             counted(thread_count, "thread", "threads"), executor.where(),
+                             out_dir);
+  std::optional<Progress> progress;
+  if (!quiet) progress.emplace(std::cerr, isatty(STDERR_FILENO) != 0);
+  RunOptions options;
+  options.threads = thread_count;
+  stop_on_signals(options);
+  options.on_start = [&](std::size_t count) {
+    if (progress) progress->start(count);  // the trials the store does not hold
+  };
+  options.on_trial_started = [&](const TrialSpec& trial) {
+    if (progress) progress->trial_started(trial.index);
+  };
+  options.on_trial_finished = [&](const TrialSpec& trial, const TrialResult& result) {
+    if (journal) journal->record(trial, result);
+    if (!progress) return;
+    if (!result.ok)
+      progress->message(fmt::format("  trial failed: {}: {}", trial.key, result.reason));
+    progress->trial_finished(trial.index, result.ok);
+  };
+  const auto outcome = pipeline::run_study(executor, study, trials, options, arguments.store);
+  if (!root) return stop_was_requested() ? exit_interrupted : exit_ok;
+  if (!quiet) print_run_sources(outcome, executor);
+  if (progress) progress->stop();
+  if (outcome.interrupted)
+    return report_interruption(*outcome.interrupted, arguments.store, journal->file().string());
+
+  const auto& run = *outcome.completed;
+  const auto record = run.record();
+  write_outputs(record, out_dir);
+  journal->remove();
+  const std::size_t plot_count = arguments.plots ? render_plots(record, out_dir, quiet) : 0;
+  // Without plots this run, the page embeds none (not those an earlier run left in plots/).
+  write_file_atomically(
+      std::filesystem::path(out_dir) / "report.html",
+      html_report(record, arguments.plots ? std::filesystem::path(out_dir) / "plots"
+                                          : std::filesystem::path()));
+
+  if (!quiet) std::cout << console_tables(record);
+  std::cout << fmt::format(
+      "{}: {}, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, rates.csv, summary.json, "
+      "rates.md, rates.tex, report.html{}\n",
+      study.name, counted(trials.size(), "trial", "trials"), trials.size() - run.failed,
+      run.failed, run.seconds, out_dir,
+      plot_count ? fmt::format(", plots/ ({} plots)", plot_count) : "");
+  return run.failed ? exit_failed_trials : exit_ok;
+}
+
+}  // namespace rkhs::cli

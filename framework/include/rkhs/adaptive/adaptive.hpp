@@ -1,0 +1,151 @@
+#pragma once
+// Adaptive-estimation trials (docs/model.md sections 1-5 and 8): a plant x' = A x + B f(s(t)), the
+// estimator xhat' = A xhat + B fhat(s(t)) and a learning law for the coefficients alpha of
+// fhat = sum_i alpha_i k(c_i, .), integrated in time along a closed track s(t) = (v t) mod L.
+
+#include <Eigen/Dense>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rkhs/core/domain.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/core/registry.hpp"
+#include "rkhs/approx/target.hpp"
+
+namespace rkhs {
+
+/// The coupled system in z = [x (d), xhat (d), alpha (n)]:
+///   x'     = A x + B f(s)
+///   xhat'  = A xhat + B phi(s)^T alpha
+///   alpha' = psi(s) b^T (x - xhat),  b = P B,  psi(s) = Gamma^-1 phi(s) (gradient law)
+///                                            or Gamma^-1 G^-1 phi(s) (rkhs law)
+/// with s = wrap(v t). It is linear in z for given t; the Jacobian is exact and dfdt is a
+/// central difference in t (one-sided at the ends of the current smooth segment, so that no
+/// stencil crosses a kink). Evaluations allocate nothing.
+class AdaptiveSystem {
+ public:
+  /// `basis` evaluates phi(s); `learning_map` is the n x n matrix M with psi = M phi
+  /// (Gamma^-1 I or Gamma^-1 G^-1). `road` is f. All references must outlive the system.
+  AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::MatrixXd& P,
+                 KernelBasis& basis, const Eigen::MatrixXd& learning_map,
+                 const std::function<double(double)>& road, const Domain& domain, double speed);
+
+  Eigen::Index dimension() const noexcept { return 2 * d_ + n_; }
+  Eigen::Index plant_dimension() const noexcept { return d_; }
+  double arc_length(double t) const noexcept { return domain_.wrap(speed_ * t); }
+
+  /// dz = F(z, t). Pointers to dimension() doubles.
+  void rhs(const double* z, double* dz, double t) const;
+  /// J = dF/dz (row-major, dimension()^2 doubles, every entry written) and dfdt = dF/dt.
+  void jacobian(const double* z, double* J, double t, double* dfdt) const;
+  /// The smooth segment being integrated (for one-sided differences at its ends).
+  void set_segment(double t_begin, double t_end) noexcept {
+    segment_begin_ = t_begin;
+    segment_end_ = t_end;
+  }
+
+  std::size_t rhs_evaluations() const noexcept { return rhs_count_; }
+  std::size_t jacobian_evaluations() const noexcept { return jacobian_count_; }
+
+ private:
+  void rhs_uncounted(const double* z, double* dz, double t) const;
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd B_, b_;
+  KernelBasis& basis_;
+  const std::function<double(double)>& road_;
+  Domain domain_;
+  double speed_;
+  Eigen::Index d_, n_;
+  double segment_begin_ = 0, segment_end_ = 0;
+  mutable std::vector<double> phi_, psi_, plus_, minus_;
+  mutable std::size_t rhs_count_ = 0, jacobian_count_ = 0;
+};
+
+struct IntegrationStats {
+  std::size_t steps = 0;
+  std::size_t rejected_steps = 0;
+  std::size_t segments = 0;
+};
+
+/// Integrates an AdaptiveSystem from t = breakpoints[0] through every later breakpoint,
+/// landing exactly on each; `observe(k, z)` is called at breakpoint k (including k = 0) with the
+/// state (dimension() doubles).
+/// Throws std::runtime_error when the step size underflows or the step budget is exhausted,
+/// and when the state becomes non-finite.
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual IntegrationStats integrate(
+      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      const std::function<void(std::size_t, const double*)>& observe) const = 0;
+  /// Whether to stop and restart at the kinks of phi(s(t)) and f(s(t)).
+  virtual bool restarts_at_kinks() const noexcept = 0;
+};
+
+using IntegratorRegistry = Registry<Integrator>;
+IntegratorRegistry& integrator_registry();
+
+template <class T>
+bool register_integrator() noexcept {
+  try {
+    return integrator_registry().add(T::info(), [](const ParameterSet& p) {
+      return std::unique_ptr<Integrator>(std::make_unique<T>(p));
+    });
+  } catch (...) {
+    return false;
+  }
+}
+
+/// Study-wide settings of adaptive trials ([adaptive] in a study file).
+struct AdaptiveSettings {
+  double speed = 1.0;                 ///< v, m/s
+  double laps = 10;                   ///< T = laps L / v unless final_time > 0
+  double final_time = 0;              ///< s
+  std::string q = "identity";         ///< Q of the Lyapunov equation (parse_matrix syntax)
+  bool projected_road = false;        ///< drive the plant with Pi_n f (in H_n) instead of f
+  std::vector<double> snapshot_laps;  ///< laps at which fhat is recorded (estimates.csv)
+  std::size_t snapshot_points = 256;  ///< points of the snapshot grid
+  std::size_t samples_per_lap = 20;   ///< output samples for V and |x - xhat|
+  double final_time_or_laps(double length) const {
+    return final_time > 0 ? final_time : laps * length / speed;
+  }
+};
+
+/// Names of the metrics of an adaptive trial, in output order (docs/metrics.md).
+const std::vector<std::string>& adaptive_metric_names();
+
+struct TimeSample {
+  double t;
+  double state_error;  ///< |x - xhat|
+  double lyapunov;     ///< V(t)
+};
+
+struct Snapshot {
+  double lap;
+  std::vector<double> estimate;  ///< fhat on the snapshot grid
+};
+
+struct AdaptiveMeasurement {
+  std::vector<double> metrics;  ///< aligned with adaptive_metric_names()
+  std::string solve_method;
+  std::vector<std::string> flags;
+  std::vector<TimeSample> samples;
+  std::vector<double> road;  ///< f on the snapshot grid
+  std::vector<Snapshot> snapshots;
+};
+
+/// Runs one adaptive trial. Throws on invalid input or failed integration.
+AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFunction& target,
+                                     std::span<const double> centres, const class Plant& plant,
+                                     const class LearningLaw& law, const Integrator& integrator,
+                                     const AdaptiveSettings& settings,
+                                     std::size_t evaluation_points,
+                                     const struct SolverOptions& solver);
+
+}  // namespace rkhs
+
+#define RKHS_REGISTER_INTEGRATOR(Type) \
+  RKHS_REGISTRAR(rkhs_integrator_registered_, ::rkhs::register_integrator<Type>())

@@ -1,0 +1,71 @@
+#pragma once
+// Plants x' = A x + B f(s(t)) (docs/model.md sections 1-2) and learning laws (eq. a3 and 4.2).
+
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rkhs/core/registry.hpp"
+
+namespace rkhs {
+
+/// A linear plant driven through B by the unknown function. A is Hurwitz (checked when the
+/// plant is created: constructors throw std::invalid_argument otherwise).
+class Plant {
+ public:
+  virtual ~Plant() = default;
+  virtual const Eigen::MatrixXd& A() const noexcept = 0;  ///< d x d
+  virtual const Eigen::VectorXd& B() const noexcept = 0;  ///< d
+};
+
+using PlantRegistry = Registry<Plant>;
+PlantRegistry& plant_registry();
+
+/// The update of the coefficients alpha of fhat = sum_i alpha_i phi_i:
+///   gradient: alpha' = Gamma^-1 phi(s) B^T P (x - xhat)          (eq. a3)
+///   rkhs:     alpha' = Gamma^-1 G^-1 phi(s) B^T P (x - xhat)     (eq. 4.2)
+/// with a scalar gain Gamma > 0.
+class LearningLaw {
+ public:
+  virtual ~LearningLaw() = default;
+  virtual bool uses_gram_inverse() const noexcept = 0;
+  virtual double gain() const noexcept = 0;  ///< Gamma
+};
+
+using LawRegistry = Registry<LearningLaw>;
+LawRegistry& law_registry();
+
+/// Parses a matrix written in a study file: "identity" (needs `size`), "diag(a, b, ...)", or
+/// rows separated by ';' with entries separated by spaces or commas ("-1 0; 0 -2", "1; 0").
+/// Throws std::invalid_argument saying what is wrong.
+Eigen::MatrixXd parse_matrix(std::string_view text, Eigen::Index size = 0);
+
+template <class T>
+bool register_plant() noexcept {
+  try {
+    return plant_registry().add(T::info(), [](const ParameterSet& p) {
+      return std::unique_ptr<Plant>(std::make_unique<T>(p));
+    });
+  } catch (...) {
+    return false;
+  }
+}
+
+template <class T>
+bool register_law() noexcept {
+  try {
+    return law_registry().add(T::info(), [](const ParameterSet& p) {
+      return std::unique_ptr<LearningLaw>(std::make_unique<T>(p));
+    });
+  } catch (...) {
+    return false;
+  }
+}
+
+}  // namespace rkhs
+
+#define RKHS_REGISTER_PLANT(Type) \
+  RKHS_REGISTRAR(rkhs_plant_registered_, ::rkhs::register_plant<Type>())
+#define RKHS_REGISTER_LAW(Type) RKHS_REGISTRAR(rkhs_law_registered_, ::rkhs::register_law<Type>())

@@ -1,0 +1,64 @@
+#pragma once
+// Approximation trials: the space H_n of kernel sections at n centres and the projection Pi_n
+// (docs/model.md sections 4 and 5). No ODE is involved: Pi_n f is the kernel interpolant of f.
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rkhs/core/domain.hpp"
+#include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/approx/target.hpp"
+
+namespace rkhs {
+
+/// Fill distance h = sup_{x in Omega} min_i |x - c_i| (distance along the circle on a periodic
+/// domain). Centres need not be sorted. +inf for no centres.
+double fill_distance(std::span<const double> centres, const Domain& domain);
+/// Separation distance q = min_{i != j} |c_i - c_j| / 2; NaN for fewer than two centres.
+double separation_distance(std::span<const double> centres, const Domain& domain);
+
+/// Names of the metrics of an approximation trial, in output order.
+///  fill_distance, separation_distance    geometry of the centres
+///  gram_condition_number                 lambda_max / lambda_min, +inf when singular
+///  gram_min_eigenvalue, gram_max_eigenvalue
+///  power_function_sup                    max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid
+///  power_function_floor                  round-off level of P_n: max_m sqrt(n eps lambda_max
+///                                        |G^-1 k_X(s_m)|^2); below it P_n is not resolved
+///  l2_error, sup_error                   ||f - Pi_n f|| in L2(Omega) and on the grid
+///  error_floor                           round-off level of Pi_n f on the grid: max_m
+///                                        n eps lambda_max |G^-1 k_X(s_m)| |alpha|
+///  interpolant_native_norm               ||Pi_n f||_H = sqrt(alpha^T G alpha)
+const std::vector<std::string>& approximation_metric_names();
+
+struct ApproximationMeasurement {
+  std::vector<double> metrics;  ///< aligned with approximation_metric_names()
+  std::string solve_method;     ///< GramSolver::method()
+  std::vector<std::string> flags;  ///< gram_singular, power_function_at_floor, sup_error_at_floor, ...
+};
+
+/// Measures Pi_n for `kernel` at `centres` on `evaluation_points` uniform points of the
+/// kernel's domain. Throws SingularGramError (policy `fail`) and std::exception on bad input.
+ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
+                                               const TargetFunction& target,
+                                               std::span<const double> centres,
+                                               std::size_t evaluation_points,
+                                               const SolverOptions& solver);
+
+/// The same measurement from a Gram matrix `gram` of `centres` and its `solver` already built
+/// by the caller (who needs them too: an adaptive trial). The cross matrix
+/// K_mi = k(s_m, c_i) on the evaluation points is moved into `*cross` when it is not null.
+ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
+                                               const TargetFunction& target,
+                                               std::span<const double> centres,
+                                               std::size_t evaluation_points,
+                                               const Eigen::MatrixXd& gram,
+                                               const GramSolver& solver,
+                                               Eigen::MatrixXd* cross = nullptr);
+
+/// P_n(s) at each point, with the same solver (values below round-off clamped to 0).
+Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,
+                               std::span<const double> centres, std::span<const double> points);
+
+}  // namespace rkhs

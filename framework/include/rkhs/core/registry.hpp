@@ -1,0 +1,151 @@
+#pragma once
+// Plugin registries: one per kind of plugin (kernel, centres, target, ...).
+//
+// A registry maps a plugin name to its metadata and a factory. Built-in plugins register
+// themselves from a namespace-scope registrar object defined by a RKHS_REGISTER_* macro; such
+// registrations run during static initialisation, so `add` never throws: a duplicate name or an
+// invalid declaration is recorded and reported by `errors()` once `main` runs (see
+// report_registration_errors in plugins.hpp). Registries are function-local statics (no static
+// initialisation order problem) and are frozen before trials start: after `freeze()` they are
+// only read, so worker threads read them without locking.
+
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rkhs/core/parameters.hpp"
+
+namespace rkhs {
+
+/// What a plugin declares about itself: shown by `rkhs-study list`, checked by the parser.
+struct PluginInfo {
+  std::string name;                        ///< lower-case identifier used in study files
+  std::string doc;                         ///< one line
+  std::vector<ParameterSpec> parameters;   ///< in the order they are printed and keyed
+  std::vector<std::pair<std::string, std::string>> traits;  ///< kind-specific facts, for `list`
+};
+
+/// Levenshtein distance, for "did you mean" suggestions.
+std::size_t edit_distance(std::string_view a, std::string_view b);
+
+/// The closest of `candidates` to `name` when it is close enough to be a likely misspelling,
+/// otherwise an empty string.
+std::string closest_name(std::string_view name, const std::vector<std::string>& candidates);
+
+template <class Product, class... FactoryArgs>
+class Registry {
+ public:
+  using Factory =
+      std::function<std::unique_ptr<Product>(const ParameterSet&, FactoryArgs...)>;
+  struct Entry {
+    PluginInfo info;
+    Factory factory;
+  };
+
+  explicit Registry(std::string kind) : kind_(std::move(kind)) {}
+  Registry(const Registry&) = delete;
+  Registry& operator=(const Registry&) = delete;
+
+  /// Registers a plugin. Never throws. Returns false (and records why) when the name is empty
+  /// or taken, a parameter declaration is invalid, or the registry is frozen.
+  bool add(PluginInfo info, Factory factory) noexcept {
+    try {
+      std::lock_guard lock(mutex_);
+      std::string problem;
+      if (frozen_) problem = "registered after the registry was frozen";
+      else if (info.name.empty()) problem = "empty plugin name";
+      else if (entries_.contains(info.name)) problem = "duplicate name";
+      else if (!factory) problem = "no factory";
+      for (const auto& spec : info.parameters) {
+        if (!problem.empty()) break;
+        if (auto why = validate_spec(spec); !why.empty())
+          problem = "parameter '" + spec.name + "': " + why;
+      }
+      if (!problem.empty()) {
+        errors_.push_back(kind_ + " plugin '" + info.name + "': " + problem);
+        return false;
+      }
+      auto name = info.name;
+      entries_.emplace(std::move(name), Entry{std::move(info), std::move(factory)});
+      return true;
+    } catch (...) {
+      // Out of memory during start-up: nothing sensible can be recorded.
+      return false;
+    }
+  }
+
+  /// The entry named `name`, or nullptr.
+  const Entry* find(std::string_view name) const noexcept {
+    auto it = entries_.find(name);
+    return it == entries_.end() ? nullptr : &it->second;
+  }
+
+  /// Registered names, sorted.
+  std::vector<std::string> names() const {
+    std::vector<std::string> out;
+    for (const auto& [name, entry] : entries_) out.push_back(name);
+    return out;
+  }
+
+  const std::string& kind() const noexcept { return kind_; }
+  std::vector<std::string> errors() const {
+    std::lock_guard lock(mutex_);
+    return errors_;
+  }
+  std::size_t error_count() const {
+    std::lock_guard lock(mutex_);
+    return errors_.size();
+  }
+  /// Removes and returns the errors recorded after the first `kept`: the plugin loader reports
+  /// them as the failure of the module it was loading (which it then unloads), so they do not
+  /// linger as start-up errors.
+  std::vector<std::string> take_errors_after(std::size_t kept) {
+    std::lock_guard lock(mutex_);
+    if (kept >= errors_.size()) return {};
+    std::vector<std::string> taken(errors_.begin() + static_cast<std::ptrdiff_t>(kept), errors_.end());
+    errors_.resize(kept);
+    return taken;
+  }
+
+  /// After this, `add` is refused: trials read the registry from several threads.
+  void freeze() noexcept {
+    std::lock_guard lock(mutex_);
+    frozen_ = true;
+  }
+  /// Re-opens the registry (for run-time registration between studies; not during a run).
+  void unfreeze() noexcept {
+    std::lock_guard lock(mutex_);
+    frozen_ = false;
+  }
+  /// Removes a plugin (used by tests that register temporary plugins). Returns whether it existed.
+  bool remove(std::string_view name) {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(name);
+    if (it == entries_.end()) return false;
+    entries_.erase(it);
+    return true;
+  }
+
+ private:
+  std::string kind_;
+  mutable std::mutex mutex_;
+  std::map<std::string, Entry, std::less<>> entries_;
+  std::vector<std::string> errors_;
+  bool frozen_ = false;
+};
+
+}  // namespace rkhs
+
+#define RKHS_CONCAT_IMPL(a, b) a##b
+#define RKHS_CONCAT(a, b) RKHS_CONCAT_IMPL(a, b)
+/// A unique identifier per use within a translation unit.
+#define RKHS_UNIQUE_NAME(prefix) RKHS_CONCAT(prefix, __COUNTER__)
+
+// RKHS_REGISTRAR(prefix, call): what every RKHS_REGISTER_* macro expands to (immediate in the
+// framework, deferred until the ABI check in a plugin module).
+#include "rkhs/core/registrar.hpp"

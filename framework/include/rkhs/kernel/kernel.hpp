@@ -1,0 +1,130 @@
+#pragma once
+// Kernels: what a kernel type must provide (concepts), the facts theory needs about it
+// (KernelProperties), and the type-erased AnyKernel through which trials use it.
+//
+// A kernel plugin is a concrete class K with
+//   static PluginInfo info();                      name, doc, parameters (registry.hpp)
+//   K(const ParameterSet&, const Domain&);          may throw ParameterError / invalid_argument
+//   double operator()(double x, double y) const;    k(x, y) for x, y in the domain, periodised
+//                                                   when the domain is periodic
+//   KernelProperties properties() const;
+// and, optionally, a sparse feature map (FeatureMapKernel) through which Gram and cross
+// matrices are assembled. It registers with RKHS_REGISTER_KERNEL(K) in its own .cpp file.
+// Hot loops (Gram assembly, cross matrices, error evaluation) are instantiated for K, so the
+// compiler inlines k(x, y); type erasure happens once per trial, at AnyKernel.
+
+#include <Eigen/Dense>
+#include <concepts>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rkhs/core/domain.hpp"
+#include "rkhs/core/parameters.hpp"
+#include "rkhs/core/registry.hpp"
+
+namespace rkhs {
+
+/// What approximation theory needs to know about a kernel instance.
+struct KernelProperties {
+  bool positive_definite = true;  ///< strictly positive definite on distinct points
+  /// Native space equivalent to the Sobolev space H^tau(Omega) (d = 1): tau. Empty when the
+  /// kernel is analytic (Gaussian) or has no Sobolev-equivalent native space.
+  std::optional<double> sobolev_order;
+  bool analytic = false;        ///< infinitely smooth, spectral (exponential) convergence
+  double support_radius = 0.0;  ///< k(x, y) = 0 when |x - y| >= radius; 0 means global support
+  bool stationary = true;       ///< k(x, y) depends on x - y only
+  bool periodic = false;        ///< periodised on a periodic domain
+};
+
+/// Nonzero entries of a sparse feature vector phi(x), with k(x, y) = sum_f phi_f(x) phi_f(y).
+struct SparseFeatures {
+  std::vector<std::int32_t> index;
+  std::vector<double> value;
+  void clear() noexcept {
+    index.clear();
+    value.clear();
+  }
+  void push(std::int32_t i, double v) {
+    index.push_back(i);
+    value.push_back(v);
+  }
+  std::size_t size() const noexcept { return index.size(); }
+};
+
+template <class K>
+concept KernelFunction = requires(const K& k, double x, double y) {
+  { k(x, y) } -> std::convertible_to<double>;
+  { k.properties() } -> std::convertible_to<KernelProperties>;
+  { K::info() } -> std::convertible_to<PluginInfo>;
+};
+
+/// A kernel with a finite sparse feature map: `features(x, f)` clears f and appends the
+/// nonzero features at x (indices < feature_count(); no allocation once f has grown to its
+/// largest size).
+template <class K>
+concept FeatureMapKernel = KernelFunction<K> && requires(const K& k, double x, SparseFeatures& f) {
+  k.features(x, f);
+  { k.feature_count() } -> std::convertible_to<std::size_t>;
+};
+
+/// The n kernel sections phi_i = k(c_i, .) at fixed centres, evaluated at one point at a time:
+/// the inner loop of an ODE right-hand side. One virtual call evaluates all n sections with the
+/// concrete kernel inlined; nothing is allocated after construction. Not thread-safe (it owns
+/// scratch buffers): one basis per trial.
+class KernelBasis {
+ public:
+  virtual ~KernelBasis() = default;
+  virtual std::size_t size() const noexcept = 0;
+  /// phi[i] = k(c_i, s) for i < size().
+  virtual void evaluate(double s, double* phi) const = 0;
+  /// Fixes a linear map T (rows x size()) for evaluate_mapped. For feature-map kernels T Phi_c
+  /// is precomputed, so a mapped evaluation costs O(rows x features at s), not O(rows x n).
+  virtual void set_map(const Eigen::MatrixXd& map) = 0;
+  /// out = T phi(s), out.size() == T.rows().
+  virtual void evaluate_mapped(double s, double* out) const = 0;
+};
+
+/// A kernel instance behind a virtual interface: the registry boundary. Each method runs a
+/// whole loop on the concrete kernel type.
+class AnyKernel {
+ public:
+  virtual ~AnyKernel() = default;
+
+  virtual const std::string& name() const noexcept = 0;
+  virtual const ParameterSet& parameters() const noexcept = 0;
+  virtual const Domain& domain() const noexcept = 0;
+  virtual const KernelProperties& properties() const noexcept = 0;
+
+  /// k(x, y). A virtual call per value: use the matrix methods in loops.
+  virtual double evaluate(double x, double y) const = 0;
+  /// G_ij = k(c_i, c_j), n x n, symmetric.
+  virtual Eigen::MatrixXd gram(std::span<const double> centres) const = 0;
+  /// K_mi = k(s_m, c_i), points.size() x centres.size().
+  virtual Eigen::MatrixXd cross(std::span<const double> points,
+                                std::span<const double> centres) const = 0;
+  /// k(s_m, s_m) for each point.
+  virtual Eigen::VectorXd diagonal(std::span<const double> points) const = 0;
+  /// Number of features of a finite feature map, 0 when the kernel has none.
+  virtual std::size_t feature_count() const noexcept = 0;
+  /// The sections k(c_i, .) at `centres`, for evaluation along a path.
+  virtual std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const = 0;
+  /// Points in [0, L) where kernel sections are not smooth (finest B-spline knots; the seam 0
+  /// for a kernel that is not periodic on a periodic domain), sorted. Empty when smooth.
+  virtual std::vector<double> kink_points() const = 0;
+};
+
+using KernelRegistry = Registry<AnyKernel, const Domain&>;
+
+/// The kernel registry (function-local static, defined in the framework library).
+KernelRegistry& kernel_registry();
+
+/// Creates a kernel from the registry. Throws std::invalid_argument for an unknown name and
+/// ParameterError for invalid parameters.
+std::unique_ptr<AnyKernel> make_kernel(std::string_view name, const ParameterSet& parameters,
+                                       const Domain& domain);
+
+}  // namespace rkhs

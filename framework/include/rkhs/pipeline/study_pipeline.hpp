@@ -1,0 +1,68 @@
+#pragma once
+// The study pipeline every command that runs trials shares (run, check, report): load the
+// study on every process, open the result store, run the trials the store does not hold,
+// compute the rates, and hand back one RunRecord for the writers. Commands add only what is
+// theirs (outputs, plots, verdicts, messages).
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rkhs/pipeline/executor.hpp"
+#include "rkhs/report/output.hpp"
+#include "rkhs/run/result_store.hpp"
+#include "rkhs/verify/study_rates.hpp"
+
+namespace rkhs::pipeline {
+
+/// Where finished trials are committed (docs/results.md): shared by every study run from here.
+struct StoreOptions {
+  std::string file = "results/rkhs-study.sqlite";
+  bool fresh = false;     ///< run every trial again (results are still stored)
+  bool disabled = false;  ///< no store at all
+};
+
+/// The study `load` returns, loaded on every process (each must succeed; see
+/// Executor::on_every_process).
+StudyDefinition load_everywhere(const Executor& executor,
+                                const std::function<StudyDefinition()>& load);
+
+/// A run whose every trial has a result, with what the commands report about it.
+struct CompletedRun {
+  const StudyDefinition& study;
+  const std::vector<TrialSpec>& trials;
+  StoredRun stored;                  ///< results in trial order; reused / ran counts
+  std::vector<MetricSeries> rates;   ///< compute_rates of the results
+  std::size_t failed = 0;            ///< trials whose status is failed
+  int threads = 1;                   ///< worker threads of the root process
+  double seconds = 0;                ///< wall time of the run
+  std::string started;               ///< ISO 8601 UTC time the run started
+  std::vector<RankRecord> ranks;     ///< MPI ranks (empty: one process)
+
+  /// The record the output writers take (it refers to this object: keep it alive).
+  RunRecord record() const;
+};
+
+/// What run_study did.
+struct PipelineOutcome {
+  /// Every trial has a result (root only).
+  std::optional<CompletedRun> completed;
+  /// The run was interrupted: what finished, was stored and was not (root only).
+  std::optional<StoredRun> interrupted;
+  /// The store the root used ("" with StoreOptions::disabled).
+  std::string store_file;
+};
+
+/// Runs `trials` of `study` through the store on `executor` with `options` (threads 0: the
+/// executor's default), freezing the registries first. Non-root processes get an empty
+/// outcome once the job is done.
+PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
+                          const std::vector<TrialSpec>& trials, RunOptions options,
+                          const StoreOptions& store);
+
+/// The current UTC time, ISO 8601 ("2026-12-02T01:30:00Z").
+std::string utc_now();
+
+}  // namespace rkhs::pipeline

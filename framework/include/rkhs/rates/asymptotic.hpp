@@ -1,0 +1,115 @@
+#pragma once
+// The asymptotic regime of a convergence series: which points a rate fit may use (the
+// asymptotic window, without the pre-asymptotic head and without a floor), and which rate model
+// describes the series, algebraic (power law, log-log) or exponential (log-linear in n).
+// docs/verification.md states the rules with their formulas; in short:
+//
+//   u_i = ln x_i (power law, x = n or h) or n_i (exponential),  v_i = ln y_i,
+//   r_i = (v_{i+1} - v_i) / (u_{i+1} - u_i)             pairwise rates of the usable points,
+//   R   = median r_i                                     the bulk rate,
+//   s   = robust scale of the second differences of v   the noise in ln y,
+//   T_i = max(0.1 |R|, 4 sqrt(2) s / |u_{i+1} - u_i|)    what a rate may differ from R by.
+//
+// A floor is a trailing run of rates that have stalled, sign(R) (R - r_i) > T_i, or at least
+// two trailing rates that collapsed to |r_i| <= 0.1 |R| (round-off, a singular Gram matrix, an
+// integration tolerance); the head is a leading run with |r_i - R| > T_i. Both are removed, R and s recomputed on what remains, until nothing changes;
+// a window keeps at least 3 points. The noise term makes the rule scale with the scatter of the
+// series, so noisy series are not trimmed by chance (the CI keeps its coverage) while exact
+// series are trimmed as soon as a rate is off by 10 %.
+//
+// Each model gets its own window and fit. The preferred model is the one that fits its own
+// window better than the other model fits that same window, measured by
+// ΔAIC = m ln(SSE_other / SSE_model) (both models have two parameters, so this is the AIC
+// difference); when both models win on their own windows the larger per-point advantage wins.
+// The evidence is decisive when ΔAIC >= 2 on at least 4 points (with 3, each model's SSE has
+// one degree of freedom and their ratio is mostly chance).
+
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rkhs/rates/rates.hpp"
+
+namespace rkhs {
+
+/// The usable points of a series split into head, window and floor. All indices are positions
+/// in the caller's arrays, increasing.
+struct AsymptoticWindow {
+  std::vector<std::size_t> points;  ///< the window: what the fit uses
+  std::vector<std::size_t> head;    ///< usable points before it, excluded as pre-asymptotic
+  std::vector<std::size_t> floor;   ///< usable points after it, excluded as a floor
+  double bulk_rate = 0.0;           ///< R: the median pairwise rate of the window (NaN if < 2 points)
+  double noise = 0.0;               ///< s: the noise in ln y estimated from the window
+  /// Empty when nothing was excluded; otherwise sentences like "head n = 10..20 excluded
+  /// (pairwise rates 0.88, 0.95 differ from the bulk rate 1.00 by more than 0.10)".
+  std::string note;
+};
+
+/// One rate model applied to a series: its window, its fit on the window, and the pairwise
+/// rates of the whole series under this model.
+struct ModelAnalysis {
+  RateModel model = RateModel::power_law;
+  AsymptoticWindow window;
+  std::optional<RateFit> fit;  ///< on window.points (RateFit::used holds positions); empty if < 2
+  /// Size y.size() - 1 over every point given (usable or not), NaN where undefined.
+  std::vector<double> pairwise;
+  /// ΔAIC of this model over the other on this model's window, m ln(SSE_other / SSE_this):
+  /// positive when this model fits its own window better. NaN with fewer than 3 points.
+  double advantage = 0.0;
+};
+
+/// Both models and which one describes the series.
+struct SeriesAnalysis {
+  ModelAnalysis power_law;
+  ModelAnalysis exponential;
+  /// The better-fitting model; empty when the models cannot be compared (fewer than 3 points
+  /// in either window, or neither wins on its own window).
+  std::optional<RateModel> preferred;
+  /// ΔAIC of the preferred model over the other on the preferred model's window (>= 0);
+  /// NaN when `preferred` is empty.
+  double evidence = 0.0;
+  /// Points of the preferred model's window, on which `evidence` was measured (0 when none).
+  std::size_t evidence_points = 0;
+  /// The model whose fit is reported: exponential when it is preferred decisively, otherwise
+  /// the power law (the convention of rates against ln n or ln h).
+  RateModel reported = RateModel::power_law;
+  /// One sentence on the choice, e.g. "exponential model preferred (ΔAIC = 9.8 over the power
+  /// law on n = 10..60)".
+  std::string note;
+
+  bool decisive() const {
+    return preferred.has_value() && evidence >= 2.0 && evidence_points >= 4;
+  }
+  const ModelAnalysis& analysis(RateModel model) const {
+    return model == RateModel::power_law ? power_law : exponential;
+  }
+  const ModelAnalysis& reported_analysis() const { return analysis(reported); }
+};
+
+/// The asymptotic window of the points (u_i, v_i), i < u.size(), already transformed (u = ln x
+/// or n, v = ln y) and all finite. Positions in the result index u. Fewer than 4 points, or an
+/// abscissa that is not strictly monotone, give the whole range (with a note in the latter
+/// case). `labels[i]` names point i in notes (the n of the trial), same size as u.
+/// Throws std::invalid_argument when the sizes differ.
+AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<const double> v,
+                                          std::span<const double> labels);
+
+/// Analyses a series y over the refinement axis: `x` is the power law's abscissa (n or fill
+/// distance h), `n` the exponential model's (and the labels in notes). Points with
+/// usable[i] == false (failed trials, flagged values) and points with a non-finite or
+/// non-positive value or abscissa are left out before anything else. Throws
+/// std::invalid_argument when the sizes differ or confidence is not in (0, 1).
+SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
+                              std::span<const double> y, const std::vector<bool>& usable,
+                              double confidence = 0.95);
+
+/// Pairwise exponential rates ln(y_{i+1} / y_i) / (n_{i+1} - n_i), the counterpart of
+/// pairwise_rates; NaN where a value is non-positive or non-finite or n_{i+1} = n_i.
+std::vector<double> pairwise_exponential_rates(std::span<const double> n,
+                                               std::span<const double> y);
+
+/// "10..60" or "10" (a single point) for labels of the given positions; "" when empty.
+std::string label_range(std::span<const double> labels, const std::vector<std::size_t>& positions);
+
+}  // namespace rkhs

@@ -1,0 +1,62 @@
+#pragma once
+// Convergence rates predicted by approximation theory from a kernel's metadata
+// (KernelProperties: Sobolev order tau, or analytic), for the metrics of approximation trials.
+// These are the `theory = true` expectations of docs/verification.md, where the derivations
+// and references are.
+//
+// Kernels whose native space is equivalent to the Sobolev space H^tau on a bounded domain in
+// d dimensions, with fill distance h and separation distance q (quasi-uniform: q ~ h ~ n^-1/d):
+//
+//   power_function_sup     ~ h^(tau - d/2)   order attained (two-sided)
+//   sup_error             <= C h^(tau - d/2)  upper bound only (|f - Pi f| <= P ||f||_H)
+//   l2_error              <= C h^tau          upper bound only (smoother f converge faster)
+//   gram_min_eigenvalue    ~ q^(2 tau - d)   order attained (two-sided)
+//   gram_condition_number  ~ n q^-(2 tau - d) = h^(-2 tau)   (two-sided)
+//
+// The textbook "condition number ~ q^-(2 tau - d)" is the bound on 1 / lambda_min; for a fixed
+// kernel on a bounded domain lambda_max grows like n (Gershgorin bounds it by n max k, the
+// Rayleigh quotient of the all-ones vector by n times the mean of k), so the condition number
+// grows like n q^-(2 tau - d) = q^-(2 tau) for quasi-uniform centres: n^(2 tau) in one dimension
+// (measured: +2.0 for tau = 1 and +3.9 for tau = 2, docs/model.md section 8).
+//
+// Analytic kernels (Gaussian): every metric above converges (or grows) at least exponentially,
+// so the theory is one-sided and qualitative: the exponential model describes the series
+// better than any power law, and its rate has the right sign.
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/rates/rates.hpp"
+
+namespace rkhs {
+
+struct TheoryRate {
+  RateModel model = RateModel::power_law;  ///< power_law (Sobolev) or exponential (analytic)
+  double h_exponent = 0.0;  ///< power law: the metric behaves like h^h_exponent
+  /// True when the order is attained (the fitted rate must equal it within the tolerance);
+  /// false when theory bounds the metric from above only (it may converge faster).
+  bool sharp = true;
+  int direction = -1;     ///< exponential: -1 the metric decays, +1 it grows
+  std::string statement;  ///< "power_function_sup ~ h^(tau - d/2) = h^0.5 (tau = 1, d = 1)"
+};
+
+/// The theory for `metric` and a kernel with `properties` in `dimension` dimensions, or
+/// std::nullopt with the reason in `*why` (metric without a theory, kernel without a Sobolev
+/// order and not analytic).
+std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
+                                      int dimension, std::string* why = nullptr);
+
+/// The metrics theory_rate knows.
+const std::vector<std::string>& theory_metrics();
+
+/// The interval accepted for the fitted power-law slope against the study's abscissa, for an
+/// algebraic theory: the slope is h_exponent against ln h, -h_exponent / d against ln n
+/// (quasi-uniform centres). Sharp: slope +- tolerance; otherwise one-sided (at least as fast
+/// as the theory, minus the tolerance). `*slope` receives the predicted slope.
+RateInterval theory_interval(const TheoryRate& theory, Abscissa abscissa, int dimension,
+                             double tolerance, double* slope = nullptr);
+
+}  // namespace rkhs

@@ -1,0 +1,60 @@
+#pragma once
+// A console convergence table for one metric of one group of trials, in the shape of deal.II's
+// ConvergenceTable: the refinement axis, the metric, the pairwise (local) rate, and a footer
+// with the fitted rate and its confidence interval (docs/style.md practice 15).
+//
+//   l2_error, group gaussian/eps=2
+//    n   l2_error    rate
+//   10  3.162e-02       -
+//   20  1.118e-02   -1.50
+//   40  3.953e-03   -1.50
+//   80  1.398e-03*  -1.50
+//   fitted rate: -1.50 ± 0.00 (95% CI [-1.50, -1.50], R² = 1.000, 4 points)
+//   * value flagged: at the round-off floor or from a singular Gram matrix
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "rkhs/rates/rates.hpp"
+
+namespace rkhs {
+
+/// One line of the table: a point of the refinement axis and the metric measured there.
+struct TableRow {
+  double abscissa = 0.0;  ///< n, or whatever the axis is (fill distance h, ...)
+  double value = 0.0;     ///< the metric; NaN / inf / non-positive values print as they are
+  bool flagged = false;   ///< caller's doubt about the value; prints with a '*' marker
+};
+
+/// Formats the table as lines ending in '\n' (UTF-8: the footer uses ± and ²).
+///
+/// - First line: "<metric>, group <group>".
+/// - Columns, right-aligned and separated by two spaces: the abscissa (header `abscissa_name`;
+///   integral values print as integers, others with 4 significant digits), the value (header
+///   `metric`; scientific with 4 significant digits, followed by '*' when flagged), and the
+///   pairwise rate of `pairwise_model` (pairwise_rates for the power law,
+///   pairwise_exponential_rates for the exponential model, so that the column matches the
+///   footer's model; 2 decimals, 3 significant digits below 1; '-' in the first row and where the
+///   rate is undefined). Rows print in the order given; rates compare neighbouring rows.
+/// - Footer: the fitted rate from `fit`, which the caller computed from these rows (or a subset
+///   of them, e.g. without flagged ones): "fitted rate: r ± se (95% CI [lo, hi], R² = q, m
+///   points)", with "fitted rate (exponential in <abscissa_name>)" for RateModel::exponential.
+///   The rate, its standard error and CI carry 2 decimals, more when |rate| < 1 (3 significant
+///   digits, at most 6 decimals). A two-point fit prints its slope only. When `fit` is empty
+///   the footer explains why no rate is available: `no_fit_reason` when given (the caller knows
+///   what it excluded before fitting), otherwise a count of the rows with a finite, positive
+///   value. A non-empty RateFit::note follows as "note: ...".
+/// - When any row is flagged, a last line "* <flag_legend>".
+///
+/// Never throws except std::bad_alloc. Column widths count bytes, so non-ASCII metric or axis
+/// names may misalign.
+std::string format_convergence_table(
+    std::string_view metric, std::string_view group, std::string_view abscissa_name,
+    std::span<const TableRow> rows, const std::optional<RateFit>& fit,
+    std::string_view flag_legend =
+        "value flagged: at the round-off floor or from a singular Gram matrix",
+    RateModel pairwise_model = RateModel::power_law, std::string_view no_fit_reason = {});
+
+}  // namespace rkhs

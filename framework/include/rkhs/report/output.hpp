@@ -1,0 +1,57 @@
+#pragma once
+// A finished run written out: trials.csv (tidy, one row per trial), rates.csv (one row per
+// group, metric and rate: the fit and every pairwise rate), summary.json (the study, its
+// provenance, trials and rates), and the console tables. Files are written to a temporary name
+// and renamed, so a reader never sees a half-written file.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "rkhs/run/run.hpp"
+#include "rkhs/study/study.hpp"
+#include "rkhs/study/trial_grid.hpp"
+#include "rkhs/verify/study_rates.hpp"
+
+namespace rkhs {
+
+struct RunRecord {
+  const StudyDefinition& study;
+  const std::vector<TrialSpec>& trials;
+  const std::vector<TrialResult>& results;
+  const std::vector<MetricSeries>& rates;
+  int threads = 1;
+  double wall_seconds = 0;
+  std::string started;  ///< ISO 8601 UTC time the run started
+  std::vector<RankRecord> ranks = {};  ///< MPI ranks of a distributed run (empty: one process)
+};
+
+std::string trials_csv(const RunRecord& run);
+std::string rates_csv(const RunRecord& run);
+std::string summary_json(const RunRecord& run);
+/// Adaptive studies: fhat and f on the snapshot grid at the chosen laps (one row per trial, lap
+/// and point: the data of the paper's "road surface estimates" figures).
+std::string estimates_csv(const RunRecord& run);
+/// Adaptive studies: |x - xhat| and V at the output samples of every trial.
+std::string timeseries_csv(const RunRecord& run);
+/// The rate tables as Markdown (one table per metric and group: n, value, pairwise rate, then
+/// the fitted rate with its confidence interval) and as LaTeX (booktabs tables), written as
+/// rates.md and rates.tex. Flagged values carry a '*'.
+std::string markdown_tables(const RunRecord& run);
+std::string latex_tables(const RunRecord& run);
+/// One ConvergenceTable per metric and group.
+std::string console_tables(const RunRecord& run);
+
+/// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and
+/// timeseries.csv) into `directory` (created if needed).
+void write_outputs(const RunRecord& run, const std::filesystem::path& directory);
+
+/// Writes `content` to `file` atomically (temporary file, then rename).
+void write_file_atomically(const std::filesystem::path& file, const std::string& content);
+
+/// A CSV field, quoted when it contains a comma, quote or line break (RFC 4180).
+std::string csv_field(const std::string& value);
+/// A real for CSV: shortest round-trip representation, "inf"/"-inf", "" for NaN.
+std::string csv_number(double value);
+
+}  // namespace rkhs

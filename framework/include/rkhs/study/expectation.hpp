@@ -1,0 +1,77 @@
+#pragma once
+// Expectations: what a study file says its results must show ([[expect]] tables), checked by
+// `rkhs-study check` (rkhs/verify/verification.hpp). docs/verification.md is the reference.
+//
+//   [[expect]]
+//   metric = "power_function_sup"     # a metric of the study
+//   kernel = "bspline"                # group selector: any axis column of trials.csv
+//   degree = 1                        #   (a list accepts any of its values)
+//   theory = true                     # what is expected: theory = true | rate | model | bound
+//   tier = "quick"                    # optional: the tiers this expectation belongs to
+//
+// An expectation applies to every group (all axes but n) its selector matches; each
+// (expectation, group) pair gets its own verdict.
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rkhs/core/parameters.hpp"
+#include "rkhs/rates/rates.hpp"
+
+namespace rkhs {
+
+struct TrialSpec;
+
+/// One term of a group selector: an axis column of trials.csv ("kernel", "degree",
+/// "target_amplitude", "centres", ...) and the values it accepts (any of them).
+struct AxisSelector {
+  std::string column;
+  std::vector<ParameterValue> values;
+};
+
+enum class ExpectationKind {
+  rate,    ///< the fitted rate lies in an interval
+  theory,  ///< the rate the kernel's metadata predicts (rkhs/rates/theory.hpp)
+  model,   ///< a rate model describes the series better than the other
+  bound,   ///< metric <= constant * by [* times] at every n
+};
+
+/// metric(n) <= constant * by(n) * times(n) at every usable n (by and times optional; without
+/// them the bound is the constant).
+struct BoundSpec {
+  std::string by;     ///< "" when absent
+  std::string times;  ///< "" when absent (needs by)
+  double constant = 1.0;
+};
+
+/// One [[expect]] table, validated against the study it belongs to.
+struct Expectation {
+  std::size_t number = 0;    ///< 1-based position among the file's [[expect]] tables
+  std::string location;      ///< "file:line:column" of the table, for messages
+  std::string name;          ///< optional label (`name = "..."`), "" when absent
+  std::string metric;
+  std::vector<AxisSelector> selectors;  ///< all must match; empty selects every group
+  ExpectationKind kind = ExpectationKind::rate;
+  /// rate: the model whose fit is judged (default power law); model: the model required.
+  RateModel model = RateModel::power_law;
+  RateInterval interval;            ///< rate: the accepted interval
+  std::optional<double> expected;   ///< rate = x: x (the interval is x +- tolerance)
+  double tolerance = 0.1;           ///< rate = x and theory: half-width of the accepted interval
+  BoundSpec bound;                  ///< bound only
+  std::vector<std::string> tiers;   ///< empty: belongs to no named tier
+
+  /// Whether `trial`'s group satisfies every selector (values compared as printed in
+  /// trials.csv, so `sigma = 1` matches the real 1.0).
+  bool selects(const TrialSpec& trial) const;
+  /// "kernel=bspline degree=1" (the selector as written), "every group" when empty.
+  std::string selector_text() const;
+  /// Whether the expectation is in `tier` ("" means every expectation).
+  bool in_tier(std::string_view tier) const;
+};
+
+/// The default tolerance of rate = x and theory expectations: 0.1 on the slope.
+inline constexpr double default_rate_tolerance = 0.1;
+
+}  // namespace rkhs

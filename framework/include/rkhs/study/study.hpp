@@ -1,0 +1,109 @@
+#pragma once
+// Study definitions: a TOML file (docs/study-files.md) that declares axes (kernels with their
+// parameters, n, targets, centre placements), the domain, the metrics and the solver; the trial
+// grid is the Cartesian product of the axes.
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/core/domain.hpp"
+#include "rkhs/study/expectation.hpp"
+#include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/core/parameters.hpp"
+
+namespace rkhs {
+
+/// A bad study file. `what()` reads "file:line:column: key: what was found; what is allowed".
+class StudyError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// One plugin with its resolved parameters.
+struct PluginChoice {
+  std::string name;
+  ParameterSet parameters;
+  /// `tier = "quick"` (or a list) in the entry: the tiers it belongs to; empty when unmarked.
+  /// Not part of the label or the trial key.
+  std::vector<std::string> tiers;
+  /// "name p1=v1 p2=v2": the plugin part of a trial key.
+  std::string label() const;
+};
+
+/// One point of the trial grid.
+struct TrialSpec {
+  std::size_t index = 0;  ///< position in the grid (the order of trials.csv)
+  PluginChoice kernel;
+  PluginChoice target;
+  PluginChoice centres;
+  PluginChoice plant;       ///< adaptive trials only (empty name otherwise)
+  PluginChoice law;         ///< adaptive trials only
+  PluginChoice integrator;  ///< adaptive trials only
+  std::size_t n = 0;
+  std::string group_key;  ///< every axis but n: trials of a group form one convergence series
+  std::string key;        ///< every axis: identifies the trial
+  std::uint64_t seed = 0; ///< hash of key: the seed of any randomness in the trial
+};
+
+/// What rates are fitted against: ln n (default) or ln h with h the fill distance.
+struct StudyLimits {
+  double trial_seconds = 0;          ///< a trial running longer fails (0: no limit)
+  double matrix_megabytes = 2048;    ///< a trial whose dense matrices exceed this fails up front
+};
+
+struct StudyDefinition {
+  std::string name;
+  std::string description;
+  std::string source;  ///< the file it was read from
+  std::string kind = "approximation";
+  Domain domain;
+  std::vector<std::size_t> n_values;  ///< increasing, distinct
+  std::size_t evaluation_points = 4096;
+  std::vector<PluginChoice> kernels, targets, centres;
+  std::vector<PluginChoice> plants, laws, integrators;  ///< adaptive studies only
+  std::vector<std::string> metrics;  ///< the metrics written and fitted, in output order
+  Abscissa abscissa = Abscissa::n;
+  SolverOptions solver;
+  StudyLimits limits;
+  AdaptiveSettings adaptive;  ///< kind = "adaptive" only
+  std::vector<Expectation> expectations;  ///< [[expect]] tables (rkhs/study/expectation.hpp)
+  /// What the file asks for that is valid but doubtful, as "file:line:column: key: why" (e.g. an
+  /// evaluation grid too coarse for the largest n); `validate`, `run` and `check` print them.
+  std::vector<std::string> warnings;
+
+  /// The Cartesian product kernels x targets x centres [x plants x laws x integrators] x n,
+  /// n varying fastest.
+  std::vector<TrialSpec> trials() const;
+
+  /// One axis of the trial grid: what it is called (singular and plural) and how many values
+  /// it has. grid_axes() lists the axes this study's kind has, in the order trials() nests
+  /// them (n last); the product of the counts is trials().size().
+  struct GridAxis {
+    const char* singular;
+    const char* plural;
+    std::size_t count;
+  };
+  std::vector<GridAxis> grid_axes() const;
+
+  /// Every metric a trial of this study's kind measures (TrialResult::metrics is aligned with
+  /// it), and the position of one of them (throws std::out_of_range for an unknown name).
+  const std::vector<std::string>& all_metrics() const;
+  std::size_t metric_index(std::string_view metric) const;
+};
+
+/// Every metric a trial of `kind` measures, in output order. Throws std::invalid_argument for
+/// an unknown kind.
+const std::vector<std::string>& metric_names(std::string_view kind);
+
+/// Reads and validates a study file. Throws StudyError (file, line, column, key, found,
+/// allowed, and a suggestion for misspelt names) for any problem.
+StudyDefinition load_study(const std::filesystem::path& file);
+/// The same from text; `source_name` is used in messages.
+StudyDefinition parse_study(std::string_view text, const std::string& source_name);
+
+}  // namespace rkhs

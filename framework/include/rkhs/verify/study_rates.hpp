@@ -1,0 +1,46 @@
+#pragma once
+// Convergence rates of a finished study: for each group (every axis but n) and each metric,
+// the pairwise rates between successive n and a least-squares fit of ln(metric) against ln(n)
+// (or ln h, as the study says). Failed trials and values flagged as numerically meaningless
+// (singular Gram matrix for the condition number, round-off floors) are excluded from fits and
+// the exclusion is said in the fit's note. The fit uses the asymptotic window only (no
+// pre-asymptotic head, no floor; rkhs/rates/asymptotic.hpp), and both rate models are fitted: the
+// reported one is the power law unless the exponential model fits decisively better.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rkhs/rates/asymptotic.hpp"
+#include "rkhs/rates/rates.hpp"
+#include "rkhs/run/run.hpp"
+#include "rkhs/study/study.hpp"
+
+namespace rkhs {
+
+struct MetricSeries {
+  std::string metric;
+  std::size_t group = 0;                ///< index of the group (order of first appearance)
+  std::vector<std::size_t> trials;      ///< trial indices, increasing n
+  std::vector<double> abscissa;         ///< n or fill distance, per trial
+  std::vector<double> n;                ///< n per trial (the exponential model's abscissa)
+  std::vector<double> values;           ///< the metric, NaN for failed trials
+  std::vector<bool> flagged;            ///< excluded from the fit as numerically meaningless
+  /// Size trials.size() - 1, NaN where undefined: the pairwise rates of the reported model
+  /// (analysis.reported), power-law rates unless the exponential model is reported.
+  std::vector<double> pairwise;
+  std::optional<RateFit> fit;           ///< the reported model's fit on its asymptotic window
+  SeriesAnalysis analysis;              ///< both models, their windows, the preferred one
+  std::string note;                     ///< what was excluded and why ("" when nothing)
+  std::string no_fit_reason;            ///< why there is no fit ("" when there is one)
+};
+
+/// The flag that makes a value of `metric` meaningless, or "" when none does.
+std::string_view excluding_flag(std::string_view metric);
+
+/// Series for every group and every metric of the study, groups in trial order.
+std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
+                                        const std::vector<TrialSpec>& trials,
+                                        const std::vector<TrialResult>& results);
+
+}  // namespace rkhs

@@ -1,0 +1,83 @@
+#include <algorithm>
+#include <cmath>
+
+#include "rkhs/adaptive/adaptive.hpp"
+
+namespace rkhs {
+
+IntegratorRegistry& integrator_registry() {
+  static IntegratorRegistry registry("integrator");
+  return registry;
+}
+
+AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B,
+                               const Eigen::MatrixXd& P, KernelBasis& basis,
+                               const Eigen::MatrixXd& learning_map,
+                               const std::function<double(double)>& road, const Domain& domain,
+                               double speed)
+    : A_(A),
+      B_(B),
+      b_(P * B),
+      basis_(basis),
+      road_(road),
+      domain_(domain),
+      speed_(speed),
+      d_(A.rows()),
+      n_(static_cast<Eigen::Index>(basis.size())),
+      phi_(basis.size()),
+      psi_(basis.size()),
+      plus_(static_cast<std::size_t>(2 * A.rows()) + basis.size()),
+      minus_(plus_.size()) {
+  basis_.set_map(learning_map);
+}
+
+void AdaptiveSystem::rhs_uncounted(const double* z, double* dz, double t) const {
+  using Vector = Eigen::Map<const Eigen::VectorXd>;
+  const double s = arc_length(t);
+  const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
+  Eigen::Map<Eigen::VectorXd> dx(dz, d_), dxhat(dz + d_, d_), dalpha(dz + 2 * d_, n_);
+  basis_.evaluate(s, phi_.data());
+  basis_.evaluate_mapped(s, psi_.data());
+  const double estimate = Vector(phi_.data(), n_).dot(alpha);
+  const double error = b_.dot(x - xhat);  // B^T P (x - xhat)
+  dx.noalias() = A_ * x + B_ * road_(s);
+  dxhat.noalias() = A_ * xhat + B_ * estimate;
+  dalpha = error * Vector(psi_.data(), n_);
+}
+
+void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
+  ++rhs_count_;
+  rhs_uncounted(z, dz, t);
+}
+
+void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt) const {
+  ++jacobian_count_;
+  const Eigen::Index m = dimension();
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jac(J, m, m);
+  jac.setZero();
+  const double s = arc_length(t);
+  basis_.evaluate(s, phi_.data());
+  basis_.evaluate_mapped(s, psi_.data());
+  const Eigen::Map<const Eigen::VectorXd> phi(phi_.data(), n_), psi(psi_.data(), n_);
+  jac.block(0, 0, d_, d_) = A_;
+  jac.block(d_, d_, d_, d_) = A_;
+  jac.block(d_, 2 * d_, d_, n_).noalias() = B_ * phi.transpose();
+  jac.block(2 * d_, 0, n_, d_).noalias() = psi * b_.transpose();
+  jac.block(2 * d_, d_, n_, d_).noalias() = -psi * b_.transpose();
+
+  // dF/dt by differences in t, inside the current smooth segment. F depends on t only through
+  // s = v t, so the increment is sized in arc length (1e-6 L): small against the scales of f
+  // and phi, large enough that round-off in f(s +- h) does not dominate.
+  const double h = 1e-6 * domain_.length / std::abs(speed_);
+  double lo = t - h, hi = t + h;
+  if (lo < segment_begin_) lo = t;
+  if (hi > segment_end_ && segment_end_ > segment_begin_) hi = t;
+  if (hi == lo) hi = t + h;  // degenerate segment: forward difference
+  rhs(z, plus_.data(), hi);  // counted: part of the cost of a Jacobian
+  rhs(z, minus_.data(), lo);
+  for (Eigen::Index i = 0; i < m; ++i)
+    dfdt[i] =
+        (plus_[static_cast<std::size_t>(i)] - minus_[static_cast<std::size_t>(i)]) / (hi - lo);
+}
+
+}  // namespace rkhs

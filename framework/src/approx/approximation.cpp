@@ -1,0 +1,147 @@
+#include "rkhs/approx/approximation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rkhs/core/cancellation.hpp"
+
+namespace rkhs {
+
+namespace {
+constexpr double eps = std::numeric_limits<double>::epsilon();
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<double> sorted_wrapped(std::span<const double> centres, const Domain& domain) {
+  std::vector<double> c(centres.size());
+  std::transform(centres.begin(), centres.end(), c.begin(),
+                 [&](double x) { return domain.wrap(x); });
+  std::sort(c.begin(), c.end());
+  return c;
+}
+}  // namespace
+
+double fill_distance(std::span<const double> centres, const Domain& domain) {
+  if (centres.empty()) return std::numeric_limits<double>::infinity();
+  const auto c = sorted_wrapped(centres, domain);
+  double largest_gap = 0;
+  for (std::size_t i = 1; i < c.size(); ++i) largest_gap = std::max(largest_gap, c[i] - c[i - 1]);
+  if (domain.periodic) {
+    largest_gap = std::max(largest_gap, c.front() + domain.length - c.back());
+    return 0.5 * largest_gap;
+  }
+  return std::max({0.5 * largest_gap, c.front(), domain.length - c.back()});
+}
+
+double separation_distance(std::span<const double> centres, const Domain& domain) {
+  if (centres.size() < 2) return nan;
+  const auto c = sorted_wrapped(centres, domain);
+  double smallest_gap = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < c.size(); ++i) smallest_gap = std::min(smallest_gap, c[i] - c[i - 1]);
+  if (domain.periodic) smallest_gap = std::min(smallest_gap, c.front() + domain.length - c.back());
+  return 0.5 * smallest_gap;
+}
+
+const std::vector<std::string>& approximation_metric_names() {
+  static const std::vector<std::string> names{
+      "fill_distance",       "separation_distance", "gram_condition_number",
+      "gram_min_eigenvalue", "gram_max_eigenvalue", "power_function_sup",
+      "power_function_floor", "l2_error",           "sup_error",
+      "error_floor",         "interpolant_native_norm"};
+  return names;
+}
+
+namespace {
+// P_n^2 on the points, with what the error estimates need.
+struct PowerFunctionData {
+  Eigen::MatrixXd cross;                  // K_mi = k(s_m, c_i)
+  Eigen::VectorXd power_squared;          // max(0, k(s,s) - k_X^T G^-1 k_X)
+  Eigen::VectorXd solution_norm_squared;  // |G^-1 k_X(s_m)|^2
+};
+
+PowerFunctionData power_function_data(const AnyKernel& kernel, const GramSolver& solver,
+                                      std::span<const double> centres,
+                                      std::span<const double> points) {
+  PowerFunctionData data;
+  data.cross = kernel.cross(points, centres);
+  Eigen::VectorXd quadratic;
+  solver.quadratic_forms(data.cross.transpose(), quadratic, data.solution_norm_squared);
+  data.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+  return data;
+}
+}  // namespace
+
+Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,
+                               std::span<const double> centres, std::span<const double> points) {
+  return power_function_data(kernel, solver, centres, points).power_squared.cwiseSqrt();
+}
+
+ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
+                                               const TargetFunction& target,
+                                               std::span<const double> centres,
+                                               std::size_t evaluation_points,
+                                               const SolverOptions& solver_options) {
+  const Eigen::MatrixXd gram = kernel.gram(centres);
+  check_cancelled();
+  const GramSolver solver(gram, solver_options);
+  check_cancelled();
+  return measure_approximation(kernel, target, centres, evaluation_points, gram, solver);
+}
+
+ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
+                                               const TargetFunction& target,
+                                               std::span<const double> centres,
+                                               std::size_t evaluation_points,
+                                               const Eigen::MatrixXd& gram,
+                                               const GramSolver& solver,
+                                               Eigen::MatrixXd* cross_out) {
+  const Domain& domain = kernel.domain();
+  const auto n = static_cast<Eigen::Index>(centres.size());
+  const auto points = domain.uniform_points(evaluation_points);
+
+  ApproximationMeasurement out;
+  out.metrics.assign(approximation_metric_names().size(), nan);
+  auto set = [&](std::size_t index, double value) { out.metrics[index] = value; };
+  set(0, fill_distance(centres, domain));
+  set(1, separation_distance(centres, domain));
+
+  const auto& spectrum = solver.spectrum();
+  out.solve_method = solver.method();
+  set(2, spectrum.condition_number);
+  set(3, spectrum.lambda_min);
+  set(4, spectrum.lambda_max);
+  if (spectrum.singular) out.flags.push_back("gram_singular");
+
+  // Power function from the cross matrix K_mi = k(s_m, c_i), O(n^2) per point.
+  auto data = power_function_data(kernel, solver, centres, points);
+  check_cancelled();
+  const Eigen::MatrixXd& cross = data.cross;
+  const Eigen::VectorXd& solution_norm_squared = data.solution_norm_squared;
+  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
+  const double power_sup = std::sqrt(data.power_squared.maxCoeff());
+  const double power_floor = std::sqrt(round_off * solution_norm_squared.maxCoeff());
+  set(5, power_sup);
+  set(6, power_floor);
+  if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+
+  // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
+  Eigen::VectorXd at_centres(n), at_points(static_cast<Eigen::Index>(points.size()));
+  target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
+  target.evaluate(points, std::span<double>(at_points.data(), points.size()));
+  const Eigen::VectorXd alpha = solver.solve(at_centres);
+  const Eigen::VectorXd residual = at_points - cross * alpha;
+  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), points.size()));
+  const double sup = residual.cwiseAbs().maxCoeff();
+  const double error_floor =
+      round_off * std::sqrt(solution_norm_squared.maxCoeff()) * alpha.norm();
+  set(7, l2);
+  set(8, sup);
+  set(9, error_floor);
+  set(10, std::sqrt(std::max(0.0, alpha.dot(gram * alpha))));
+  if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
+  if (l2 <= error_floor * std::sqrt(domain.length)) out.flags.push_back("l2_error_at_floor");
+  if (cross_out) *cross_out = std::move(data.cross);
+  return out;
+}
+
+}  // namespace rkhs

@@ -1,0 +1,66 @@
+#include "rkhs/core/data_root.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <mutex>
+#include <stdexcept>
+
+namespace rkhs {
+namespace {
+
+struct Setting {
+  std::mutex mutex;
+  std::optional<std::filesystem::path> directory;
+};
+
+Setting& setting() {
+  static Setting instance;
+  return instance;
+}
+
+}  // namespace
+
+void set_data_root(const std::filesystem::path& directory) {
+  auto& s = setting();
+  std::lock_guard lock(s.mutex);
+  if (directory.empty())
+    s.directory.reset();
+  else
+    s.directory = std::filesystem::absolute(directory).lexically_normal();
+}
+
+DataRoot data_root() {
+  {
+    auto& s = setting();
+    std::lock_guard lock(s.mutex);
+    if (s.directory) return {*s.directory, "--data-dir"};
+  }
+  if (const char* environment = std::getenv("RKHS_STUDY_DATA"); environment && *environment)
+    return {std::filesystem::absolute(environment).lexically_normal(), "RKHS_STUDY_DATA"};
+  return {std::filesystem::absolute("studies/data").lexically_normal(), "default"};
+}
+
+std::filesystem::path resolve_data_file(const std::string& name) {
+  if (name.empty()) throw std::invalid_argument("no data file given (file = \"...\")");
+  const std::filesystem::path given(name);
+  std::error_code error;
+  if (given.is_absolute()) {
+    if (std::filesystem::is_regular_file(given, error)) return given;
+    throw std::invalid_argument(
+        fmt::format("data file '{}' not found (looked at {})", name, given.string()));
+  }
+  const auto root = data_root();
+  const auto path = (root.directory / given).lexically_normal();
+  if (std::filesystem::is_regular_file(path, error)) return path;
+  const std::string origin = root.origin == "default"
+                                 ? "the default data root studies/data/ below the current directory"
+                                 : fmt::format("the data root from {}", root.origin);
+  throw std::invalid_argument(fmt::format(
+      "data file '{}' not found (looked at {}, in {}{}; set the data root with --data-dir DIR or "
+      "RKHS_STUDY_DATA)",
+      name, path.string(), origin,
+      std::filesystem::is_directory(root.directory, error) ? "" : ", which does not exist"));
+}
+
+}  // namespace rkhs

@@ -1,0 +1,28 @@
+#include "rkhs/pipeline/journal.hpp"
+
+#include "rkhs/report/output.hpp"
+
+namespace rkhs::pipeline {
+
+Journal::Journal(const std::filesystem::path& file, const StudyDefinition& study)
+    : study_(study), file_(file) {
+  out_.open(file, std::ios::trunc);
+  out_ << "index,key,status,reason";
+  for (const auto& metric : study.metrics) out_ << "," << metric;
+  out_ << "\n" << std::flush;
+}
+
+void Journal::record(const TrialSpec& trial, const TrialResult& result) {
+  out_ << trial.index << "," << csv_field(trial.key) << "," << (result.ok ? "ok" : "failed")
+       << "," << csv_field(result.reason);
+  for (const auto& metric : study_.metrics)
+    out_ << "," << csv_number(result.metrics[study_.metric_index(metric)]);
+  out_ << "\n" << std::flush;
+}
+
+void Journal::remove() {
+  out_.close();
+  std::filesystem::remove(file_);
+}
+
+}  // namespace rkhs::pipeline

@@ -1,0 +1,309 @@
+#include "rkhs/plugin/kernel_contract.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rkhs/core/random.hpp"
+
+namespace rkhs {
+
+namespace {
+
+constexpr double epsilon = std::numeric_limits<double>::epsilon();
+
+std::string g(double value) {
+  return fmt::format("{:.3g}", value);
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? "; " : "") + items[i];
+  return out;
+}
+
+class Checks {
+ public:
+  explicit Checks(ContractReport& report) : report_(report) {}
+  void add(std::string name, bool passed, std::string detail) {
+    report_.checks.push_back({std::move(name), passed, false, std::move(detail)});
+  }
+  void skip(std::string name, std::string why) {
+    report_.checks.push_back({std::move(name), true, true, std::move(why)});
+  }
+  /// "measured <= tolerance" checks.
+  void at_most(std::string name, std::string what, double measured, double tolerance) {
+    add(std::move(name), measured <= tolerance,
+        fmt::format("{} = {} (tolerance {})", what, g(measured), g(tolerance)));
+  }
+
+ private:
+  ContractReport& report_;
+};
+
+// Smallest eigenvalue of G relative to round-off: PSD to working precision when
+// lambda_min >= -64 n eps lambda_max (eigenvalue error of a symmetric solver ~ n eps ||G||).
+struct Spectrum {
+  Eigen::VectorXd lambda;
+  double allowed_negative = 0;
+};
+Spectrum spectrum_of(const Eigen::MatrixXd& gram) {
+  Spectrum s;
+  s.lambda =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(gram, Eigen::EigenvaluesOnly).eigenvalues();
+  s.allowed_negative = 64 * static_cast<double>(gram.rows()) * epsilon * s.lambda.maxCoeff();
+  return s;
+}
+
+}  // namespace
+
+bool ContractReport::passed() const noexcept {
+  return std::all_of(checks.begin(), checks.end(), [](const auto& c) { return c.passed; });
+}
+
+std::vector<std::string> ContractReport::failures() const {
+  std::vector<std::string> out;
+  for (const auto& c : checks)
+    if (!c.passed) out.push_back(c.name + ": " + c.detail);
+  return out;
+}
+
+std::vector<double> golden_ratio_points(std::size_t count, double length, double start) {
+  const double golden = 0.61803398874989484820;
+  std::vector<double> out(count);
+  double u = start;
+  for (auto& s : out) {
+    u += golden;
+    u -= std::floor(u);
+    s = u * length;
+  }
+  return out;
+}
+
+std::vector<double> nested_uniform_centres(std::size_t n, double length) {
+  std::vector<double> out(n);
+  for (std::size_t i = 0; i < n; ++i)
+    out[i] = static_cast<double>(i) * length / static_cast<double>(n);
+  return out;
+}
+
+PowerFunctionSquared power_function_squared(const AnyKernel& kernel,
+                                            const std::vector<double>& centres,
+                                            const std::vector<double>& points) {
+  const Eigen::MatrixXd gram = kernel.gram(centres);
+  const auto n = static_cast<double>(centres.size());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram);
+  const Eigen::VectorXd& lambda = eigen.eigenvalues();
+  const double lambda_max = lambda.maxCoeff();
+  const double cutoff = 1e3 * n * epsilon * lambda_max;
+  const Eigen::MatrixXd projections = kernel.cross(points, centres) * eigen.eigenvectors();
+  const Eigen::VectorXd diagonal = kernel.diagonal(points);
+
+  PowerFunctionSquared out;
+  out.squared = diagonal;
+  double lambda_min_kept = lambda_max;
+  for (Eigen::Index i = 0; i < lambda.size(); ++i) {
+    if (lambda(i) <= cutoff) {
+      ++out.dropped;
+      continue;
+    }
+    lambda_min_kept = std::min(lambda_min_kept, lambda(i));
+    out.squared -= projections.col(i).cwiseAbs2() / lambda(i);
+  }
+  out.condition = lambda_max / lambda_min_kept;
+  out.tolerance = 32 * n * epsilon * out.condition * diagonal.maxCoeff();
+  return out;
+}
+
+ContractReport check_kernel_contract(const AnyKernel& kernel) {
+  ContractReport report;
+  Checks checks(report);
+  const Domain& domain = kernel.domain();
+  const double length = domain.length;
+  const auto points = golden_ratio_points(61, length);
+  const auto props = kernel.properties();
+
+  std::vector<std::string> metadata_problems;
+  if (props.analytic && props.sobolev_order)
+    metadata_problems.push_back("both analytic and a Sobolev order");
+  if (props.sobolev_order && !(*props.sobolev_order > 0.5))  // H^tau in C(Omega) needs tau > d/2
+    metadata_problems.push_back(fmt::format("Sobolev order {} <= 1/2", g(*props.sobolev_order)));
+  if (!(props.support_radius >= 0)) metadata_problems.push_back("negative support radius");
+  if (kernel.feature_count() > 0 && props.positive_definite)  // rank <= features
+    metadata_problems.push_back("positive definite with a finite feature map");
+  checks.add("metadata", metadata_problems.empty(),
+             metadata_problems.empty() ? "consistent" : join(metadata_problems));
+
+  // k(x, x) scale for relative tolerances.
+  const Eigen::VectorXd diagonal = kernel.diagonal(points);
+  const double scale = diagonal.maxCoeff();
+  checks.add("diagonal", scale > 0 && diagonal.minCoeff() >= 0,
+             fmt::format("k(x, x) in [{}, {}]", g(diagonal.minCoeff()), g(scale)));
+  if (!(scale > 0)) return report;  // every other tolerance is relative to it
+
+  // Symmetry, periodicity, compact support, stationarity on pairs of scattered points.
+  double asymmetry = 0, aperiodicity = 0, outside_support = 0, nonstationarity = 0;
+  for (double x : points) {
+    for (double y : points) {
+      const double kxy = kernel.evaluate(x, y);
+      asymmetry = std::max(asymmetry, std::abs(kxy - kernel.evaluate(y, x)));
+      if (domain.periodic) {
+        aperiodicity = std::max(aperiodicity, std::abs(kernel.evaluate(x + length, y) - kxy));
+        aperiodicity = std::max(aperiodicity, std::abs(kernel.evaluate(x, y - 2 * length) - kxy));
+      }
+      if (props.support_radius > 0 && domain.distance(x, y) >= props.support_radius)
+        outside_support = std::max(outside_support, std::abs(kxy));
+      if (props.stationary) {
+        const double shift = 0.3 * length;
+        if (domain.periodic || (x + shift <= length && y + shift <= length))
+          nonstationarity =
+              std::max(nonstationarity, std::abs(kernel.evaluate(x + shift, y + shift) - kxy));
+      }
+    }
+  }
+  checks.at_most("symmetry", "max |k(x,y) - k(y,x)| / max k", asymmetry / scale, 1e-14);
+  if (props.periodic != domain.periodic) {
+    checks.add("periodicity", false,
+               fmt::format("declared periodic = {} on {} domain", props.periodic ? "yes" : "no",
+                           domain.periodic ? "a periodic" : "an interval"));
+  } else if (domain.periodic) {
+    // x + L rounds: |dk| <= |k'| eps L.
+    checks.at_most("periodicity", "max |k(x+L,y) - k(x,y)|, |k(x,y-2L) - k(x,y)| / max k",
+                   aperiodicity / scale, 1e-11);
+  } else {
+    checks.skip("periodicity", "interval domain, declared not periodic");
+  }
+  if (props.support_radius > 0)
+    checks.at_most("compact support", "max |k(x,y)| at distance >= radius", outside_support, 0.0);
+  else
+    checks.skip("compact support", "global support declared");
+  if (props.stationary)
+    checks.at_most("stationarity", "max |k(x+t,y+t) - k(x,y)| / max k", nonstationarity / scale,
+                   1e-11);
+  else
+    checks.skip("stationarity", "not declared stationary");
+
+  // Gram matrix: symmetric positive semidefinite, diagonal = diagonal(), entries = evaluate().
+  const auto centres = golden_ratio_points(40, length, 0.77);
+  const Eigen::MatrixXd gram = kernel.gram(centres);
+  if (gram.rows() != 40 || gram.cols() != 40) {
+    checks.add("Gram matrix size", false,
+               fmt::format("{} x {} for 40 centres", gram.rows(), gram.cols()));
+    return report;
+  }
+  checks.at_most("Gram symmetric", "max |G - G^T|", (gram - gram.transpose()).cwiseAbs().maxCoeff(),
+                 0.0);
+  const auto spectrum = spectrum_of(gram);
+  const Eigen::VectorXd& lambda = spectrum.lambda;
+  checks.add("Gram positive semidefinite", lambda.minCoeff() >= -spectrum.allowed_negative,
+             fmt::format("40 scattered points: eigenvalues {} .. {} (tolerance -{})",
+                         g(lambda.minCoeff()), g(lambda.maxCoeff()), g(spectrum.allowed_negative)));
+  {
+    // Random point sets: no structure a kernel could accidentally be kind to.
+    Random random(hash64(kernel.name()));
+    double worst = 0;  // most negative lambda_min / allowed
+    std::string where = "none negative";
+    for (std::size_t count : {10u, 25u, 50u}) {
+      for (int set = 0; set < 3; ++set) {
+        std::vector<double> random_points(count);
+        for (auto& s : random_points) s = random.uniform() * length;
+        const auto random_spectrum = spectrum_of(kernel.gram(random_points));
+        const double ratio = -random_spectrum.lambda.minCoeff() / random_spectrum.allowed_negative;
+        if (ratio > worst) {
+          worst = ratio;
+          where = fmt::format("lambda_min = {} at {} points (tolerance -{})",
+                              g(random_spectrum.lambda.minCoeff()), count,
+                              g(random_spectrum.allowed_negative));
+        }
+      }
+    }
+    checks.add("Gram positive semidefinite on random point sets", worst <= 1.0,
+               fmt::format("9 sets of 10, 25, 50 points: {}", where));
+  }
+  checks.at_most("Gram diagonal", "max |G_ii - k(c_i, c_i)| / max k",
+                 (gram.diagonal() - kernel.diagonal(centres)).cwiseAbs().maxCoeff() / scale, 1e-14);
+  if (kernel.feature_count() > 0 && kernel.feature_count() < 40) {
+    const auto rank_bound = static_cast<Eigen::Index>(kernel.feature_count());
+    checks.at_most(
+        "feature-map rank",
+        fmt::format("eigenvalue {} of 40 ({} features) / lambda_max", 40 - rank_bound, rank_bound),
+        lambda(39 - rank_bound) / lambda.maxCoeff(), 64 * 40 * epsilon);
+  } else {
+    checks.skip("feature-map rank", kernel.feature_count() ? "at least as many features as centres"
+                                                           : "no finite feature map");
+  }
+
+  const Eigen::MatrixXd cross = kernel.cross(points, centres);
+  if (cross.rows() != static_cast<Eigen::Index>(points.size()) || cross.cols() != 40) {
+    checks.add("cross matrix size", false, fmt::format("{} x {}", cross.rows(), cross.cols()));
+    return report;
+  }
+  double cross_error = 0;
+  for (Eigen::Index m = 0; m < cross.rows(); ++m)
+    for (Eigen::Index i = 0; i < cross.cols(); ++i)
+      cross_error =
+          std::max(cross_error, std::abs(cross(m, i) - kernel.evaluate(points[m], centres[i])));
+  checks.at_most("cross matrix", "max |K_mi - k(s_m, c_i)| / max k", cross_error / scale, 1e-14);
+
+  // Power function on nested uniform centres 4 -> 8 -> 16: >= 0, ~0 at the centres,
+  // non-increasing as centres are added.
+  auto evaluation = golden_ratio_points(257, length, 0.31);
+  const auto finest = nested_uniform_centres(16, length);
+  evaluation.insert(evaluation.end(), finest.begin(), finest.end());
+  PowerFunctionSquared previous;
+  double worst_negative = 0, worst_at_centres = 0, worst_increase = 0;
+  bool nonnegative = true, zero_at_centres = true, nonincreasing = true;
+  std::string skipped_because;
+  for (std::size_t n : {4u, 8u, 16u}) {
+    const auto nested = nested_uniform_centres(n, length);
+    const auto power = power_function_squared(kernel, nested, evaluation);
+    const double negative = -power.squared.minCoeff();
+    worst_negative = std::max(worst_negative, negative / std::max(power.tolerance, 1e-300));
+    if (negative > power.tolerance) nonnegative = false;
+    // Evaluation points 257 + 16j are the uniform centres of 16; every n-th of them is a centre.
+    double at_centres = 0;
+    for (std::size_t i = 0; i < 16; i += 16 / n)
+      at_centres =
+          std::max(at_centres, std::abs(power.squared(static_cast<Eigen::Index>(257 + i))));
+    worst_at_centres = std::max(worst_at_centres, at_centres / scale);
+    if (at_centres > power.tolerance + 1e-14 * scale) zero_at_centres = false;
+    if (n > 4) {
+      // Truncating a nonzero (ill-conditioned) eigenvalue changes the space, so the nested
+      // comparison is only meaningful without truncation, or for a finite feature map, whose
+      // Gram matrices beyond its rank are exactly singular (the dropped eigenvalues are zeros),
+      // and when the tolerance is small.
+      const bool meaningful =
+          (power.dropped == 0 && previous.dropped == 0) || kernel.feature_count() > 0;
+      const double tolerance = power.tolerance + previous.tolerance;
+      if (meaningful && tolerance < 1e-6 * scale) {
+        const double increase = (power.squared - previous.squared).maxCoeff();
+        worst_increase = std::max(worst_increase, increase / scale);
+        if (increase > tolerance) nonincreasing = false;
+        ++report.monotonicity_comparisons;
+      } else {
+        skipped_because = fmt::format("n = {}: condition {}, {} eigenvalues dropped", n,
+                                      g(power.condition), power.dropped);
+      }
+    }
+    previous = power;
+  }
+  checks.add("power function non-negative", nonnegative,
+             fmt::format("n = 4, 8, 16: worst -min P^2 = {} x its round-off tolerance",
+                         g(worst_negative)));
+  checks.add("power function zero at centres", zero_at_centres,
+             fmt::format("max P^2 at the centres / max k = {}", g(worst_at_centres)));
+  if (report.monotonicity_comparisons > 0) {
+    checks.add(
+        "power function non-increasing", nonincreasing,
+        fmt::format("largest increase of P^2 from n/2 to n / max k = {}{}", g(worst_increase),
+                    skipped_because.empty() ? "" : " (some n skipped: " + skipped_because + ")"));
+  } else {
+    checks.skip("power function non-increasing",
+                "round-off makes the nested comparison meaningless (" + skipped_because + ")");
+  }
+  return report;
+}
+
+}  // namespace rkhs

@@ -1,0 +1,274 @@
+#include "rkhs/plugin/plugin_loader.hpp"
+
+#include <dlfcn.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+#include <mutex>
+
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/core/build_info.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/plugin/module.hpp"
+#include "rkhs/approx/target.hpp"
+
+namespace rkhs {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The six registries, each seen through the operations the loader needs.
+struct RegistryView {
+  std::vector<std::string> (*names)();
+  std::size_t (*error_count)();
+  void (*remove)(const std::string&);
+  std::vector<std::string> (*take_errors_after)(std::size_t);
+};
+
+template <auto& registry>
+constexpr RegistryView view_of() {
+  return {[] { return registry().names(); }, [] { return registry().error_count(); },
+          [](const std::string& name) { registry().remove(name); },
+          [](std::size_t count) { return registry().take_errors_after(count); }};
+}
+
+// In the order of LoadedPlugin's lists.
+constexpr std::size_t registry_count = 6;
+constexpr std::array<RegistryView, registry_count> registries{
+    view_of<kernel_registry>(), view_of<centre_registry>(), view_of<target_registry>(),
+    view_of<plant_registry>(),  view_of<law_registry>(),    view_of<integrator_registry>()};
+
+std::array<std::vector<std::string>*, registry_count> lists_of(LoadedPlugin& plugin) {
+  return {&plugin.kernels, &plugin.centres, &plugin.targets,
+          &plugin.plants,  &plugin.laws,    &plugin.integrators};
+}
+
+// What the registries hold, to learn what a module registered and whether it was refused.
+struct RegistryState {
+  std::array<std::vector<std::string>, registry_count> names;
+  std::array<std::size_t, registry_count> errors{};
+
+  static RegistryState take() {
+    RegistryState out;
+    for (std::size_t r = 0; r < registry_count; ++r) {
+      out.names[r] = registries[r].names();
+      out.errors[r] = registries[r].error_count();
+    }
+    return out;
+  }
+  bool same_errors(const RegistryState& other) const { return errors == other.errors; }
+  bool same(const RegistryState& other) const { return names == other.names && same_errors(other); }
+};
+
+std::vector<std::string> added(const std::vector<std::string>& before,
+                               const std::vector<std::string>& after) {
+  std::vector<std::string> out;
+  std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
+                      std::back_inserter(out));
+  return out;
+}
+
+// Removes what was registered since `before` and returns the registration errors recorded since.
+std::vector<std::string> roll_back(const RegistryState& before) {
+  const auto now = RegistryState::take();
+  std::vector<std::string> errors;
+  for (std::size_t r = 0; r < registry_count; ++r) {
+    for (const auto& name : added(before.names[r], now.names[r])) registries[r].remove(name);
+    const auto taken = registries[r].take_errors_after(before.errors[r]);
+    errors.insert(errors.end(), taken.begin(), taken.end());
+  }
+  return errors;
+}
+
+struct Module {
+  LoadedPlugin plugin;
+  void* handle = nullptr;  // closed only by unload_plugin: the registries hold its factories
+};
+
+std::mutex& loader_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+std::vector<Module>& modules() {
+  static std::vector<Module> loaded;
+  return loaded;
+}
+
+template <class Function>
+Function* symbol(void* handle, const char* name) {
+  return reinterpret_cast<Function*>(dlsym(handle, name));
+}
+
+std::string join(const std::vector<std::string>& items, std::string_view separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    out += (i ? std::string(separator) : "") + items[i];
+  return out;
+}
+
+}  // namespace
+
+LoadedPlugin load_plugin(const fs::path& file) {
+  std::lock_guard lock(loader_mutex());
+  const std::string shown = file.string();
+  std::error_code error;
+  if (!fs::exists(file, error)) throw PluginError(shown + ": plugin file not found");
+  if (fs::is_directory(file, error))
+    throw PluginError(shown + ": is a directory, not a plugin file");
+  const fs::path canonical = fs::canonical(file, error);
+  if (error)
+    throw PluginError(fmt::format("{}: cannot resolve the path: {}", shown, error.message()));
+  for (const auto& module : modules())
+    if (module.plugin.file == canonical) return module.plugin;
+
+  const auto before = RegistryState::take();
+  dlerror();
+  // Lazy binding: see plugin.hpp (a module built against another ABI still loads far enough to
+  // say which ABI it was built against). Local: its symbols do not leak into other modules.
+  void* handle = dlopen(canonical.c_str(), RTLD_LAZY | RTLD_LOCAL);
+  if (!handle) {
+    const char* why = dlerror();
+    roll_back(before);
+    throw PluginError(
+        fmt::format("{}: not an rkhs-study plugin (cannot be loaded as a shared "
+                    "library: {})",
+                    shown, why ? why : "unknown reason"));
+  }
+  auto fail = [&](const std::string& message) {
+    roll_back(before);
+    dlclose(handle);
+    throw PluginError(shown + ": " + message);
+  };
+
+  auto* abi_version = symbol<int() noexcept>(handle, "rkhs_plugin_abi_version");
+  if (!abi_version)
+    fail(
+        "not an rkhs-study plugin (it exports no rkhs_plugin_abi_version; declare the module "
+        "with RKHS_PLUGIN_MODULE(name) from rkhs/plugin/module.hpp)");
+  auto* version = symbol<const char*() noexcept>(handle, "rkhs_plugin_rkhs_study_version");
+  const std::string built_with = version && version() ? version() : "unknown version";
+  const int abi = abi_version();
+  if (abi != RKHS_PLUGIN_ABI_VERSION)
+    fail(
+        fmt::format("built against plugin ABI {} (rkhs-study {}), this rkhs-study {} has plugin "
+                    "ABI {}; rebuild the plugin against this rkhs-study",
+                    abi, built_with, build_info().version, RKHS_PLUGIN_ABI_VERSION));
+  if (!RegistryState::take().same(before))
+    fail(
+        "registered plugins while being loaded, before its ABI could be checked: compile every "
+        "source of the module with RKHS_BUILDING_PLUGIN defined (rkhs_study_add_plugin() and "
+        "rkhs_study::plugin do)");
+
+  auto* name_of = symbol<const char*() noexcept>(handle, "rkhs_plugin_name");
+  auto* register_all = symbol<int() noexcept>(handle, "rkhs_plugin_register");
+  if (!name_of || !register_all)
+    fail(
+        "not an rkhs-study plugin (it exports rkhs_plugin_abi_version but not rkhs_plugin_name "
+        "and rkhs_plugin_register; declare the module with RKHS_PLUGIN_MODULE(name))");
+  const std::string name = name_of() ? name_of() : "";
+  if (name.empty()) fail("invalid plugin metadata: empty module name in RKHS_PLUGIN_MODULE");
+  for (const auto& module : modules())
+    if (module.plugin.name == name)
+      fail(fmt::format("duplicate plugin name '{}' (already loaded from {})", name,
+                       module.plugin.file.string()));
+
+  const int failed = register_all();
+  const auto after = RegistryState::take();
+  if (!after.same_errors(before)) {
+    const auto errors = roll_back(before);
+    dlclose(handle);
+    throw PluginError(shown + ": " + join(errors, "; "));
+  }
+  if (failed < 0)
+    fail(fmt::format("registers more than {} plugins in one module",
+                     plugin_detail::PendingRegistrations::capacity));
+  if (failed > 0)
+    fail(
+        fmt::format("{} registration(s) failed without a recorded reason (an exception thrown "
+                    "by a plugin's info()?)",
+                    failed));
+
+  LoadedPlugin plugin;
+  plugin.file = canonical;
+  plugin.name = name;
+  plugin.rkhs_study_version = built_with;
+  plugin.abi_version = abi;
+  bool registered = false;
+  const auto lists = lists_of(plugin);
+  for (std::size_t r = 0; r < registry_count; ++r) {
+    *lists[r] = added(before.names[r], after.names[r]);
+    registered = registered || !lists[r]->empty();
+  }
+  if (!registered)
+    fail(
+        "registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, _PLANT, _LAW, "
+        "_INTEGRATOR, in the module's sources)");
+  modules().push_back({plugin, handle});
+  return plugin;
+}
+
+std::vector<LoadedPlugin> loaded_plugins() {
+  std::lock_guard lock(loader_mutex());
+  std::vector<LoadedPlugin> out;
+  for (const auto& module : modules()) out.push_back(module.plugin);
+  return out;
+}
+
+bool unload_plugin(const fs::path& file) {
+  std::lock_guard lock(loader_mutex());
+  std::error_code error;
+  const fs::path canonical = fs::canonical(file, error);
+  auto& loaded = modules();
+  const auto it = std::find_if(loaded.begin(), loaded.end(),
+                               [&](const Module& m) { return m.plugin.file == canonical; });
+  if (error || it == loaded.end()) return false;
+  const auto lists = lists_of(it->plugin);
+  for (std::size_t r = 0; r < registry_count; ++r)
+    for (const auto& name : *lists[r]) registries[r].remove(name);
+  dlclose(it->handle);
+  loaded.erase(it);
+  return true;
+}
+
+std::vector<fs::path> plugin_path_files(std::string_view value) {
+  std::vector<fs::path> files;
+  while (true) {
+    const auto colon = value.find(':');
+    const std::string entry(value.substr(0, colon));
+    if (!entry.empty()) {
+      std::error_code error;
+      if (fs::is_directory(entry, error)) {
+        std::vector<fs::path> found;
+        for (const auto& item : fs::directory_iterator(entry, error))
+          if (item.path().extension() == ".so" && !item.is_directory())
+            found.push_back(item.path());
+        std::sort(found.begin(), found.end());
+        files.insert(files.end(), found.begin(), found.end());
+      } else if (fs::exists(entry, error)) {
+        files.emplace_back(entry);
+      } else {
+        throw PluginError(entry + ": no such plugin file or directory");
+      }
+    }
+    if (colon == std::string_view::npos) break;
+    value.remove_prefix(colon + 1);
+  }
+  return files;
+}
+
+void load_plugins_from_environment() {
+  const char* value = std::getenv("RKHS_STUDY_PLUGIN_PATH");
+  if (!value) return;
+  try {
+    for (const auto& file : plugin_path_files(value)) load_plugin(file);
+  } catch (const PluginError& e) {
+    throw PluginError(std::string("RKHS_STUDY_PLUGIN_PATH: ") + e.what());
+  }
+}
+
+}  // namespace rkhs

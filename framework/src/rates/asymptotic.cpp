@@ -1,0 +1,315 @@
+#include "rkhs/rates/asymptotic.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "rkhs/core/parameters.hpp"
+
+namespace rkhs {
+namespace {
+
+constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
+// The window rule's constants (docs/verification.md): a rate is off when it differs from the
+// bulk rate by more than 10 % of it and by more than 4 noise standard deviations.
+constexpr double relative_threshold = 0.1;
+constexpr double noise_multiple = 4.0;
+constexpr std::size_t minimum_window = 3;
+constexpr double decisive_evidence = 2.0;
+
+double median(std::vector<double> values) {
+  const std::size_t half = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half), values.end());
+  const double upper = values[half];
+  if (values.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half)));
+}
+
+// Croux and Rousseeuw (1992): the MAD of few normal samples is biased low; these factors make
+// 1.4826 MAD unbiased for the standard deviation at sample size k.
+double mad_correction(std::size_t k) {
+  static constexpr double small[] = {1.0, 1.0, 1.196, 1.495, 1.363, 1.206, 1.200, 1.140, 1.129, 1.107};
+  if (k < std::size(small)) return small[k];
+  return static_cast<double>(k) / (static_cast<double>(k) - 0.8);
+}
+
+// Noise in v: each interior point against the chord of its neighbours, scaled to unit variance
+// under i.i.d. noise, then a robust scale. A smooth trend (a head or a floor bending in) barely
+// shows in second differences, scatter does.
+double noise_scale(std::span<const double> u, std::span<const double> v) {
+  std::vector<double> residuals;
+  for (std::size_t i = 1; i + 1 < u.size(); ++i) {
+    const double a = (u[i + 1] - u[i]) / (u[i + 1] - u[i - 1]), b = 1.0 - a;
+    residuals.push_back(std::fabs(v[i] - (a * v[i - 1] + b * v[i + 1])) /
+                        std::sqrt(1.0 + a * a + b * b));
+  }
+  if (residuals.empty()) return 0.0;
+  return mad_correction(residuals.size()) * 1.4826 * median(residuals);
+}
+
+// 2 decimals, 3 significant digits below 1: how the console tables print rates.
+std::string rate_text(double r) {
+  return std::fabs(r) >= 1.0 ? fmt::format("{:.2f}", r) : fmt::format("{:.3g}", r);
+}
+
+std::string rate_list(const std::vector<double>& rates) {
+  std::string out;
+  for (std::size_t i = 0; i < rates.size(); ++i) out += (i ? ", " : "") + rate_text(rates[i]);
+  return out;
+}
+
+// Residual sum of squares of the least-squares line through (u_i, v_i), i in positions.
+double line_sse(std::span<const double> u, std::span<const double> v,
+                const std::vector<std::size_t>& positions) {
+  const double m = static_cast<double>(positions.size());
+  double u_mean = 0.0, v_mean = 0.0;
+  for (auto i : positions) {
+    u_mean += u[i] / m;
+    v_mean += v[i] / m;
+  }
+  double suu = 0.0, suv = 0.0, svv = 0.0;
+  for (auto i : positions) {
+    suu += (u[i] - u_mean) * (u[i] - u_mean);
+    suv += (u[i] - u_mean) * (v[i] - v_mean);
+    svv += (v[i] - v_mean) * (v[i] - v_mean);
+  }
+  if (!(suu > 0.0)) return svv;
+  double sse = 0.0;
+  const double slope = suv / suu;
+  for (auto i : positions) {
+    const double r = (v[i] - v_mean) - slope * (u[i] - u_mean);
+    sse += r * r;
+  }
+  return sse;
+}
+
+std::string_view model_name(RateModel model) {
+  return model == RateModel::power_law ? "power law" : "exponential model";
+}
+
+}  // namespace
+
+std::string label_range(std::span<const double> labels, const std::vector<std::size_t>& positions) {
+  if (positions.empty()) return "";
+  const auto first = format_real(labels[positions.front()]);
+  if (positions.size() == 1) return first;
+  return first + ".." + format_real(labels[positions.back()]);
+}
+
+std::vector<double> pairwise_exponential_rates(std::span<const double> n,
+                                               std::span<const double> y) {
+  if (n.size() != y.size())
+    throw std::invalid_argument("pairwise_exponential_rates: n and y differ in size");
+  std::vector<double> rates;
+  for (std::size_t i = 1; i < n.size(); ++i) {
+    const bool defined = std::isfinite(n[i - 1]) && std::isfinite(n[i]) && n[i] != n[i - 1] &&
+                         std::isfinite(y[i - 1]) && std::isfinite(y[i]) && y[i - 1] > 0.0 &&
+                         y[i] > 0.0;
+    rates.push_back(defined ? std::log(y[i] / y[i - 1]) / (n[i] - n[i - 1]) : not_a_number);
+  }
+  return rates;
+}
+
+AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<const double> v,
+                                          std::span<const double> labels) {
+  if (u.size() != v.size() || u.size() != labels.size())
+    throw std::invalid_argument("detect_asymptotic_window: u, v and labels differ in size");
+  const std::size_t m = u.size();
+  AsymptoticWindow window;
+  window.bulk_rate = window.noise = not_a_number;
+  std::vector<double> rates, steps;
+  bool increasing = true, decreasing = true;
+  for (std::size_t i = 0; i + 1 < m; ++i) {
+    steps.push_back(u[i + 1] - u[i]);
+    rates.push_back((v[i + 1] - v[i]) / steps.back());
+    increasing = increasing && steps.back() > 0.0;
+    decreasing = decreasing && steps.back() < 0.0;
+  }
+  const bool monotone = increasing || decreasing;
+
+  std::size_t lo = 0, hi = m == 0 ? 0 : m - 1;
+  // What the notes say: the excluded rates, the smallest threshold they exceeded and the bulk
+  // rate they were measured against (of the pass that excluded them).
+  std::vector<double> head_rates, floor_rates;
+  double head_threshold = std::numeric_limits<double>::infinity(), floor_threshold = head_threshold;
+  double head_bulk = not_a_number, floor_bulk = not_a_number;
+  bool floor_collapsed = false;
+  auto bulk_of = [&](std::size_t a, std::size_t b) {  // R and s on points a..b
+    const std::vector<double> window_rates(rates.begin() + static_cast<std::ptrdiff_t>(a),
+                                           rates.begin() + static_cast<std::ptrdiff_t>(b));
+    return std::pair{median(window_rates), noise_scale(u.subspan(a, b - a + 1), v.subspan(a, b - a + 1))};
+  };
+  // Trimming stops when a window would drop below 3 points; at most m passes.
+  for (std::size_t pass = 0; monotone && m > minimum_window && pass < m; ++pass) {
+    if (hi - lo + 1 <= minimum_window) break;
+    const auto [bulk, noise] = bulk_of(lo, hi);
+    auto threshold = [&, bulk = bulk, noise = noise](std::size_t i) {
+      return std::max({relative_threshold * std::fabs(bulk),
+                       noise_multiple * std::sqrt(2.0) * noise / std::fabs(steps[i]), 1e-12});
+    };
+    const double sign = bulk > 0.0 ? 1.0 : (bulk < 0.0 ? -1.0 : 0.0);
+    std::size_t new_hi = hi;
+    while (sign != 0.0 && new_hi - lo + 1 > minimum_window &&
+           sign * (bulk - rates[new_hi - 1]) > threshold(new_hi - 1)) {
+      floor_rates.insert(floor_rates.begin(), rates[new_hi - 1]);
+      floor_threshold = std::min(floor_threshold, threshold(new_hi - 1));
+      floor_bulk = bulk;
+      --new_hi;
+    }
+    // A floor can also hide behind a large noise estimate (a sharp corner between fast decay
+    // and a flat tail inflates the second differences): two or more trailing rates that have
+    // collapsed below 10 % of the bulk rate are a floor whatever the noise.
+    if (new_hi == hi && sign != 0.0) {
+      std::size_t run = 0;
+      while (run < hi - lo && std::fabs(rates[hi - 1 - run]) <= relative_threshold * std::fabs(bulk)) ++run;
+      run = std::min(run, hi - lo + 1 - minimum_window);
+      if (run >= 2) {
+        for (std::size_t k = 0; k < run; ++k) floor_rates.insert(floor_rates.begin(), rates[hi - 1 - k]);
+        floor_bulk = bulk;
+        floor_collapsed = true;
+        new_hi = hi - run;
+      }
+    }
+    std::size_t new_lo = lo;
+    while (new_hi - new_lo + 1 > minimum_window &&
+           std::fabs(rates[new_lo] - bulk) > threshold(new_lo)) {
+      head_rates.push_back(rates[new_lo]);
+      head_threshold = std::min(head_threshold, threshold(new_lo));
+      head_bulk = bulk;
+      ++new_lo;
+    }
+    if (new_lo == lo && new_hi == hi) break;
+    lo = new_lo;
+    hi = new_hi;
+  }
+
+  for (std::size_t i = 0; i < m; ++i) {
+    if (i < lo) window.head.push_back(i);
+    else if (i > hi) window.floor.push_back(i);
+    else window.points.push_back(i);
+  }
+  if (m >= 2) std::tie(window.bulk_rate, window.noise) = bulk_of(lo, hi);
+
+  std::vector<std::string> notes;
+  if (!monotone && m >= 2)
+    notes.push_back("abscissa not strictly monotone in n: no asymptotic window detected");
+  if (!window.head.empty())
+    notes.push_back(fmt::format(
+        "head n = {} excluded (pairwise rate{} {} differ{} from the bulk rate {} by more than {})",
+        label_range(labels, window.head), head_rates.size() > 1 ? "s" : "", rate_list(head_rates),
+        head_rates.size() > 1 ? "" : "s", rate_text(head_bulk), rate_text(head_threshold)));
+  if (!window.floor.empty())
+    notes.push_back(fmt::format(
+        "floor from n = {} excluded (pairwise rate{} {} stalled against the bulk rate {}{})",
+        format_real(labels[window.floor.front()]), floor_rates.size() > 1 ? "s" : "",
+        rate_list(floor_rates), rate_text(floor_bulk),
+        floor_collapsed ? fmt::format(": below {} % of it", 100 * relative_threshold)
+                        : fmt::format(" by more than {}", rate_text(floor_threshold))));
+  for (std::size_t i = 0; i < notes.size(); ++i) window.note += (i ? "; " : "") + notes[i];
+  return window;
+}
+
+SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
+                              std::span<const double> y, const std::vector<bool>& usable,
+                              double confidence) {
+  if (x.size() != y.size() || n.size() != y.size() || usable.size() != y.size())
+    throw std::invalid_argument("analyse_series: x, n, y and usable differ in size");
+  if (!(confidence > 0.0 && confidence < 1.0))
+    throw std::invalid_argument("analyse_series: confidence must lie in (0, 1)");
+
+  // The same points for both models, so that their fits can be compared.
+  std::vector<std::size_t> positions;
+  for (std::size_t i = 0; i < y.size(); ++i)
+    if (usable[i] && std::isfinite(y[i]) && y[i] > 0.0 && std::isfinite(x[i]) && x[i] > 0.0 &&
+        std::isfinite(n[i]))
+      positions.push_back(i);
+  std::vector<double> labels, log_x, log_y, plain_n;
+  for (auto i : positions) {
+    labels.push_back(n[i]);
+    log_x.push_back(std::log(x[i]));
+    log_y.push_back(std::log(y[i]));
+    plain_n.push_back(n[i]);
+  }
+
+  SeriesAnalysis out;
+  out.evidence = not_a_number;
+  auto analyse_model = [&](RateModel model, ModelAnalysis& result) {
+    result.model = model;
+    const std::span<const double> u = model == RateModel::power_law ? log_x : plain_n;
+    auto window = detect_asymptotic_window(u, log_y, labels);
+    auto to_positions = [&](std::vector<std::size_t>& indices) {
+      for (auto& k : indices) k = positions[k];
+    };
+    std::vector<double> fit_x, fit_y;
+    for (auto k : window.points) {
+      fit_x.push_back(model == RateModel::power_law ? x[positions[k]] : n[positions[k]]);
+      fit_y.push_back(y[positions[k]]);
+    }
+    to_positions(window.points);
+    to_positions(window.head);
+    to_positions(window.floor);
+    result.window = std::move(window);
+    result.fit = model == RateModel::power_law ? fit_power_law(fit_x, fit_y, confidence)
+                                               : fit_exponential(fit_x, fit_y, confidence);
+    if (result.fit)
+      for (auto& k : result.fit->used) k = result.window.points[k];
+    result.pairwise = model == RateModel::power_law ? pairwise_rates(x, y)
+                                                    : pairwise_exponential_rates(n, y);
+  };
+  analyse_model(RateModel::power_law, out.power_law);
+  analyse_model(RateModel::exponential, out.exponential);
+
+  // ΔAIC of `model` over the other on `model`'s own window (indices into `positions`).
+  auto own_window_advantage = [&](const ModelAnalysis& analysis) -> double {
+    std::vector<std::size_t> window;
+    for (auto p : analysis.window.points)
+      window.push_back(static_cast<std::size_t>(
+          std::lower_bound(positions.begin(), positions.end(), p) - positions.begin()));
+    if (window.size() < minimum_window) return not_a_number;
+    const double m = static_cast<double>(window.size());
+    const double floor = m * 1e-20;  // exact series: a finite ratio instead of 0 / 0
+    const double power = std::max(line_sse(log_x, log_y, window), floor);
+    const double exponential = std::max(line_sse(plain_n, log_y, window), floor);
+    const double ratio = analysis.model == RateModel::power_law ? exponential / power
+                                                                : power / exponential;
+    return m * std::log(ratio);
+  };
+  const double power_advantage = out.power_law.advantage = own_window_advantage(out.power_law);
+  const double exponential_advantage = out.exponential.advantage =
+      own_window_advantage(out.exponential);
+  const double power_per_point = power_advantage / static_cast<double>(out.power_law.window.points.size());
+  const double exponential_per_point =
+      exponential_advantage / static_cast<double>(out.exponential.window.points.size());
+  if (power_advantage > 0.0 && !(exponential_advantage > 0.0 && exponential_per_point > power_per_point)) {
+    out.preferred = RateModel::power_law;
+    out.evidence = power_advantage;
+    out.evidence_points = out.power_law.window.points.size();
+  } else if (exponential_advantage > 0.0) {
+    out.preferred = RateModel::exponential;
+    out.evidence = exponential_advantage;
+    out.evidence_points = out.exponential.window.points.size();
+  }
+  out.reported = out.preferred == RateModel::exponential && out.decisive() ? RateModel::exponential
+                                                                          : RateModel::power_law;
+  if (out.preferred) {
+    const auto& window = out.analysis(*out.preferred).window.points;
+    const auto other = *out.preferred == RateModel::power_law ? RateModel::exponential
+                                                              : RateModel::power_law;
+    const auto why_not = out.evidence < decisive_evidence ? ", not decisive (ΔAIC < 2)"
+                         : out.evidence_points < 4    ? ", not decisive (a decision needs 4 points)"
+                                                      : "";
+    out.note = fmt::format("{} preferred (ΔAIC = {:.1f} over the {} on n = {}){}",
+                           model_name(*out.preferred), out.evidence, model_name(other),
+                           label_range(n, window), out.decisive() ? "" : why_not);
+  } else if (std::isnan(power_advantage) || std::isnan(exponential_advantage)) {
+    out.note = "models not compared (fewer than 3 points in a window)";
+  } else {
+    out.note = "neither model fits better on its own window";
+  }
+  return out;
+}
+
+}  // namespace rkhs

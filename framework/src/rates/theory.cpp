@@ -1,0 +1,80 @@
+#include "rkhs/rates/theory.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rkhs/core/parameters.hpp"
+
+namespace rkhs {
+
+const std::vector<std::string>& theory_metrics() {
+  static const std::vector<std::string> names{"power_function_sup", "sup_error", "l2_error",
+                                              "gram_min_eigenvalue", "gram_condition_number"};
+  return names;
+}
+
+std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
+                                      int dimension, std::string* why) {
+  auto none = [&](std::string reason) -> std::optional<TheoryRate> {
+    if (why) *why = std::move(reason);
+    return std::nullopt;
+  };
+  const auto& known = theory_metrics();
+  if (std::find(known.begin(), known.end(), metric) == known.end())
+    return none(fmt::format("no theory rate for metric '{}' (theory covers power_function_sup, "
+                            "sup_error, l2_error, gram_min_eigenvalue, gram_condition_number)",
+                            metric));
+  TheoryRate theory;
+  if (properties.analytic) {
+    theory.model = RateModel::exponential;
+    theory.sharp = false;
+    theory.direction = metric == "gram_condition_number" ? +1 : -1;
+    theory.statement = fmt::format("{} {} at least exponentially in n (analytic kernel)", metric,
+                                   theory.direction < 0 ? "decays" : "grows");
+    return theory;
+  }
+  if (!properties.sobolev_order)
+    return none("the kernel is neither analytic nor Sobolev-equivalent (its metadata gives no "
+                "sobolev_order), so theory predicts no rate");
+  const double tau = *properties.sobolev_order, d = dimension;
+  const auto given = fmt::format("tau = {}, d = {}", format_real(tau), dimension);
+  if (metric == "power_function_sup" || metric == "sup_error") {
+    theory.h_exponent = tau - d / 2;
+    theory.sharp = metric == "power_function_sup";
+    theory.statement = fmt::format("{} {} h^(tau - d/2) = h^{} ({})", metric,
+                                   theory.sharp ? "~" : "<= C", format_real(theory.h_exponent), given);
+  } else if (metric == "l2_error") {
+    theory.h_exponent = tau;
+    theory.sharp = false;
+    theory.statement = fmt::format("{} <= C h^tau = h^{} ({})", metric, format_real(tau), given);
+  } else if (metric == "gram_min_eigenvalue") {
+    theory.h_exponent = 2 * tau - d;
+    theory.statement = fmt::format("{} ~ q^(2 tau - d) = q^{} ({}; q ~ h)", metric,
+                                   format_real(theory.h_exponent), given);
+  } else {  // gram_condition_number: lambda_max ~ n times 1 / lambda_min ~ q^-(2 tau - d)
+    theory.h_exponent = -2 * tau;
+    theory.statement = fmt::format(
+        "{} ~ n q^-(2 tau - d) = h^{} ({}; lambda_max ~ n, lambda_min ~ q^(2 tau - d), q ~ h "
+        "~ n^-1/d)",
+        metric, format_real(theory.h_exponent), given);
+  }
+  return theory;
+}
+
+RateInterval theory_interval(const TheoryRate& theory, Abscissa abscissa, int dimension,
+                             double tolerance, double* slope) {
+  constexpr double infinity = std::numeric_limits<double>::infinity();
+  // Against ln h the slope is the exponent; against ln n (h ~ n^-1/d) it is -exponent / d, and
+  // "converges at least as fast" flips from slope >= to slope <=.
+  const bool in_h = abscissa == Abscissa::fill_distance;
+  const double predicted = in_h ? theory.h_exponent : -theory.h_exponent / dimension;
+  if (slope) *slope = predicted;
+  if (theory.sharp) return {predicted - tolerance, predicted + tolerance};
+  return in_h ? RateInterval{predicted - tolerance, infinity}
+              : RateInterval{-infinity, predicted + tolerance};
+}
+
+}  // namespace rkhs

@@ -1,0 +1,188 @@
+#include "rkhs/report/html_report.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "rkhs/core/build_info.hpp"
+#include "rkhs/verify/verification.hpp"
+
+namespace rkhs {
+
+namespace {
+
+std::string escape_html(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) |
+                       (static_cast<unsigned char>(bytes[i + 1]) << 8) |
+                       static_cast<unsigned char>(bytes[i + 2]);
+    for (int s : {18, 12, 6, 0}) out += table[(v >> s) & 63];
+  }
+  if (const std::size_t rest = bytes.size() - i; rest) {
+    unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+    if (rest == 2) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
+    out += table[(v >> 18) & 63];
+    out += table[(v >> 12) & 63];
+    out += rest == 2 ? table[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+std::string read_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+std::string html_report(const RunRecord& run, const std::filesystem::path& plots) {
+  const auto& study = run.study;
+  const auto& build = build_info();
+  std::string mpi_rows;  // a distributed run: one row per MPI rank
+  for (std::size_t r = 0; r < run.ranks.size(); ++r)
+    mpi_rows += fmt::format(
+        "<tr><th>MPI rank {}</th><td class=\"text\">{}: {} threads, {} trials{}</td></tr>\n", r,
+        escape_html(run.ranks[r].host), run.ranks[r].threads, run.ranks[r].trials,
+        run.ranks[r].lost ? " (lost during the run; its trials ran elsewhere)" : "");
+  std::string page = fmt::format(
+      R"(<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{0}: rkhs-study report</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em auto; max-width: 70em; color: #222; }}
+table {{ border-collapse: collapse; margin: 0.5em 0 1em; }}
+th, td {{ border: 1px solid #bbb; padding: 0.2em 0.6em; text-align: right; }}
+th {{ background: #eee; }}
+td.text {{ text-align: left; }}
+.flagged {{ color: #a50; }}
+.fit {{ margin: 0 0 1.5em; }}
+img {{ max-width: 100%; border: 1px solid #ddd; }}
+pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
+</style></head>
+<body>
+<h1>{0}</h1>
+<p>{1}</p>
+<h2>Provenance</h2>
+<table class="provenance">
+<tr><th>study file</th><td class="text">{2}</td></tr>
+<tr><th>kind</th><td class="text">{3}</td></tr>
+<tr><th>rkhs-study</th><td class="text">{4} (commit {5}; {6}, {7})</td></tr>
+<tr><th>started</th><td class="text">{8}</td></tr>
+<tr><th>threads, wall time</th><td class="text">{9}, {10:.2f} s</td></tr>
+<tr><th>trials</th><td class="text">{11}</td></tr>
+{12}</table>
+)",
+      escape_html(study.name), escape_html(study.description), escape_html(study.source),
+      escape_html(study.kind), build.version, build.git_commit, build.compiler, build.build_type,
+      escape_html(run.started), run.threads, run.wall_seconds, run.trials.size(), mpi_rows);
+
+  // Failed trials first: they are what a reader must not miss.
+  std::string failed;
+  for (const auto& trial : run.trials)
+    if (const auto& r = run.results[trial.index]; !r.ok)
+      failed += fmt::format("<tr><td class=\"text\">{}</td><td class=\"text\">{}</td></tr>\n",
+                            escape_html(trial.key), escape_html(r.reason));
+  page += failed.empty() ? "<h2>Failed trials</h2>\n<p>None.</p>\n"
+                         : "<h2>Failed trials</h2>\n<table "
+                           "class=\"failed\"><tr><th>trial</th><th>reason</th></tr>\n" +
+                               failed + "</table>\n";
+
+  if (!study.expectations.empty()) {
+    const auto outcomes = verify_expectations(study, run.trials, run.results, run.rates);
+    page += "<h2>Expectations</h2>\n<pre class=\"verdicts\">" +
+            escape_html(format_verification(outcomes, false)) + "</pre>\n";
+  }
+
+  page += "<h2>Rates</h2>\n";
+  for (const auto& metric : study.metrics) {
+    page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
+    const auto svg = plots / ("convergence_" + metric + ".svg");
+    if (!plots.empty() && std::filesystem::exists(svg))
+      page += fmt::format(
+          "<p><img class=\"plot\" alt=\"convergence of {}\" "
+          "src=\"data:image/svg+xml;base64,{}\"></p>\n",
+          escape_html(metric), base64(read_file(svg)));
+    for (const auto& series : run.rates) {
+      if (series.metric != metric || series.trials.empty()) continue;
+      page += fmt::format(
+          "<p>{}</p>\n<table class=\"rates\"><tr><th>n</th><th>{}</th><th>rate</th></tr>\n",
+          escape_html(run.trials[series.trials.front()].group_key), escape_html(metric));
+      for (std::size_t k = 0; k < series.trials.size(); ++k) {
+        const double v = series.values[k];
+        const double r = k == 0 ? std::nan("") : series.pairwise[k - 1];
+        page += fmt::format(
+            "<tr{}><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            series.flagged[k] ? " class=\"flagged\"" : "", run.trials[series.trials[k]].n,
+            std::isnan(v) ? std::string("failed")
+                          : fmt::format("{:.4g}{}", v, series.flagged[k] ? "*" : ""),
+            std::isfinite(r) ? fmt::format("{:.2f}", r) : std::string("&ndash;"));
+      }
+      page += "</table>\n";
+      if (const auto& fit = series.fit)
+        page += fmt::format(
+            "<p class=\"fit\">fitted rate {:.3g} &plusmn; {:.2g} (95% CI [{:.3g}, {:.3g}], R&sup2; "
+            "= {:.3f}, {} points, window n = {}..{}{}){}</p>\n",
+            fit->rate, fit->std_error, fit->ci_low, fit->ci_high, fit->r_squared, fit->points,
+            run.trials[series.trials[fit->used.front()]].n,
+            run.trials[series.trials[fit->used.back()]].n,
+            fit->model == RateModel::exponential ? ", exponential in n" : "",
+            series.note.empty() ? "" : "<br>" + escape_html(series.note));
+      else
+        page += "<p class=\"fit\">no fit: " + escape_html(series.no_fit_reason) + "</p>\n";
+    }
+  }
+  // Other plots (adaptive studies).
+  std::string others;
+  if (!plots.empty() && std::filesystem::exists(plots))
+    for (const auto& entry : std::filesystem::directory_iterator(plots)) {
+      const auto name = entry.path().filename().string();
+      if (entry.path().extension() == ".svg" && !name.starts_with("convergence_"))
+        others += fmt::format(
+            "<p><img class=\"plot\" alt=\"{0}\" src=\"data:image/svg+xml;base64,{1}\"></p>\n",
+            escape_html(name), base64(read_file(entry.path())));
+    }
+  if (!others.empty()) page += "<h2>Estimates and state errors</h2>\n" + others;
+  // The page reports whether every plot loaded (read by the project's browser test).
+  page += R"(<script>
+window.addEventListener('load', function () {
+  var images = document.images, loaded = 0;
+  for (var i = 0; i < images.length; ++i) if (images[i].complete && images[i].naturalWidth > 0) ++loaded;
+  document.body.setAttribute('data-images-loaded', loaded + '/' + images.length);
+});
+</script>
+</body></html>
+)";
+  return page;
+}
+
+}  // namespace rkhs

@@ -1,0 +1,489 @@
+#include "rkhs/report/output.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/core/build_info.hpp"
+#include "rkhs/report/convergence_table.hpp"
+
+namespace rkhs {
+
+namespace {
+
+std::string join(const std::vector<std::string>& items, std::string_view separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? std::string(separator) : "") + items[i];
+  return out;
+}
+
+std::string csv_row(const std::vector<std::string>& fields) {
+  std::string out;
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (i) out += ',';
+    out += csv_field(fields[i]);
+  }
+  out += '\n';
+  return out;
+}
+
+std::string abscissa_name(const StudyDefinition& study) {
+  return study.abscissa == Abscissa::n ? "n" : "h";
+}
+
+std::string model_id(RateModel model) {
+  return model == RateModel::power_law ? "power_law" : "exponential";
+}
+
+// Minimal JSON writing: strings escaped, non-finite numbers as null (with the value kept as
+// a string beside it where it matters, e.g. an infinite condition number).
+std::string json_string(std::string_view text) {
+  std::string out = "\"";
+  for (char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) out += fmt::format("\\u{:04x}", static_cast<int>(c));
+        else out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string json_number(double value) {
+  if (std::isfinite(value)) return format_real(value);
+  if (std::isnan(value)) return "null";
+  return value > 0 ? "\"inf\"" : "\"-inf\"";
+}
+
+std::string json_value(const ParameterValue& value) {
+  if (std::holds_alternative<std::string>(value)) return json_string(std::get<std::string>(value));
+  if (std::holds_alternative<bool>(value)) return std::get<bool>(value) ? "true" : "false";
+  return format_value(value);
+}
+
+std::string json_parameters(const ParameterSet& parameters) {
+  std::vector<std::string> items;
+  for (const auto& [name, value] : parameters.values())
+    items.push_back(fmt::format("{}: {}", json_string(name), json_value(value)));
+  return fmt::format("{{{}}}", join(items, ", "));
+}
+
+std::string json_plugin(const PluginChoice& choice) {
+  return fmt::format("{{\"name\": {}, \"parameters\": {}}}", json_string(choice.name),
+                     json_parameters(choice.parameters));
+}
+
+std::string group_label(const TrialSpec& trial) { return trial.group_key; }
+
+}  // namespace
+
+std::string csv_field(const std::string& value) {
+  if (value.find_first_of(",\"\n\r") == std::string::npos) return value;
+  std::string out = "\"";
+  for (char c : value) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string csv_number(double value) { return std::isnan(value) ? "" : format_real(value); }
+
+std::string trials_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  header.push_back("n");
+  header.insert(header.end(), run.study.metrics.begin(), run.study.metrics.end());
+  for (const char* extra : {"status", "reason", "solve", "flags"}) header.push_back(extra);
+  std::string out = csv_row(header);
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    auto row = axis_values(columns, trial);
+    row.push_back(std::to_string(trial.n));
+    for (const auto& metric : run.study.metrics)
+      row.push_back(csv_number(result.metrics[run.study.metric_index(metric)]));
+    row.push_back(result.ok ? "ok" : "failed");
+    row.push_back(result.reason);
+    row.push_back(result.solve_method);
+    row.push_back(join(result.flags, ";"));
+    out += csv_row(row);
+  }
+  return out;
+}
+
+std::string rates_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  for (const char* extra : {"metric", "abscissa", "kind", "model", "n_from", "n_to", "points",
+                            "rate", "std_error", "ci_low", "ci_high", "r_squared", "delta_aic",
+                            "note"})
+    header.push_back(extra);
+  std::string out = csv_row(header);
+  for (const auto& series : run.rates) {
+    if (series.trials.empty()) continue;
+    const auto axes = axis_values(columns, run.trials[series.trials.front()]);
+    auto row_start = [&](const char* kind, RateModel model, std::size_t from, std::size_t to) {
+      auto row = axes;
+      row.push_back(series.metric);
+      row.push_back(model == RateModel::exponential ? std::string("n") : abscissa_name(run.study));
+      row.push_back(kind);
+      row.push_back(model_id(model));
+      row.push_back(std::to_string(from));
+      row.push_back(std::to_string(to));
+      return row;
+    };
+    const auto& n_of = [&](std::size_t k) { return run.trials[series.trials[k]].n; };
+    // The reported fit ("fit") and the other model's ("alternative_fit"), each on its window.
+    const auto reported = series.analysis.reported;
+    const auto other = reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law;
+    for (const auto model : {reported, other}) {
+      const auto& analysis = series.analysis.analysis(model);
+      const auto& fit = analysis.fit;
+      std::size_t from = n_of(0), to = n_of(series.trials.size() - 1);
+      if (fit && !fit->used.empty()) {
+        from = n_of(fit->used.front());
+        to = n_of(fit->used.back());
+      }
+      auto row = row_start(model == reported ? "fit" : "alternative_fit", model, from, to);
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      row.push_back(std::to_string(fit ? fit->points : 0));
+      for (double v : {fit ? fit->rate : nan, fit ? fit->std_error : nan, fit ? fit->ci_low : nan,
+                       fit ? fit->ci_high : nan, fit ? fit->r_squared : nan, analysis.advantage})
+        row.push_back(csv_number(v));
+      std::vector<std::string> notes;
+      if (model == reported) {
+        if (!series.note.empty()) notes.push_back(series.note);
+        if (!series.analysis.note.empty()) notes.push_back(series.analysis.note);
+      } else {
+        if (!analysis.window.note.empty()) notes.push_back(analysis.window.note);
+        if (fit && !fit->note.empty()) notes.push_back(fit->note);
+      }
+      row.push_back(join(notes, "; "));
+      out += csv_row(row);
+    }
+    const auto& window = series.analysis.reported_analysis().window;
+    auto outside = [&](std::size_t k) {
+      return std::find(window.head.begin(), window.head.end(), k) != window.head.end() ||
+             std::find(window.floor.begin(), window.floor.end(), k) != window.floor.end();
+    };
+    for (std::size_t k = 0; k < series.pairwise.size(); ++k) {
+      auto row = row_start("pairwise", reported, n_of(k), n_of(k + 1));
+      row.push_back("2");
+      row.push_back(csv_number(series.pairwise[k]));
+      for (int i = 0; i < 5; ++i) row.push_back("");
+      const bool doubtful = series.flagged[k] || series.flagged[k + 1];
+      row.push_back(doubtful ? "flagged value (not used in the fit)"
+                             : outside(k) || outside(k + 1)
+                                   ? "outside the asymptotic window (not used in the fit)"
+                                   : "");
+      out += csv_row(row);
+    }
+  }
+  return out;
+}
+
+std::string summary_json(const RunRecord& run) {
+  const auto& study = run.study;
+  const auto& build = build_info();
+  std::string out = "{\n";
+  out += fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
+                     json_string(study.name), json_string(study.description),
+                     json_string(study.source), json_string(study.kind));
+  // A distributed run names its ranks: host, threads and trials run on each.
+  std::string mpi;
+  if (!run.ranks.empty()) {
+    std::vector<std::string> ranks;
+    for (const auto& r : run.ranks)
+      ranks.push_back(fmt::format("{{\"host\": {}, \"threads\": {}, \"trials\": {}{}}}",
+                                  json_string(r.host), r.threads, r.trials,
+                                  r.lost ? ", \"lost\": true" : ""));
+    mpi = fmt::format(", \"mpi_ranks\": [{}]", join(ranks, ", "));
+  }
+  out += fmt::format(
+      "  \"provenance\": {{\"version\": {}, \"git_commit\": {}, \"compiler\": {}, "
+      "\"build_type\": {}, \"threads\": {}, \"started\": {}, \"wall_seconds\": {}{}}},\n",
+      json_string(build.version), json_string(build.git_commit), json_string(build.compiler),
+      json_string(build.build_type), run.threads, json_string(run.started),
+      json_number(std::round(run.wall_seconds * 1000) / 1000), mpi);
+  out += fmt::format("  \"domain\": {{\"length\": {}, \"periodic\": {}}},\n",
+                     json_number(study.domain.length), study.domain.periodic ? "true" : "false");
+  std::vector<std::string> n_values;
+  for (auto n : study.n_values) n_values.push_back(std::to_string(n));
+  out += fmt::format("  \"n\": [{}],\n  \"evaluation_points\": {},\n  \"abscissa\": {},\n",
+                     join(n_values, ", "), study.evaluation_points,
+                     json_string(abscissa_name(study)));
+  std::size_t failed = 0;
+  for (const auto& r : run.results) failed += r.ok ? 0 : 1;
+  out += fmt::format("  \"counts\": {{\"trials\": {}, \"ok\": {}, \"failed\": {}}},\n",
+                     run.trials.size(), run.trials.size() - failed, failed);
+
+  out += "  \"trials\": [\n";
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    std::vector<std::string> metrics, flags;
+    for (const auto& metric : study.metrics)
+      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[study.metric_index(metric)]));
+    for (const auto& flag : result.flags) flags.push_back(json_string(flag));
+    out += fmt::format(
+        "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
+        "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
+        "\"flags\": [{}], \"seconds\": {}, \"metrics\": {{{}}}}}{}\n",
+        trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
+        json_plugin(trial.centres), trial.n,
+        result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
+        json_string(result.ok ? "ok" : "failed"),
+        json_string(result.reason), json_string(result.solve_method), join(flags, ", "),
+        json_number(std::round(result.seconds * 1e4) / 1e4), join(metrics, ", "),
+        trial.index + 1 < run.trials.size() ? "," : "");
+  }
+  out += "  ],\n  \"rates\": [\n";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t s = 0; s < run.rates.size(); ++s) {
+    const auto& series = run.rates[s];
+    const auto n_list = [&](const std::vector<std::size_t>& positions) {
+      std::vector<std::string> items;
+      for (auto k : positions) items.push_back(std::to_string(run.trials[series.trials[k]].n));
+      return fmt::format("[{}]", join(items, ", "));
+    };
+    // A model's fit on its window: the fields common to the reported and the alternative fit.
+    const auto model_fields = [&](const ModelAnalysis& analysis) {
+      const auto& fit = analysis.fit;
+      return fmt::format(
+          "\"model\": {}, \"rate\": {}, \"std_error\": {}, \"ci_low\": {}, \"ci_high\": {}, "
+          "\"r_squared\": {}, \"points\": {}, \"window\": {}, \"head\": {}, \"floor\": {}, "
+          "\"delta_aic\": {}",
+          json_string(model_id(analysis.model)), json_number(fit ? fit->rate : nan),
+          json_number(fit ? fit->std_error : nan), json_number(fit ? fit->ci_low : nan),
+          json_number(fit ? fit->ci_high : nan), json_number(fit ? fit->r_squared : nan),
+          fit ? fit->points : 0, n_list(analysis.window.points), n_list(analysis.window.head),
+          n_list(analysis.window.floor), json_number(analysis.advantage));
+    };
+    const auto reported = series.analysis.reported;
+    const auto& alternative = series.analysis.analysis(
+        reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law);
+    std::vector<std::size_t> flagged;
+    for (std::size_t k = 0; k < series.flagged.size(); ++k)
+      if (series.flagged[k]) flagged.push_back(k);
+    std::vector<std::string> pairwise;
+    for (double r : series.pairwise) pairwise.push_back(json_number(r));
+    out += fmt::format(
+        "    {{\"group\": {}, \"metric\": {}, {}, \"preferred\": {}, \"decisive\": {}, "
+        "\"model_note\": {}, \"flagged\": {}, \"pairwise\": [{}], \"note\": {}, "
+        "\"alternative\": {{{}}}}}{}\n",
+        json_string(group_label(run.trials[series.trials.front()])), json_string(series.metric),
+        model_fields(series.analysis.reported_analysis()),
+        series.analysis.preferred ? json_string(model_id(*series.analysis.preferred)) : "null",
+        series.analysis.decisive() ? "true" : "false", json_string(series.analysis.note),
+        n_list(flagged), join(pairwise, ", "), json_string(series.note), model_fields(alternative),
+        s + 1 < run.rates.size() ? "," : "");
+  }
+  out += "  ]\n}\n";
+  return out;
+}
+
+std::string estimates_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  for (const char* extra : {"n", "lap", "s", "road", "estimate"}) header.push_back(extra);
+  std::string out = csv_row(header);
+  const auto grid = run.study.domain.uniform_points(run.study.adaptive.snapshot_points);
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    if (!result.ok) continue;
+    const auto axes = axis_values(columns, trial);
+    for (const auto& snapshot : result.snapshots) {
+      for (std::size_t m = 0; m < snapshot.estimate.size() && m < grid.size(); ++m) {
+        auto row = axes;
+        row.push_back(std::to_string(trial.n));
+        row.push_back(format_real(snapshot.lap));
+        row.push_back(format_real(grid[m]));
+        row.push_back(csv_number(result.road[m]));
+        row.push_back(csv_number(snapshot.estimate[m]));
+        out += csv_row(row);
+      }
+    }
+  }
+  return out;
+}
+
+std::string timeseries_csv(const RunRecord& run) {
+  const auto columns = axis_columns(run.trials);
+  std::vector<std::string> header = columns;
+  for (const char* extra : {"n", "t", "lap", "state_error", "lyapunov"}) header.push_back(extra);
+  std::string out = csv_row(header);
+  const double lap_time = run.study.domain.length / run.study.adaptive.speed;
+  for (const auto& trial : run.trials) {
+    const auto& result = run.results[trial.index];
+    const auto axes = axis_values(columns, trial);
+    for (const auto& sample : result.samples) {
+      auto row = axes;
+      row.push_back(std::to_string(trial.n));
+      row.push_back(format_real(sample.t));
+      row.push_back(format_real(sample.t / lap_time));
+      row.push_back(csv_number(sample.state_error));
+      row.push_back(csv_number(sample.lyapunov));
+      out += csv_row(row);
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// One metric and group of a run, as a document table needs it.
+struct DocumentTable {
+  std::string metric, group, axis;
+  std::vector<std::string> abscissa, value, rate;
+  std::string fit;  // "-1.50 ± 0.03 (95% CI [-1.53, -1.47], R² = 0.999, 10 points)" or a reason
+};
+
+std::vector<DocumentTable> document_tables(const RunRecord& run) {
+  std::vector<DocumentTable> out;
+  for (const auto& metric : run.study.metrics)
+    for (const auto& series : run.rates) {
+      if (series.metric != metric || series.trials.empty()) continue;
+      const bool in_n = series.analysis.reported == RateModel::exponential ||
+                        run.study.abscissa == Abscissa::n;
+      DocumentTable table{metric, group_label(run.trials[series.trials.front()]),
+                          in_n ? std::string("n") : abscissa_name(run.study), {}, {}, {}, {}};
+      for (std::size_t k = 0; k < series.trials.size(); ++k) {
+        const double x = in_n ? series.n[k] : series.abscissa[k];
+        table.abscissa.push_back(in_n ? fmt::format("{}", run.trials[series.trials[k]].n)
+                                      : fmt::format("{:.4g}", x));
+        const double v = series.values[k];
+        table.value.push_back((std::isnan(v) ? std::string("failed") : fmt::format("{:.4g}", v)) +
+                              (series.flagged[k] ? "*" : ""));
+        const double r = k == 0 ? std::nan("") : series.pairwise[k - 1];
+        table.rate.push_back(std::isfinite(r) ? fmt::format("{:.2f}", r) : std::string("-"));
+      }
+      const auto& fit = series.fit;
+      table.fit = fit && std::isfinite(fit->std_error)
+                      ? fmt::format("{:.3g} ± {:.2g} (95% CI [{:.3g}, {:.3g}], R² = {:.3f}, {} points){}",
+                                    fit->rate, fit->std_error, fit->ci_low, fit->ci_high,
+                                    fit->r_squared, fit->points,
+                                    fit->model == RateModel::exponential ? ", exponential in n" : "")
+                  : fit ? fmt::format("{:.3g} ({} points, no uncertainty)", fit->rate, fit->points)
+                        : "no fit: " + series.no_fit_reason;
+      out.push_back(std::move(table));
+    }
+  return out;
+}
+
+std::string latex_escape(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '_' || c == '%' || c == '&' || c == '#' || c == '$') out += '\\';
+    if (c == '|') {
+      out += "$|$";
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string markdown_tables(const RunRecord& run) {
+  std::string out = fmt::format("# {}: rates\n\n", run.study.name);
+  for (const auto& t : document_tables(run)) {
+    std::string group = t.group;
+    for (std::size_t p = group.find('|'); p != std::string::npos; p = group.find('|', p + 2))
+      group.replace(p, 1, "\\|");
+    out += fmt::format("## {}\n\n{}\n\n| {} | {} | rate |\n|---:|---:|---:|\n", t.metric, group,
+                       t.axis, t.metric);
+    for (std::size_t k = 0; k < t.abscissa.size(); ++k)
+      out += fmt::format("| {} | {} | {} |\n", t.abscissa[k], t.value[k], t.rate[k]);
+    out += fmt::format("\nFitted rate: {}\n\n", t.fit);
+  }
+  out += "\\* value flagged: at the round-off floor or from a singular Gram matrix; not fitted.\n";
+  return out;
+}
+
+std::string latex_tables(const RunRecord& run) {
+  std::string out = fmt::format("% {}: rate tables (needs \\usepackage{{booktabs}})\n",
+                                latex_escape(run.study.name));
+  for (const auto& t : document_tables(run)) {
+    out += fmt::format(
+        "\\begin{{table}}[ht]\n\\centering\n\\caption{{{}: {}}}\n\\begin{{tabular}}{{rrr}}\n"
+        "\\toprule\n${}$ & {} & rate \\\\\n\\midrule\n",
+        latex_escape(t.metric), latex_escape(t.group), t.axis, latex_escape(t.metric));
+    for (std::size_t k = 0; k < t.abscissa.size(); ++k)
+      out += fmt::format("{} & {} & {} \\\\\n", t.abscissa[k], t.value[k],
+                         t.rate[k] == "-" ? "--" : t.rate[k]);
+    std::string fit = latex_escape(t.fit);
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"±", "$\\pm$"},
+                                   {"R²", "$R^2$"}}) {
+      for (auto p = fit.find(from); p != std::string::npos; p = fit.find(from, p + to.size()))
+        fit.replace(p, from.size(), to);
+    }
+    out += fmt::format("\\bottomrule\n\\end{{tabular}}\n\n\\smallskip fitted rate: {}\n\\end{{table}}\n\n",
+                       fit);
+  }
+  return out;
+}
+
+std::string console_tables(const RunRecord& run) {
+  std::string out;
+  for (const auto& metric : run.study.metrics) {
+    for (const auto& series : run.rates) {
+      if (series.metric != metric || series.trials.empty()) continue;
+      // An exponential fit is in n whatever the study's abscissa: the table's axis follows it.
+      const auto model = series.analysis.reported;
+      const bool in_n = model == RateModel::exponential || run.study.abscissa == Abscissa::n;
+      std::vector<TableRow> rows;
+      for (std::size_t k = 0; k < series.trials.size(); ++k)
+        rows.push_back({in_n ? series.n[k] : series.abscissa[k], series.values[k],
+                        static_cast<bool>(series.flagged[k])});
+      out += format_convergence_table(
+          metric, group_label(run.trials[series.trials.front()]),
+          in_n ? std::string("n") : abscissa_name(run.study), rows, series.fit,
+          "value flagged: at the round-off floor or from a singular Gram matrix", model,
+          series.no_fit_reason);
+      if (const auto& window = series.analysis.reported_analysis().window.points; !window.empty()) {
+        out += fmt::format("  window: n = {}, {} of {} points{}{}\n", label_range(series.n, window),
+                           window.size(), series.trials.size(),
+                           series.analysis.note.empty() ? "" : "; ", series.analysis.note);
+      }
+      if (!series.note.empty()) out += "  note: " + series.note + "\n";
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
+  const auto temporary = file.string() + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + temporary);
+    out << content;
+    out.flush();
+    if (!out) throw std::runtime_error("error writing " + temporary);
+  }
+  std::filesystem::rename(temporary, file);
+}
+
+void write_outputs(const RunRecord& run, const std::filesystem::path& directory) {
+  std::filesystem::create_directories(directory);
+  write_file_atomically(directory / "trials.csv", trials_csv(run));
+  write_file_atomically(directory / "rates.csv", rates_csv(run));
+  write_file_atomically(directory / "summary.json", summary_json(run));
+  write_file_atomically(directory / "rates.md", markdown_tables(run));
+  write_file_atomically(directory / "rates.tex", latex_tables(run));
+  if (run.study.kind == "adaptive") {
+    write_file_atomically(directory / "estimates.csv", estimates_csv(run));
+    write_file_atomically(directory / "timeseries.csv", timeseries_csv(run));
+  }
+}
+
+}  // namespace rkhs

@@ -1,0 +1,268 @@
+#include "rkhs/run/run.hpp"
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <numeric>
+#include <optional>
+#include <thread>
+
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/core/cancellation.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/target.hpp"
+
+namespace rkhs {
+
+namespace {
+
+double estimated_cost(const StudyDefinition& study, const TrialSpec& trial) {
+  const auto n = static_cast<double>(trial.n);
+  const double static_cost = n * n * n + n * n * static_cast<double>(study.evaluation_points);
+  if (study.kind != "adaptive") return static_cost;
+  // One dense LU of the (2d + n) system per step, steps growing with the horizon in laps.
+  const double laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
+                      study.domain.length;
+  return static_cost + laps * (n + 8) * (n + 8) * (n + 8) * 1e3;
+}
+
+// Dense matrices of a trial: Gram (twice, with its eigenvectors) and the cross matrix.
+double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
+  const auto n = static_cast<double>(trial.n);
+  return 8.0 * (3 * n * n + 2 * n * static_cast<double>(study.evaluation_points)) / 1048576.0;
+}
+
+// The two results of a trial that did not run to its end: never started, or stopped while it ran
+// (neither is reported as finished, so neither is stored).
+TrialResult not_started() {
+  TrialResult result;
+  result.skipped = true;
+  result.reason = "not run: the run was interrupted";
+  return result;
+}
+
+TrialResult stopped_while_running() {
+  TrialResult result = not_started();
+  result.stopped_while_running = true;
+  result.reason = "not run: the run was interrupted while the trial ran";
+  return result;
+}
+
+}  // namespace
+
+TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
+                      const std::function<bool()>& stop_requested) {
+  TrialResult result;
+  result.metrics.assign(study.all_metrics().size(),
+                        std::numeric_limits<double>::quiet_NaN());
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<std::chrono::steady_clock::time_point> deadline;
+  if (study.limits.trial_seconds > 0)
+    deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(study.limits.trial_seconds));
+  const auto time_limit_reason = [&](double seconds) {
+    return fmt::format("exceeded limits.trial_seconds = {} ({:.1f} s)",
+                       format_real(study.limits.trial_seconds), seconds);
+  };
+  try {
+    const CancellationScope cancellation(stop_requested, deadline);
+    if (const double mb = matrix_megabytes(study, trial); mb > study.limits.matrix_megabytes)
+      throw std::runtime_error(fmt::format(
+          "needs {:.0f} MB of matrices, above limits.matrix_megabytes = {:.0f}", mb,
+          study.limits.matrix_megabytes));
+    const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study.domain);
+    const auto target =
+        target_registry().find(trial.target.name)->factory(trial.target.parameters, study.domain);
+    result.data_provenance = target->data_provenance();
+    const auto placement = centre_registry().find(trial.centres.name)->factory(trial.centres.parameters);
+    const auto centres = placement->place(trial.n, study.domain, trial.seed);
+    check_cancelled();
+    if (study.kind == "adaptive") {
+      const auto plant = plant_registry().find(trial.plant.name)->factory(trial.plant.parameters);
+      const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
+      const auto integrator =
+          integrator_registry().find(trial.integrator.name)->factory(trial.integrator.parameters);
+      auto measured = measure_adaptive(*kernel, *target, centres, *plant, *law, *integrator,
+                                       study.adaptive, study.evaluation_points, study.solver);
+      result.metrics = std::move(measured.metrics);
+      result.solve_method = std::move(measured.solve_method);
+      result.flags = std::move(measured.flags);
+      result.samples = std::move(measured.samples);
+      result.road = std::move(measured.road);
+      result.snapshots = std::move(measured.snapshots);
+    } else {
+      auto measured =
+          measure_approximation(*kernel, *target, centres, study.evaluation_points, study.solver);
+      result.metrics = std::move(measured.metrics);
+      result.solve_method = std::move(measured.solve_method);
+      result.flags = std::move(measured.flags);
+    }
+    check_cancelled();
+    // Metrics that are undefined by design in some trials: a single centre has no separation;
+    // coefficient and Lyapunov metrics need a road in H_n.
+    static const std::vector<std::string> may_be_undefined{
+        "separation_distance", "coefficient_error", "lyapunov_max_increase", "lyapunov_ratio"};
+    const auto& names = study.all_metrics();
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (std::isnan(result.metrics[i]) &&
+          std::find(may_be_undefined.begin(), may_be_undefined.end(), names[i]) == may_be_undefined.end())
+        throw std::runtime_error(fmt::format("{} is NaN", names[i]));
+    result.ok = true;
+  } catch (const TrialCancelled&) {
+    result = stopped_while_running();
+  } catch (const TrialTimeLimitExceeded& e) {
+    result.ok = false;
+    result.reason = time_limit_reason(e.elapsed_seconds);
+  } catch (const std::exception& e) {
+    result.ok = false;
+    result.reason = e.what();
+  } catch (...) {
+    result.ok = false;
+    result.reason = "unknown exception";
+  }
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (result.skipped) return result;
+  if (result.ok && study.limits.trial_seconds > 0 && result.seconds > study.limits.trial_seconds) {
+    result.ok = false;
+    result.reason = time_limit_reason(result.seconds);
+  }
+  if (!result.ok)
+    std::fill(result.metrics.begin(), result.metrics.end(), std::numeric_limits<double>::quiet_NaN());
+  return result;
+}
+
+std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
+                                             const std::vector<TrialSpec>& trials) {
+  std::vector<double> cost(trials.size());
+  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = estimated_cost(study, trials[i]);
+  std::vector<std::size_t> order(trials.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
+  return order;
+}
+
+namespace {
+
+std::atomic<bool> abandoned_any{false};
+
+// What the worker threads of one run_trials call share. When trials are abandoned it outlives
+// the call (the workers hold it), so it owns copies of everything they read.
+struct RunState {
+  StudyDefinition study;
+  std::vector<TrialSpec> trials;
+  RunOptions options;
+  std::vector<TrialResult> results;
+  enum Phase : char { waiting, running, done };
+  std::vector<Phase> phase;   // by position in `trials`
+  std::mutex mutex;           // guards results, phase, finished, abandoned and the callbacks
+  std::condition_variable changed;
+  std::size_t finished = 0;   // trials done, skipped or not (the whole run ends at trials.size())
+  bool abandoned = false;     // run_trials has returned: no more writes, no more callbacks
+};
+
+void run_in_arena(RunState& state) {
+  const auto order = largest_first_order(state.study, state.trials);
+  const auto& options = state.options;
+  const int threads =
+      options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+  // Raise TBB's worker limit to the requested count (it defaults to the hardware threads).
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                  static_cast<std::size_t>(threads));
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, order.size(), 1),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            const std::size_t i = order[k];
+            TrialResult result;
+            if (options.stop_requested && options.stop_requested()) {
+              result = not_started();
+            } else {
+              {
+                std::lock_guard lock(state.mutex);
+                if (state.abandoned) return;
+                state.phase[i] = RunState::running;
+                if (options.on_trial_started) options.on_trial_started(state.trials[i]);
+              }
+              result = run_trial(state.study, state.trials[i], options.stop_requested);
+            }
+            std::lock_guard lock(state.mutex);
+            if (state.abandoned) return;
+            state.phase[i] = RunState::done;
+            state.results[i] = std::move(result);
+            if (!state.results[i].skipped && options.on_trial_finished)
+              options.on_trial_finished(state.trials[i], state.results[i]);
+            ++state.finished;
+            state.changed.notify_all();
+          }
+        },
+        tbb::simple_partitioner());
+  });
+}
+
+}  // namespace
+
+bool trials_abandoned() noexcept {
+  return abandoned_any.load();
+}
+
+std::vector<TrialResult> run_trials(const StudyDefinition& study,
+                                    const std::vector<TrialSpec>& trials,
+                                    const RunOptions& options) {
+  if (options.on_start) options.on_start(trials.size());
+  auto state = std::make_shared<RunState>();
+  state->study = study;
+  state->trials = trials;
+  state->options = options;
+  state->results.resize(trials.size());
+  state->phase.assign(trials.size(), RunState::waiting);
+  if (options.abandon_after_seconds < 0 || trials.empty()) {
+    run_in_arena(*state);
+    return std::move(state->results);
+  }
+  // The trials run on a thread of their own, so that this one can give up waiting.
+  std::thread runner([state] { run_in_arena(*state); });
+  std::unique_lock lock(state->mutex);
+  std::optional<std::chrono::steady_clock::time_point> stop_seen;
+  const auto grace = std::chrono::duration<double>(options.abandon_after_seconds);
+  while (state->finished < trials.size()) {
+    state->changed.wait_for(lock, std::chrono::milliseconds(50));
+    if (state->finished == trials.size()) break;
+    if (!stop_seen && options.stop_requested && options.stop_requested())
+      stop_seen = std::chrono::steady_clock::now();
+    if (stop_seen && std::chrono::steady_clock::now() - *stop_seen >= grace) {
+      // Trials still running are abandoned; trials not reached yet are skipped.
+      state->abandoned = true;
+      abandoned_any = true;
+      for (std::size_t i = 0; i < trials.size(); ++i) {
+        if (state->phase[i] == RunState::running)
+          state->results[i] = stopped_while_running();
+        else if (state->phase[i] == RunState::waiting)
+          state->results[i] = not_started();
+      }
+      auto results = state->results;
+      lock.unlock();
+      runner.detach();
+      return results;
+    }
+  }
+  lock.unlock();
+  runner.join();
+  return std::move(state->results);
+}
+
+}  // namespace rkhs

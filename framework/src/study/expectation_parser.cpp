@@ -1,0 +1,387 @@
+#include "expectation_parser.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/study/trial_grid.hpp"
+#include "rkhs/core/registry.hpp"
+#include "rkhs/rates/theory.hpp"
+
+namespace rkhs::detail {
+namespace {
+
+// The same message format as study.cpp's Reporter (whose helpers are local to that file).
+[[noreturn]] void fail(const std::string& source, const toml::source_region& where,
+                       std::string_view key, std::string_view message) {
+  std::string out = source;
+  if (where.begin.line > 0) out += fmt::format(":{}:{}", where.begin.line, where.begin.column);
+  out += ": ";
+  if (!key.empty()) out += std::string(key) + ": ";
+  out += message;
+  throw StudyError(out);
+}
+
+std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? std::string(separator) : "") + items[i];
+  return out;
+}
+
+std::string known_list(const std::string& found, const std::vector<std::string>& known) {
+  std::string out = fmt::format("(known: {}", join(known));
+  if (auto guess = closest_name(found, known); !guess.empty())
+    out += fmt::format("; did you mean '{}'?", guess);
+  return out + ")";
+}
+
+std::string show(const toml::node& node) {
+  std::ostringstream out;
+  node.visit([&](auto&& v) { out << v; });
+  return out.str();
+}
+
+std::optional<ParameterValue> scalar(const toml::node& node) {
+  if (auto v = node.as_integer()) return ParameterValue(v->get());
+  if (auto v = node.as_floating_point()) return ParameterValue(v->get());
+  if (auto v = node.as_string()) return ParameterValue(v->get());
+  if (auto v = node.as_boolean()) return ParameterValue(v->get());
+  return std::nullopt;
+}
+
+bool valid_tier_name(const std::string& name) {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+  });
+}
+
+// Reads one [[expect]] table; `columns` are the study's axis columns (the selector keys).
+class ExpectationReader {
+ public:
+  ExpectationReader(const StudyDefinition& study, const std::vector<TrialSpec>& groups,
+                    const std::vector<std::string>& columns)
+      : study_(study), groups_(groups), columns_(columns) {}
+
+  Expectation read(const toml::table& table, std::size_t number) const {
+    Expectation e;
+    e.number = number;
+    e.location = fmt::format("{}:{}:{}", study_.source, table.source().begin.line,
+                             table.source().begin.column);
+    check_keys(table);
+    read_metric(table, e);
+    if (const auto* node = table.get("name")) e.name = string_at(*node, "expect.name");
+    if (const auto* node = table.get("tier")) e.tiers = parse_tiers(*node, study_.source, "expect.tier");
+    read_selectors(table, e);
+    read_kind(table, e);
+    check_selection(table, e);
+    return e;
+  }
+
+ private:
+  static inline const std::vector<std::string> reserved_{
+      "metric", "name", "tier", "theory", "rate", "tolerance", "model", "bound"};
+
+  std::string string_at(const toml::node& node, std::string_view key) const {
+    if (!node.is_string())
+      fail(study_.source, node.source(), key, fmt::format("expected a string, found {}", show(node)));
+    return node.as_string()->get();
+  }
+
+  double number_at(const toml::node& node, std::string_view key) const {
+    if (!node.is_number() || !std::isfinite(node.value<double>().value()))
+      fail(study_.source, node.source(), key, fmt::format("expected a finite number, found {}", show(node)));
+    return node.value<double>().value();
+  }
+
+  // A metric the study measures, for `metric`, `bound.by` and `bound.times`.
+  std::string metric_at(const toml::node& node, std::string_view key) const {
+    const auto metric = string_at(node, key);
+    if (std::find(study_.metrics.begin(), study_.metrics.end(), metric) == study_.metrics.end()) {
+      const auto& all = study_.all_metrics();
+      if (std::find(all.begin(), all.end(), metric) != all.end())
+        fail(study_.source, node.source(), key,
+             fmt::format("metric '{}' is not measured by this study (study.metrics: {})", metric,
+                         join(study_.metrics)));
+      fail(study_.source, node.source(), key,
+           fmt::format("unknown metric '{}' {}", metric, known_list(metric, study_.metrics)));
+    }
+    return metric;
+  }
+
+  void check_keys(const toml::table& table) const {
+    auto allowed = reserved_;
+    allowed.insert(allowed.end(), columns_.begin(), columns_.end());
+    for (auto&& [key, value] : table) {
+      const std::string name(key.str());
+      if (std::find(allowed.begin(), allowed.end(), name) == allowed.end())
+        fail(study_.source, key.source(), "expect." + name,
+             fmt::format("unknown key (an expectation takes {}, and this study's axis columns "
+                         "as group selectors: {}{})",
+                         join(reserved_), join(columns_),
+                         closest_name(name, allowed).empty()
+                             ? std::string()
+                             : fmt::format("; did you mean '{}'?", closest_name(name, allowed))));
+    }
+  }
+
+  void read_metric(const toml::table& table, Expectation& e) const {
+    const auto* node = table.get("metric");
+    if (!node)
+      fail(study_.source, table.source(), "expect.metric",
+           fmt::format("missing: which metric is expected to behave (one of: {})", join(study_.metrics)));
+    e.metric = metric_at(*node, "expect.metric");
+  }
+
+  void read_selectors(const toml::table& table, Expectation& e) const {
+    for (const auto& column : columns_) {  // in column order, so selector_text reads naturally
+      const auto* node = table.get(column);
+      if (!node) continue;
+      AxisSelector selector{column, {}};
+      auto add = [&](const toml::node& item) {
+        auto value = scalar(item);
+        if (!value)
+          fail(study_.source, item.source(), "expect." + column,
+               fmt::format("expected a value or a list of values, found {}", show(item)));
+        selector.values.push_back(std::move(*value));
+      };
+      if (const auto* array = node->as_array()) {
+        if (array->empty()) fail(study_.source, node->source(), "expect." + column, "empty list of values");
+        for (const auto& item : *array) add(item);
+      } else {
+        add(*node);
+      }
+      e.selectors.push_back(std::move(selector));
+    }
+  }
+
+  void read_kind(const toml::table& table, Expectation& e) const {
+    const auto& src = study_.source;
+    const auto* theory = table.get("theory");
+    const auto* rate = table.get("rate");
+    const auto* model = table.get("model");
+    const auto* bound = table.get("bound");
+    const auto* tolerance = table.get("tolerance");
+    if (theory && !(theory->is_boolean() && theory->as_boolean()->get())) {
+      if (!theory->is_boolean())
+        fail(src, theory->source(), "expect.theory", fmt::format("expected true, found {}", show(*theory)));
+      theory = nullptr;  // theory = false: as if absent
+    }
+    const int what = (theory ? 1 : 0) + (rate ? 1 : 0) + (bound ? 1 : 0);
+    if (what > 1)
+      fail(src, table.source(), "expect",
+           "give one of theory = true, rate = ... or bound = { ... } per [[expect]] table");
+    if (what == 0 && !model)
+      fail(src, table.source(), "expect",
+           "say what is expected: theory = true, rate = -1.5 (or { min = ..., max = ... }), "
+           "model = \"exponential\", or bound = { by = \"...\" }");
+    if (model) {
+      const auto name = string_at(*model, "expect.model");
+      if (name == "power_law") e.model = RateModel::power_law;
+      else if (name == "exponential") e.model = RateModel::exponential;
+      else
+        fail(src, model->source(), "expect.model",
+             fmt::format("found \"{}\", expected \"power_law\" (log-log) or \"exponential\" "
+                         "(log-linear in n)", name));
+      if (theory || bound)
+        fail(src, model->source(), "expect.model",
+             theory ? "theory = true chooses the model from the kernel's metadata: remove 'model'"
+                    : "a bound has no rate model: remove 'model'");
+    }
+    if (tolerance) {
+      e.tolerance = number_at(*tolerance, "expect.tolerance");
+      if (!(e.tolerance > 0))
+        fail(src, tolerance->source(), "expect.tolerance",
+             fmt::format("must be > 0, found {}", show(*tolerance)));
+      if (!theory && !(rate && rate->is_number()))
+        fail(src, tolerance->source(), "expect.tolerance",
+             "only for theory = true or rate = <number> (an interval { min, max } or a bound "
+             "has no tolerance)");
+    }
+
+    if (theory) {
+      e.kind = ExpectationKind::theory;
+      if (study_.kind != "approximation")
+        fail(src, theory->source(), "expect.theory",
+             fmt::format("theory rates are known for approximation studies only (this study is "
+                         "kind = \"{}\")", study_.kind));
+    } else if (rate) {
+      e.kind = ExpectationKind::rate;
+      read_rate(*rate, tolerance != nullptr, e);
+    } else if (bound) {
+      e.kind = ExpectationKind::bound;
+      read_bound(*bound, e);
+    } else {
+      e.kind = ExpectationKind::model;
+    }
+  }
+
+  void read_rate(const toml::node& rate, bool has_tolerance, Expectation& e) const {
+    const auto& src = study_.source;
+    if (rate.is_number()) {
+      e.expected = number_at(rate, "expect.rate");
+      if (e.model == RateModel::exponential && !has_tolerance)
+        fail(src, rate.source(), "expect.rate",
+             "an exponential rate (per unit of n) has no natural scale: give tolerance = ...");
+      e.interval = {*e.expected - e.tolerance, *e.expected + e.tolerance};
+      return;
+    }
+    const auto* interval = rate.as_table();
+    if (!interval)
+      fail(src, rate.source(), "expect.rate",
+           fmt::format("expected a number or {{ min = ..., max = ... }}, found {}", show(rate)));
+    for (auto&& [key, value] : *interval)
+      if (key.str() != "min" && key.str() != "max")
+        fail(src, key.source(), fmt::format("expect.rate.{}", key.str()),
+             "unknown key (known: min, max)");
+    if (const auto* low = interval->get("min")) e.interval.low = number_at(*low, "expect.rate.min");
+    if (const auto* high = interval->get("max")) e.interval.high = number_at(*high, "expect.rate.max");
+    if (!interval->contains("min") && !interval->contains("max"))
+      fail(src, rate.source(), "expect.rate", "give min, max or both");
+    if (e.interval.low > e.interval.high)
+      fail(src, rate.source(), "expect.rate",
+           fmt::format("min ({}) is above max ({})", format_real(e.interval.low),
+                       format_real(e.interval.high)));
+  }
+
+  void read_bound(const toml::node& node, Expectation& e) const {
+    const auto& src = study_.source;
+    const auto* table = node.as_table();
+    if (!table)
+      fail(src, node.source(), "expect.bound",
+           fmt::format("expected {{ by = \"metric\", times = \"metric\", constant = 1.0 }}, found {}",
+                       show(node)));
+    for (auto&& [key, value] : *table)
+      if (key.str() != "by" && key.str() != "times" && key.str() != "constant")
+        fail(src, key.source(), fmt::format("expect.bound.{}", key.str()),
+             "unknown key (known: by, times, constant)");
+    const auto* by = table->get("by");
+    if (!by && table->contains("times"))
+      fail(src, node.source(), "expect.bound.by", "missing: 'times' multiplies 'by'");
+    if (!by && !table->contains("constant"))
+      fail(src, node.source(), "expect.bound",
+           "give by = \"metric\" (metric <= constant * by [* times]) or constant = ... "
+           "(metric <= constant)");
+    if (by) e.bound.by = metric_at(*by, "expect.bound.by");
+    if (const auto* times = table->get("times")) e.bound.times = metric_at(*times, "expect.bound.times");
+    if (const auto* constant = table->get("constant")) {
+      e.bound.constant = number_at(*constant, "expect.bound.constant");
+      if (!(e.bound.constant > 0))
+        fail(src, constant->source(), "expect.bound.constant",
+             fmt::format("must be > 0, found {}", show(*constant)));
+    }
+  }
+
+  // Every expectation must select a group; a theory expectation must have a theory there.
+  void check_selection(const toml::table& table, const Expectation& e) const {
+    std::vector<const TrialSpec*> selected;
+    for (const auto& group : groups_)
+      if (e.selects(group)) selected.push_back(&group);
+    if (selected.empty()) {
+      std::vector<std::string> available;
+      for (const auto& selector : e.selectors) {
+        std::set<std::string> values;
+        for (const auto& group : groups_)
+          if (auto v = axis_values({selector.column}, group).front(); !v.empty()) values.insert(v);
+        available.push_back(fmt::format("{}: {}", selector.column,
+                                        join(std::vector<std::string>(values.begin(), values.end()))));
+      }
+      fail(study_.source, table.source(), "expect",
+           fmt::format("{} selects no group of this study (values in the study: {})",
+                       e.selector_text(), join(available, "; ")));
+    }
+    // Each value of a list must select something too: `degree = [1, 5]` where no group has
+    // degree 5 is a typo, not a wish.
+    for (std::size_t k = 0; k < e.selectors.size(); ++k) {
+      const auto& selector = e.selectors[k];
+      if (selector.values.size() < 2) continue;
+      const auto* array = table.get(selector.column)->as_array();
+      for (std::size_t v = 0; v < selector.values.size(); ++v) {
+        Expectation single = e;
+        single.selectors[k].values = {selector.values[v]};
+        if (std::any_of(groups_.begin(), groups_.end(),
+                        [&](const TrialSpec& group) { return single.selects(group); }))
+          continue;
+        std::set<std::string> values;
+        for (const auto* group : selected)
+          if (auto value = axis_values({selector.column}, *group).front(); !value.empty())
+            values.insert(value);
+        fail(study_.source, array ? array->get(v)->source() : table.source(), "expect." + selector.column,
+             fmt::format("{} selects no group of this study{} (the groups it selects have {}: {})",
+                         single.selector_text(),
+                         e.selectors.size() > 1 ? " together with the other selectors" : "",
+                         selector.column,
+                         join(std::vector<std::string>(values.begin(), values.end()))));
+      }
+    }
+    if (e.kind != ExpectationKind::theory) return;
+    for (const auto* group : selected) {
+      const auto kernel = make_kernel(group->kernel.name, group->kernel.parameters, study_.domain);
+      std::string why;
+      if (!theory_rate(e.metric, kernel->properties(), 1, &why))
+        fail(study_.source, table.get("theory")->source(), "expect.theory",
+             fmt::format("kernel {}: {}", group->kernel.label(), why));
+    }
+  }
+
+  const StudyDefinition& study_;
+  const std::vector<TrialSpec>& groups_;
+  const std::vector<std::string>& columns_;
+};
+
+}  // namespace
+
+std::vector<std::string> parse_tiers(const toml::node& node, const std::string& source,
+                                     std::string_view key) {
+  std::vector<std::string> tiers;
+  auto add = [&](const toml::node& item) {
+    if (!item.is_string() || !valid_tier_name(item.as_string()->get()))
+      fail(source, item.source(), key,
+           fmt::format("expected a tier name (letters, digits, '_', '-'), found {}", show(item)));
+    tiers.push_back(item.as_string()->get());
+  };
+  if (const auto* array = node.as_array()) {
+    if (array->empty()) fail(source, node.source(), key, "empty list of tiers");
+    for (const auto& item : *array) add(item);
+  } else {
+    add(node);
+  }
+  return tiers;
+}
+
+std::vector<Expectation> parse_expectations(const toml::table& root, const StudyDefinition& study) {
+  const auto* node = root.get("expect");
+  if (!node) return {};
+  std::vector<const toml::table*> tables;
+  if (const auto* array = node->as_array()) {
+    for (const auto& item : *array) {
+      if (!item.is_table())
+        fail(study.source, item.source(), "expect",
+             fmt::format("expected a table ([[expect]]), found {}", show(item)));
+      tables.push_back(item.as_table());
+    }
+  } else if (node->is_table()) {
+    tables.push_back(node->as_table());
+  } else {
+    fail(study.source, node->source(), "expect",
+         fmt::format("expected [[expect]] tables, found {}", show(*node)));
+  }
+
+  // One representative trial per group (the selectors look at axes, which a group shares).
+  std::vector<TrialSpec> groups;
+  std::set<std::string> seen;
+  const auto trials = study.trials();
+  for (const auto& trial : trials)
+    if (seen.insert(trial.group_key).second) groups.push_back(trial);
+  const auto columns = axis_columns(trials);
+
+  const ExpectationReader reader(study, groups, columns);
+  std::vector<Expectation> out;
+  for (std::size_t i = 0; i < tables.size(); ++i) out.push_back(reader.read(*tables[i], i + 1));
+  return out;
+}
+
+}  // namespace rkhs::detail

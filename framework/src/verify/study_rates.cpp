@@ -1,0 +1,107 @@
+#include "rkhs/verify/study_rates.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "rkhs/approx/approximation.hpp"
+
+namespace rkhs {
+
+std::string_view excluding_flag(std::string_view metric) {
+  if (metric == "gram_condition_number" || metric == "gram_min_eigenvalue") return "gram_singular";
+  if (metric == "power_function_sup") return "power_function_at_floor";
+  if (metric == "sup_error") return "sup_error_at_floor";
+  if (metric == "l2_error") return "l2_error_at_floor";
+  return "";
+}
+
+std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
+                                        const std::vector<TrialSpec>& trials,
+                                        const std::vector<TrialResult>& results) {
+  std::vector<std::string> group_keys;
+  std::map<std::string, std::vector<std::size_t>> members;
+  for (const auto& trial : trials) {
+    if (!members.contains(trial.group_key)) group_keys.push_back(trial.group_key);
+    members[trial.group_key].push_back(trial.index);
+  }
+  const auto& names = study.all_metrics();
+  const bool has_fill = std::find(names.begin(), names.end(), "fill_distance") != names.end();
+  const std::size_t fill_index = has_fill ? study.metric_index("fill_distance") : 0;
+
+  std::vector<MetricSeries> out;
+  for (std::size_t g = 0; g < group_keys.size(); ++g) {
+    auto indices = members[group_keys[g]];
+    std::sort(indices.begin(), indices.end(),
+              [&](auto a, auto b) { return trials[a].n < trials[b].n; });
+    for (const auto& metric : study.metrics) {
+      const std::size_t m = study.metric_index(metric);
+      const auto flag = excluding_flag(metric);
+      MetricSeries series;
+      series.metric = metric;
+      series.group = g;
+      series.trials = indices;
+      std::vector<bool> usable;
+      std::size_t failed = 0, flagged = 0, first_flagged = indices.size();
+      for (std::size_t k = 0; k < indices.size(); ++k) {
+        const auto& result = results[indices[k]];
+        const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)
+                                                       : result.metrics[fill_index];
+        const double y = result.metrics[m];
+        const bool excluded =
+            !flag.empty() &&
+            std::find(result.flags.begin(), result.flags.end(), flag) != result.flags.end();
+        series.abscissa.push_back(x);
+        series.n.push_back(static_cast<double>(trials[indices[k]].n));
+        series.values.push_back(y);
+        series.flagged.push_back(excluded);
+        usable.push_back(result.ok && !excluded);
+        if (!result.ok) ++failed;
+        else if (excluded) {
+          ++flagged;
+          first_flagged = std::min(first_flagged, k);
+        }
+      }
+      series.analysis = analyse_series(series.abscissa, series.n, series.values, usable);
+      const auto& reported = series.analysis.reported_analysis();
+      series.pairwise = reported.pairwise;
+      series.fit = reported.fit;
+
+      std::vector<std::string> notes;
+      if (failed) notes.push_back(fmt::format("{} failed trial{} excluded", failed, failed > 1 ? "s" : ""));
+      // Flagged values that run to the end of the series are a floor the trials measured.
+      bool flagged_tail = flagged > 0;
+      for (std::size_t k = first_flagged; flagged_tail && k < indices.size(); ++k)
+        flagged_tail = series.flagged[k] || !results[indices[k]].ok;
+      if (flagged_tail)
+        notes.push_back(fmt::format("floor from n = {}: {} value{} flagged ({})",
+                                    trials[indices[first_flagged]].n, flagged,
+                                    flagged > 1 ? "s" : "", flag));
+      else if (flagged)
+        notes.push_back(fmt::format("{} value{} excluded ({})", flagged, flagged > 1 ? "s" : "", flag));
+      if (!reported.window.note.empty()) notes.push_back(reported.window.note);
+      if (series.fit) {
+        if (!series.fit->note.empty()) notes.push_back(series.fit->note);
+      } else {
+        std::size_t usable_points = 0;
+        for (std::size_t k = 0; k < indices.size(); ++k)
+          usable_points += usable[k] && std::isfinite(series.values[k]) && series.values[k] > 0.0;
+        series.no_fit_reason =
+            fmt::format("{} of {} points usable{}; a fit needs at least 2", usable_points,
+                        indices.size(),
+                        failed + flagged > 0 ? fmt::format(" after excluding {} failed or flagged",
+                                                           failed + flagged)
+                                             : std::string());
+        notes.push_back(fmt::format("no fit: {} usable point{}", usable_points,
+                                    usable_points == 1 ? "" : "s"));
+      }
+      for (std::size_t i = 0; i < notes.size(); ++i) series.note += (i ? "; " : "") + notes[i];
+      out.push_back(std::move(series));
+    }
+  }
+  return out;
+}
+
+}  // namespace rkhs

@@ -1,0 +1,205 @@
+#pragma once
+// The multiscale B-spline kernel (docs/model.md section 3; paper Sec. 2.1), d = 1:
+//
+//   k(u, v) = sum_{j=0}^{J} 2^{j (d - 2r)} sum_k N_p(2^j u / h0 - k) N_p(2^j v / h0 - k),
+//
+// N_p the cardinal B-spline of degree p with knots 0, 1, ..., p + 1, h0 = L / n0, and
+// n_j = n0 2^j cells on level j.
+//   Periodic domain [0, L): k = 0 .. n_j - 1, spline indices wrap modulo n_j.
+//   Interval [0, L]: every k whose support meets [0, n_j), i.e. k = -p .. n_j - 1 (n_j + p
+//   splines per level), no wrapping. Points outside [0, L] are clamped to it.
+//
+// Parameters (study-file keys and CSV columns):
+//   degree  integer 0..3, default 1: p (1 = hat, the paper's "first order"; 2 = quadratic).
+//   r       > 0, default = degree: level weights 2^{j (1 - 2r)}. When r is not given it equals
+//           degree; degree 0 then needs an explicit r.
+//   n0      integer 1..8192, default 4: cells on level 0 (h0 = L / n0). Periodic: n0 >= p + 1.
+//   J       integer 0..16, default 6: finest level.
+//
+// The kernel is evaluated through its sparse feature map, never by a dense double loop:
+//   phi_{j,k}(u) = 2^{j (1 - 2r) / 2} N_p(2^j u / h0 - k),
+//   k(u, v) = sum_{j,k} phi_{j,k}(u) phi_{j,k}(v),
+// with feature index offset_j + k (periodic, k wrapped into [0, n_j)) or offset_j + k + p
+// (interval). Each point has exactly (p + 1)(J + 1) features (some may be 0 at knots).
+// operator() forms the same products on the stack, O((p + 1)(J + 1)), without allocation.
+// Arguments must be finite.
+//
+// Properties: positive SEMIdefinite only (positive_definite = false). The level spaces are
+// nested, so k has rank n_J (periodic) or n_J + p (interval), fewer than feature_count():
+// a Gram matrix of more centres than that is singular (n_J = 256 with the defaults).
+// Native space equivalent to H^r when 1/2 < r < p + 1/2 (the limit J -> infinity;
+// sobolev_order is empty otherwise). Support radius (p + 1) h0 (a level-0 spline); not
+// stationary.
+// Fails: ParameterError naming "n0" when the domain is periodic and n0 < degree + 1 (a spline
+// would overlap its own periodic copy), naming "r" when degree = 0 and r is not given, and
+// naming "degree" / "J" / "n0" for values outside their declared ranges.
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "rkhs/core/domain.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/core/parameters.hpp"
+#include "rkhs/core/registry.hpp"
+
+namespace rkhs::kernels {
+
+class MultiscaleBSpline {
+ public:
+  static constexpr int max_degree = 3;
+  static constexpr int max_level = 16;  ///< largest J
+  static constexpr int max_n0 = 8192;   ///< keeps feature indices within int32
+
+  static PluginInfo info();
+
+  MultiscaleBSpline(const ParameterSet& parameters, const Domain& domain);
+
+  /// N_p(x): the cardinal B-spline of degree p = 0..3 with knots 0..p+1; 0 outside [0, p + 1)
+  /// (right-open, so N_0 is the indicator of [0, 1)).
+  static double cardinal_bspline(int degree, double x) noexcept {
+    if (!(x >= 0.0) || x >= degree + 1) return 0.0;
+    const double cell = std::floor(x);
+    std::array<double, max_degree + 1> piece{};
+    pieces(degree, x - cell, piece.data());
+    return piece[static_cast<std::size_t>(cell)];
+  }
+
+  /// k(u, v), the dot product of the two sparse feature vectors.
+  double operator()(double u, double v) const noexcept {
+    const double x0 = level0(u), y0 = level0(v);
+    std::array<double, max_degree + 1> nx{}, ny{};
+    double sum = 0.0;
+    for (int j = 0; j <= levels_; ++j) {
+      const Cell cx = cell_at(x0, j), cy = cell_at(y0, j);
+      const std::int32_t cells = n0_ << j;
+      std::int32_t shift = cx.index - cy.index;
+      if (periodic_) {
+        if (shift < 0) shift += cells;  // in [0, n_j)
+        if (shift > degree_ && shift < cells - degree_) continue;
+      } else if (shift > degree_ || shift < -degree_) {
+        continue;
+      }
+      pieces(degree_, cx.t, nx.data());
+      pieces(degree_, cy.t, ny.data());
+      const double w = weight_[j];
+      // Spline k = cx - ix = cy - iy (mod n_j when periodic): iy = ix - shift.
+      for (int ix = 0; ix <= degree_; ++ix) {
+        int iy = ix - shift;
+        if (periodic_ && iy < 0) iy += cells;
+        if (iy < 0 || iy > degree_) continue;
+        sum += (w * nx[ix]) * (w * ny[iy]);
+      }
+    }
+    return sum;
+  }
+
+  /// Clears `out` and appends the (p + 1)(J + 1) features of u, level by level.
+  void features(double u, SparseFeatures& out) const {
+    out.clear();
+    const double x0 = level0(u);
+    std::array<double, max_degree + 1> n{};
+    for (int j = 0; j <= levels_; ++j) {
+      const Cell c = cell_at(x0, j);
+      const std::int32_t cells = n0_ << j;
+      pieces(degree_, c.t, n.data());
+      for (int i = degree_; i >= 0; --i) {
+        const std::int32_t k = c.index - i;
+        const std::int32_t slot = periodic_ ? (k < 0 ? k + cells : k) : k + degree_;
+        out.push(offset_[j] + slot, weight_[j] * n[i]);
+      }
+    }
+  }
+
+  std::size_t feature_count() const noexcept {
+    return static_cast<std::size_t>(offset_[levels_ + 1]);
+  }
+
+  KernelProperties properties() const noexcept;
+
+  /// Arc lengths in [0, L) where the kernel sections are not smooth: the knots of the finest
+  /// level, s = k L / (n0 2^J). An integrator restarts there (docs/model.md section 8).
+  std::vector<double> kink_points() const {
+    const std::int64_t cells = std::int64_t{n0_} << levels_;
+    std::vector<double> out(static_cast<std::size_t>(cells));
+    for (std::int64_t k = 0; k < cells; ++k)
+      out[static_cast<std::size_t>(k)] = length_ * static_cast<double>(k) / static_cast<double>(cells);
+    return out;
+  }
+
+  int degree() const noexcept { return degree_; }
+  double r() const noexcept { return r_; }
+  int n0() const noexcept { return n0_; }
+  int levels() const noexcept { return levels_; }  ///< J
+
+ private:
+  /// out[i] = N_p(t + i) for i = 0..p and t in [0, 1]: the polynomial pieces of N_p.
+  static void pieces(int degree, double t, double* out) noexcept {
+    const double s = 1.0 - t;
+    switch (degree) {
+      case 0:
+        out[0] = 1.0;
+        return;
+      case 1:
+        out[0] = t;
+        out[1] = s;
+        return;
+      case 2:
+        out[0] = 0.5 * t * t;
+        out[1] = 0.5 + t * s;  // (1 + 2t - 2t^2) / 2
+        out[2] = 0.5 * s * s;
+        return;
+      default: {
+        const double t2 = t * t, t3 = t2 * t;
+        out[0] = t3 * (1.0 / 6.0);
+        out[1] = (1.0 + 3.0 * (t + t2 - t3)) * (1.0 / 6.0);
+        out[2] = (4.0 - 6.0 * t2 + 3.0 * t3) * (1.0 / 6.0);
+        out[3] = s * s * s * (1.0 / 6.0);
+        return;
+      }
+    }
+  }
+
+  struct Cell {
+    std::int32_t index;  ///< level-j cell holding the point: [index, index + 1) in knot units
+    double t;            ///< position in the cell, [0, 1]
+  };
+
+  /// u in level-0 knot units, in [0, n0] (periodic: wrapped first; interval: clamped).
+  double level0(double u) const noexcept {
+    if (periodic_) {
+      double w = std::fmod(u, length_);
+      if (w < 0) w += length_;
+      return w * n0_ / length_;
+    }
+    const double clamped = u < 0.0 ? 0.0 : (u > length_ ? length_ : u);
+    const double x0 = clamped * n0_ / length_;
+    return x0 > n0_ ? static_cast<double>(n0_) : x0;
+  }
+
+  /// The level-j cell of the level-0 coordinate x0 in [0, n0]. Scaling by 2^j is exact.
+  Cell cell_at(double x0, int level) const noexcept {
+    const double x = x0 * scale_[level];
+    const std::int32_t cells = n0_ << level;
+    auto index = static_cast<std::int32_t>(x);  // x >= 0: truncation is floor
+    if (index >= cells) {
+      // x = n_j (rounding of u just below L, or u = L on the interval).
+      if (periodic_) return {index - cells, x - index};
+      index = cells - 1;
+    }
+    return {index, x - index};
+  }
+
+  int degree_;
+  double r_;
+  int n0_;
+  int levels_;
+  double length_;
+  bool periodic_;
+  std::array<double, max_level + 1> scale_{};         ///< 2^j
+  std::array<double, max_level + 1> weight_{};        ///< 2^{j (1 - 2r) / 2}
+  std::array<std::int32_t, max_level + 2> offset_{};  ///< first feature index of level j
+};
+
+}  // namespace rkhs::kernels

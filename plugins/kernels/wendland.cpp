@@ -1,0 +1,44 @@
+#include "rkhs/kernels/wendland.hpp"
+
+#include "rkhs/kernel/kernel_algorithms.hpp"
+
+namespace rkhs::kernels {
+
+PluginInfo Wendland::info() {
+  return {
+      "wendland",
+      "Wendland's compactly supported function phi_{1,k}(|x - y| / radius)",
+      {integer_parameter("k", 1, "smoothness k (phi is C^{2k})", 0, 3),
+       positive_parameter("radius", 1.0, "support radius rho, metres")},
+      {{"positive definite", "yes"},
+       {"smoothness", "tau = k + 1 (Sobolev H^tau)"},
+       {"support", "compact, radius"},
+       {"periodic", "by images (finite sum, exact)"}},
+  };
+}
+
+Wendland::Wendland(const ParameterSet& parameters, const Domain& domain)
+    : smoothness_(static_cast<int>(parameters.integer("k"))),
+      radius_(parameters.real("radius")),
+      domain_(domain) {
+  if (smoothness_ < 0 || smoothness_ > 3)
+    throw ParameterError("k", "parameter 'k' must be in [0, 3]");
+  if (!(radius_ > 0) || !std::isfinite(radius_))
+    throw ParameterError("radius", "parameter 'radius' must be > 0 and finite");
+  // Image m is at distance >= (|m| - 1/2) L from x when |d| <= L/2: beyond this none reaches.
+  if (domain_.periodic) images_ = static_cast<int>(std::ceil(radius_ / domain_.length + 0.5));
+}
+
+KernelProperties Wendland::properties() const noexcept {
+  KernelProperties p;
+  p.positive_definite = true;
+  p.sobolev_order = smoothness_ + 1.0;
+  p.support_radius = radius_;
+  p.stationary = true;
+  p.periodic = domain_.periodic;
+  return p;
+}
+
+}  // namespace rkhs::kernels
+
+RKHS_REGISTER_KERNEL(rkhs::kernels::Wendland)

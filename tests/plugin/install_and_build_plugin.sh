@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# The installed package, as a plugin author uses it (the steps of docs/writing-a-kernel.md): install
+# this build into a temporary prefix, build examples/kernel-plugin out of tree against it
+# (find_package(rkhs_study)), list its kernel, run `verify-plugin` on the result, and run the
+# example's study with the plugin loaded through `plugins = [...]`, `--plugin` and
+# RKHS_STUDY_PLUGIN_PATH. With tests/docs/check_tutorial_snippets.py (every code block of the
+# page is an excerpt of these files) it makes the page's code compile.
+#
+# Usage: install_and_build_plugin.sh BUILD_DIR SOURCE_DIR [CMAKE]
+set -euo pipefail
+build=$1
+source=$2
+cmake=${3:-cmake}
+work=$(mktemp -d "${TMPDIR:-/tmp}/rkhs_install_test.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+prefix=$work/prefix
+
+step() { echo "== $*"; }
+fail() { echo "FAILED: $*" >&2; exit 1; }
+
+step "cmake --install into $prefix"
+"$cmake" --install "$build" --prefix "$prefix" > "$work/install.log"
+rkhs=$prefix/bin/rkhs-study
+[[ -x $rkhs ]] || fail "no $rkhs"
+for header in rkhs/plugin/module.hpp rkhs/kernel/kernel_algorithms.hpp rkhs/version.hpp rkhs/kernels/gaussian.hpp; do
+  [[ -f $prefix/include/$header ]] || fail "header $header not installed"
+done
+config=$(find "$prefix" -name rkhs_studyConfig.cmake)
+[[ -n $config ]] || fail "rkhs_studyConfig.cmake not installed"
+# The installed command uses the installed library (its RUNPATH), not the build tree's.
+# (ldd's output is captured first: `ldd | grep -q` under pipefail fails when grep exits early.)
+linked=$(ldd "$rkhs")
+grep -q "$prefix/.*librkhs_study.so" <<<"$linked" || fail "rkhs-study does not find $prefix's library: $(grep rkhs <<<"$linked")"
+
+step "build examples/kernel-plugin out of tree against the prefix"
+cp -r "$source/examples/kernel-plugin" "$work/kernel-plugin"
+rm -rf "$work/kernel-plugin/build"
+generator=()
+command -v ninja > /dev/null && generator=(-G Ninja)
+"$cmake" -S "$work/kernel-plugin" -B "$work/kernel-plugin/build" "${generator[@]}" \
+  -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" > "$work/configure.log" \
+  || { cat "$work/configure.log"; fail "configure"; }
+"$cmake" --build "$work/kernel-plugin/build" -j 2 > "$work/build.log" || { cat "$work/build.log"; fail "build"; }
+plugin=$work/kernel-plugin/build/inverse_multiquadric.so
+[[ -f $plugin ]] || fail "no $plugin"
+
+step "list kernel --plugin"
+"$rkhs" list kernel --plugin "$plugin" > "$work/list.txt"
+grep -q "^  inverse_multiquadric inverse multiquadric" "$work/list.txt" || { cat "$work/list.txt"; fail "list kernel does not show the plugin's kernel"; }
+grep -q "^    beta  *exponent beta" "$work/list.txt" || fail "list kernel does not show the parameter beta"
+
+step "verify-plugin"
+"$rkhs" verify-plugin "$plugin" | tee "$work/verify.txt"
+grep -q "^verify-plugin: PASS" "$work/verify.txt" || fail "verify-plugin did not pass"
+
+step "run the example study (plugins = [...] relative to the study file)"
+cd "$work"  # not the study's directory: the plugin path must be resolved against the file
+"$rkhs" run kernel-plugin/imq_study.toml --out "$work/out" --threads 2 --quiet
+grep -q "^inverse_multiquadric,1,1," "$work/out/trials.csv" || fail "no inverse_multiquadric trials in trials.csv"
+if grep -q ",failed," "$work/out/trials.csv"; then fail "failed trials"; fi
+
+step "the constructor refuses beta <= 1/2 on the closed track while the study is read"
+sed 's/^beta = \[1, 2\]$/beta = 0.5/' kernel-plugin/imq_study.toml > kernel-plugin/bad_beta.toml
+grep -q "^beta = 0.5$" kernel-plugin/bad_beta.toml || fail "imq_study.toml has no line 'beta = [1, 2]'"
+status=0
+"$rkhs" validate kernel-plugin/bad_beta.toml > "$work/bad_beta.txt" 2>&1 || status=$?
+[[ $status == 2 ]] || { cat "$work/bad_beta.txt"; fail "validate with beta = 0.5 exited $status, not 2"; }
+grep -q "bad_beta.toml:[0-9]*:[0-9]*: kernel: inverse_multiquadric beta=0.5 c=1: parameter 'beta' must be > 1/2 on a closed track" "$work/bad_beta.txt" \
+  || { cat "$work/bad_beta.txt"; fail "no file:line:column message naming beta"; }
+
+step "--plugin and RKHS_STUDY_PLUGIN_PATH"
+grep -v '^plugins' kernel-plugin/imq_study.toml > "$work/no_plugins_key.toml"
+"$rkhs" validate "$work/no_plugins_key.toml" > /dev/null 2>&1 && fail "the kernel is known without its plugin"
+"$rkhs" validate --plugin "$plugin" "$work/no_plugins_key.toml"
+RKHS_STUDY_PLUGIN_PATH=$work/kernel-plugin/build "$rkhs" validate "$work/no_plugins_key.toml"
+echo "installed package, out-of-tree plugin, verify-plugin and study: ok"

@@ -1,0 +1,93 @@
+// The kernel contract, checked for every kernel in the registry (docs/style.md practice 6): a
+// kernel registered tomorrow is tested with its default parameters the moment it registers; the
+// built-in ones also with a few variants that stress their code paths (images, few features, wide
+// support).
+
+#include <catch2/catch.hpp>
+#include <string>
+#include <vector>
+
+#include "plugins/kernels/kernel_test_support.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/plugin/kernel_contract.hpp"
+
+namespace {
+
+using rkhs::Domain;
+using rkhs::test::Given;
+
+std::vector<Given> variants_of(const std::string& name, bool periodic) {
+  std::vector<Given> out{Given{}};
+  if (name == "gaussian") {
+    out.push_back({{"sigma", 0.5}});
+    out.push_back({{"sigma", 3.0}, {"convention", std::string("sigma2")}});
+    out.push_back({{"sigma", 50.0}});  // the paper's value: Gram singular to working precision
+  } else if (name == "bspline") {
+    out.push_back({{"degree", std::int64_t{0}}, {"r", 0.75}, {"J", std::int64_t{4}}});
+    out.push_back({{"degree", std::int64_t{2}}});
+    out.push_back({{"degree", std::int64_t{3}}, {"J", std::int64_t{3}}, {"r", 2.5}});
+    // Six features on the periodic domain: Gram of 8 and 16 centres is rank deficient.
+    out.push_back({{"degree", std::int64_t{1}}, {"n0", std::int64_t{2}}, {"J", std::int64_t{1}}});
+    // n0 = degree + 1: the smallest periodic level, every spline covers the whole track.
+    out.push_back({{"degree", std::int64_t{3}}, {"n0", std::int64_t{4}}, {"J", std::int64_t{2}}});
+    if (!periodic)
+      out.push_back({{"degree", std::int64_t{3}}, {"n0", std::int64_t{1}}, {"J", std::int64_t{2}}});
+  } else if (name == "wendland") {
+    out.push_back({{"k", std::int64_t{0}}, {"radius", 2.0}});
+    out.push_back({{"k", std::int64_t{2}}, {"radius", 3.0}});
+    out.push_back({{"k", std::int64_t{3}}, {"radius", 20.0}});  // wider than half the track
+    out.push_back({{"k", std::int64_t{1}}, {"radius", 0.5}});   // narrower than the spacing
+  } else if (name == "matern") {
+    out.push_back({{"nu", 0.5}});
+    out.push_back({{"nu", 2.5}, {"length_scale", 3.0}});
+    out.push_back({{"nu", 0.5}, {"length_scale", 100.0}});  // many images
+  }
+  return out;
+}
+
+std::string describe(const std::string& name, const Given& given, const Domain& domain) {
+  std::string out = name + (domain.periodic ? " (periodic)" : " (interval)");
+  for (const auto& [key, value] : given) out += " " + key + "=" + rkhs::format_value(value);
+  return out;
+}
+
+struct Tally {
+  int kernels = 0;
+  int monotonicity_checked = 0;  // nested comparisons whose tolerance made the check meaningful
+};
+
+// The checks themselves are the library's (rkhs/plugin/kernel_contract.hpp), shared with
+// `rkhs-study verify-plugin`: one Catch2 assertion per named check.
+void check_contract(const rkhs::AnyKernel& kernel, Tally& tally) {
+  ++tally.kernels;
+  const auto report = rkhs::check_kernel_contract(kernel);
+  REQUIRE_FALSE(report.checks.empty());
+  for (const auto& check : report.checks) {
+    INFO(check.name << ": " << check.detail);
+    CHECK(check.passed);
+  }
+  tally.monotonicity_checked += report.monotonicity_comparisons;
+}
+
+}  // namespace
+
+TEST_CASE("every registered kernel satisfies the kernel contract", "[kernel][contract]") {
+  const auto names = rkhs::kernel_registry().names();
+  REQUIRE_FALSE(names.empty());
+  Tally tally;
+  for (bool periodic : {true, false}) {
+    const Domain domain{rkhs::test::track_length, periodic};
+    for (const auto& name : names) {
+      for (const auto& given : variants_of(name, periodic)) {
+        INFO(describe(name, given, domain));
+        auto kernel = rkhs::test::make_registered_kernel(name, given, domain);
+        CHECK(kernel->name() == name);
+        check_contract(*kernel, tally);
+      }
+    }
+  }
+  // The monotonicity check must not be vacuous for most instances (ill-conditioned ones, such
+  // as the Gaussian with sigma = 50, are legitimately skipped).
+  INFO(tally.monotonicity_checked << " of " << 2 * tally.kernels << " nested comparisons checked");
+  CHECK(tally.monotonicity_checked >= tally.kernels);
+}

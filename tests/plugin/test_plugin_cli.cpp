@@ -1,0 +1,151 @@
+// Plugins from the command line and from study files: --plugin (repeatable) on run, validate and
+// list, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]` relative to the study file, verify-plugin.
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cli_support.hpp"
+#include "plugin_test_support.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/study/study.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Outcome = rkhs::test::CommandOutcome;
+
+Outcome run(const std::string& arguments, const std::string& environment = "") {
+  return rkhs::test::rkhs_study(arguments, environment);
+}
+
+fs::path scratch(const std::string& name) {
+  return rkhs::test::scratch_directory("plugin_cli_test_" + name);
+}
+
+const fs::path plugin_dir = RKHS_TEST_PLUGIN_DIR;
+const fs::path imq = plugin_dir / "inverse_multiquadric.so";
+
+std::string study_using(const std::string& plugins_line) {
+  return plugins_line + R"(
+[study]
+name = "imq_small"
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [8, 16]
+[[kernel]]
+name = "inverse_multiquadric"
+beta = [1, 2]
+)";
+}
+
+void write(const fs::path& file, const std::string& text) {
+  std::ofstream(file) << text;
+}
+
+}  // namespace
+
+TEST_CASE("a study file loads its plugins relative to its own directory", "[plugin][study]") {
+  const auto dir = scratch("study");
+  const auto relative = fs::relative(imq, dir).string();
+  write(dir / "study.toml", study_using("plugins = [\"" + relative + "\"]"));
+  const auto study = rkhs::load_study(dir / "study.toml");
+  CHECK(study.kernels.size() == 2);
+  CHECK(study.kernels[0].label() == "inverse_multiquadric beta=1 c=1");
+  CHECK(rkhs::unload_plugin(imq));  // loaded by the study file
+
+  const auto out = run("run " + (dir / "study.toml").string() + " --out " + (dir / "out").string() +
+                       " --quiet --threads 2");
+  INFO(out.output);
+  CHECK(out.exit_code == 0);
+  CHECK(fs::exists(dir / "out" / "trials.csv"));
+}
+
+TEST_CASE("a study file's plugin errors name file, line, column and the key", "[plugin][study]") {
+  const auto dir = scratch("study_errors");
+  write(dir / "missing.toml", study_using("plugins = [\"nowhere/missing.so\"]"));
+  CHECK_THROWS_WITH(rkhs::load_study(dir / "missing.toml"),
+                    (dir / "missing.toml").string() + ":1:12: plugins: " +
+                        (dir / "nowhere" / "missing.so").string() + ": plugin file not found");
+  write(dir / "scalar.toml", study_using("plugins = \"x.so\""));
+  CHECK_THROWS_WITH(rkhs::load_study(dir / "scalar.toml"),
+                    (dir / "scalar.toml").string() +
+                        ":1:11: plugins: expected an array of plugin files, found a string");
+  write(dir / "abi.toml",
+        study_using("plugins = [\"" + (plugin_dir / "wrong_abi.so").string() + "\"]"));
+  CHECK_THROWS_WITH(rkhs::load_study(dir / "abi.toml"),
+                    Catch::StartsWith((dir / "abi.toml").string() +
+                                      ":1:12: plugins: " + (plugin_dir / "wrong_abi.so").string() +
+                                      ": built against plugin ABI 999"));
+}
+
+TEST_CASE("the --plugin option of run, validate and list is repeatable, and its errors exit 2",
+          "[plugin][cli]") {
+  const auto dir = scratch("flag");
+  write(dir / "study.toml", study_using(""));
+
+  // Without the plugin the kernel is unknown.
+  const auto unknown = run("validate " + (dir / "study.toml").string());
+  CHECK(unknown.exit_code == 2);
+  CHECK_THAT(unknown.output, Catch::Contains("unknown kernel 'inverse_multiquadric'"));
+
+  const auto valid = run("validate --plugin " + imq.string() + " " + (dir / "study.toml").string());
+  INFO(valid.output);
+  CHECK(valid.exit_code == 0);
+  CHECK_THAT(valid.output, Catch::Contains("valid; 2 kernels"));
+
+  const auto list = run("list --plugin " + imq.string() + " --plugin " + imq.string());
+  CHECK(list.exit_code == 0);
+  CHECK_THAT(list.output, Catch::Contains("inverse_multiquadric inverse multiquadric"));
+  CHECK_THAT(list.output, Catch::Contains("plugin modules:\n  inverse_multiquadric " +
+                                          fs::canonical(imq).string()));
+
+  const auto ran = run("run " + (dir / "study.toml").string() + " --plugin " + imq.string() +
+                       " --quiet --out " + (dir / "out").string());
+  CHECK(ran.exit_code == 0);
+
+  const auto missing = run("list --plugin " + (plugin_dir / "missing.so").string());
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.output ==
+        "rkhs-study: " + (plugin_dir / "missing.so").string() + ": plugin file not found\n");
+  const auto duplicate = run("list --plugin " + (plugin_dir / "duplicate_kernel_name.so").string());
+  CHECK(duplicate.exit_code == 2);
+  CHECK_THAT(duplicate.output, Catch::Contains("kernel plugin 'gaussian': duplicate name"));
+}
+
+TEST_CASE("RKHS_STUDY_PLUGIN_PATH loads plugins at start-up", "[plugin][cli]") {
+  const auto dir = scratch("env");
+  write(dir / "study.toml", study_using(""));
+  fs::create_directories(dir / "plugins");
+  fs::copy_file(imq, dir / "plugins" / "inverse_multiquadric.so");
+  const auto valid = run("validate " + (dir / "study.toml").string(),
+                         "RKHS_STUDY_PLUGIN_PATH=" + (dir / "plugins").string());
+  INFO(valid.output);
+  CHECK(valid.exit_code == 0);
+  const auto bad = run("list", "RKHS_STUDY_PLUGIN_PATH=" + (dir / "nothing").string());
+  CHECK(bad.exit_code == 2);
+  CHECK(bad.output == "rkhs-study: RKHS_STUDY_PLUGIN_PATH: " + (dir / "nothing").string() +
+                          ": no such plugin file or directory\n");
+}
+
+TEST_CASE("verify-plugin prints the report, exits 0 when it passes and 2 when it cannot load",
+          "[plugin][cli]") {
+  const auto ok = run("verify-plugin " + imq.string());
+  INFO(ok.output);
+  CHECK(ok.exit_code == 0);
+  CHECK_THAT(ok.output, Catch::Contains("pass  power-function rate: analytic"));
+  CHECK_THAT(ok.output,
+             Catch::EndsWith("verify-plugin: PASS (32 checks: 27 passed, 5 skipped, 0 failed)\n"));
+
+  const auto wrong = run("verify-plugin " + (plugin_dir / "wrong_abi.so").string());
+  CHECK(wrong.exit_code == 2);
+  CHECK_THAT(wrong.output,
+             Catch::StartsWith("rkhs-study: " + (plugin_dir / "wrong_abi.so").string() +
+                               ": built against plugin ABI 999"));
+}

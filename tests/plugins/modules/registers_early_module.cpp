@@ -1,4 +1,0 @@
-// The module's entry points, compiled as a plugin (see registers_early_kernel.cpp).
-#include "rkhs/plugin.hpp"
-
-RKHS_PLUGIN_MODULE("registers_early")

@@ -1,4 +1,0 @@
-// A well-formed module that forgot RKHS_REGISTER_KERNEL.
-#include "rkhs/plugin.hpp"
-
-RKHS_PLUGIN_MODULE("registers_nothing")

@@ -1,0 +1,450 @@
+// Expectations ([[expect]]), theory rates, tiers and verdicts (rkhs/study/expectation.hpp,
+// rkhs/rates/theory.hpp, rkhs/study/tiers.hpp, rkhs/verify/verification.hpp, rkhs/verify/junit.hpp). Verdicts are tested
+// on synthetic results, so each rule is exercised with known numbers.
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+#include "rkhs/verify/junit.hpp"
+#include "rkhs/core/random.hpp"
+#include "rkhs/study/study.hpp"
+#include "rkhs/verify/study_rates.hpp"
+#include "rkhs/rates/theory.hpp"
+#include "rkhs/study/tiers.hpp"
+#include "rkhs/verify/verification.hpp"
+
+using namespace rkhs;
+
+namespace {
+
+constexpr double infinity = std::numeric_limits<double>::infinity();
+
+// Two B-spline groups (degree 1 and 2) and a Gaussian, n = 10..100.
+const std::string base = R"([study]
+name = "v"
+metrics = ["fill_distance", "separation_distance", "power_function_sup", "sup_error",
+           "gram_condition_number", "interpolant_native_norm"]
+[domain]
+radius = 4.0
+[grid]
+n = { from = 10, to = 100, step = 10 }
+[[kernel]]
+name = "bspline"
+degree = [1, 2]
+J = 8
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+)";
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_study(text, "s.toml");
+  } catch (const StudyError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// Results made up from formulas: metric(trial) for every trial, uniform-centre distances.
+struct Synthetic {
+  StudyDefinition study;
+  std::vector<TrialSpec> trials;
+  std::vector<TrialResult> results;
+  std::vector<MetricSeries> rates;
+
+  Synthetic(const std::string& expectations,
+            const std::function<double(const TrialSpec&, const std::string&)>& value)
+      : study(parse_study(base + expectations, "s.toml")), trials(study.trials()) {
+    for (const auto& trial : trials) {
+      TrialResult r;
+      r.ok = true;
+      for (const auto& metric : study.all_metrics()) {
+        const double h = study.domain.length / (2.0 * static_cast<double>(trial.n));
+        if (metric == "fill_distance" || metric == "separation_distance") r.metrics.push_back(h);
+        else r.metrics.push_back(value(trial, metric));
+      }
+      results.push_back(std::move(r));
+    }
+    rates = compute_rates(study, trials, results);
+  }
+  std::vector<ExpectationOutcome> verify() const {
+    return verify_expectations(study, trials, results, rates);
+  }
+};
+
+double degree_of(const TrialSpec& t) {
+  return t.kernel.name == "bspline" ? static_cast<double>(t.kernel.parameters.integer("degree")) : 0.0;
+}
+
+// Power function like the theory says: n^-(tau - 1/2) for B-splines, exp(-0.3 n) for the
+// Gaussian; the other metrics smooth and harmless.
+double textbook(const TrialSpec& t, const std::string& metric) {
+  const double n = static_cast<double>(t.n), tau = degree_of(t);
+  if (metric == "power_function_sup")
+    return t.kernel.name == "bspline" ? 2.0 * std::pow(n, -(tau - 0.5)) : std::exp(-0.3 * n);
+  if (metric == "gram_condition_number")
+    return t.kernel.name == "bspline" ? 3.0 * std::pow(n, 2 * tau) : std::exp(0.5 * n);
+  if (metric == "sup_error") return 0.01 * textbook(t, "power_function_sup");
+  return 3.0;  // interpolant_native_norm
+}
+
+}  // namespace
+
+TEST_CASE("[[expect]] tables parse: theory, rate, interval, model, bound, tiers", "[verification]") {
+  const auto study = parse_study(base + R"(
+[[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+degree = 1
+theory = true
+tier = "quick"
+[[expect]]
+name = "degree 2 rate"
+metric = "power_function_sup"
+degree = [2]
+rate = -1.5
+tolerance = 0.2
+[[expect]]
+metric = "gram_condition_number"
+kernel = "bspline"
+rate = { min = 1.5 }
+tier = ["quick", "nightly"]
+[[expect]]
+metric = "power_function_sup"
+sigma = 1
+model = "exponential"
+[[expect]]
+metric = "sup_error"
+bound = { by = "power_function_sup", times = "interpolant_native_norm", constant = 2.0 }
+)", "s.toml");
+  REQUIRE(study.expectations.size() == 5);
+  const auto& theory = study.expectations[0];
+  CHECK(theory.number == 1);
+  CHECK(theory.location == "s.toml:17:1");
+  CHECK(theory.kind == ExpectationKind::theory);
+  CHECK(theory.tolerance == default_rate_tolerance);
+  CHECK(theory.tiers == std::vector<std::string>{"quick"});
+  CHECK(theory.selector_text() == "kernel=bspline degree=1");
+  const auto& rate = study.expectations[1];
+  CHECK(rate.name == "degree 2 rate");
+  CHECK(rate.kind == ExpectationKind::rate);
+  CHECK(rate.model == RateModel::power_law);
+  REQUIRE(rate.expected);
+  CHECK(rate.interval.low == Approx(-1.7));
+  CHECK(rate.interval.high == Approx(-1.3));
+  const auto& interval = study.expectations[2];
+  CHECK(interval.interval.low == 1.5);
+  CHECK(interval.interval.high == infinity);
+  CHECK(interval.tiers == std::vector<std::string>{"quick", "nightly"});
+  CHECK(interval.in_tier("nightly"));
+  CHECK_FALSE(interval.in_tier("weekly"));
+  CHECK(interval.in_tier(""));
+  const auto& model = study.expectations[3];
+  CHECK(model.kind == ExpectationKind::model);
+  CHECK(model.model == RateModel::exponential);
+  const auto& bound = study.expectations[4];
+  CHECK(bound.kind == ExpectationKind::bound);
+  CHECK(bound.bound.by == "power_function_sup");
+  CHECK(bound.bound.times == "interpolant_native_norm");
+  CHECK(bound.bound.constant == 2.0);
+  CHECK(bound.selector_text() == "every group");
+
+  // Selectors compare values as printed: sigma = 1 selects the Gaussian's sigma = 1.0.
+  const auto trials = study.trials();
+  CHECK(std::count_if(trials.begin(), trials.end(),
+                      [&](const TrialSpec& t) { return model.selects(t); }) == 10);
+  CHECK(std::count_if(trials.begin(), trials.end(),
+                      [&](const TrialSpec& t) { return theory.selects(t); }) == 10);
+}
+
+TEST_CASE("[[expect]] mistakes are errors with file:line:column", "[verification]") {
+  const auto with = [](const std::string& table) { return base + "[[expect]]\n" + table; };
+  CHECK_THAT(error_of(with("metrc = \"power_function_sup\"\ntheory = true\n")),
+             Catch::StartsWith("s.toml:17:1: expect.metrc: unknown key") &&
+                 Catch::Contains("did you mean 'metric'?"));
+  CHECK_THAT(error_of(with("metric = \"power_function_supp\"\ntheory = true\n")),
+             Catch::Contains("s.toml:17:10: expect.metric: unknown metric 'power_function_supp'") &&
+                 Catch::Contains("did you mean 'power_function_sup'?"));
+  CHECK_THAT(error_of(with("metric = \"l2_error\"\ntheory = true\n")),
+             Catch::Contains("expect.metric: metric 'l2_error' is not measured by this study"));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ndegree = 3\ntheory = true\n")),
+             Catch::Contains("s.toml:16:1: expect: degree=3 selects no group of this study "
+                             "(values in the study: degree: 1, 2)"));
+  // Every value of a list selects something: a typo in one is not silently dropped.
+  CHECK(error_of(with("metric = \"power_function_sup\"\ndegree = [1, 5]\ntheory = true\n")) ==
+        "s.toml:18:14: expect.degree: degree=5 selects no group of this study (the groups it "
+        "selects have degree: 1)");
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nkernel = [\"bspline\", \"gausian\"]\n"
+                           "theory = true\n")),
+             Catch::Contains("s.toml:18:22: expect.kernel: kernel=gausian selects no group"));
+  CHECK_NOTHROW(parse_study(with("metric = \"power_function_sup\"\ndegree = [1, 2]\ntheory = true\n"),
+                            "s.toml"));
+  CHECK_THAT(error_of(with("metric = \"fill_distance\"\ntheory = true\n")),
+             Catch::Contains("s.toml:18:10: expect.theory:") &&
+                 Catch::Contains("no theory rate for metric 'fill_distance'"));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\n")),
+             Catch::Contains("expect: say what is expected"));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ntheory = true\nrate = -1\n")),
+             Catch::Contains("give one of theory = true, rate = ... or bound"));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { min = 1, max = 0 }\n")),
+             Catch::Contains("s.toml:18:8: expect.rate: min (1) is above max (0)"));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { low = 1 }\n")),
+             Catch::Contains("expect.rate.low: unknown key (known: min, max)"));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nmodel = \"exponential\"\nrate = -0.3\n")),
+             Catch::Contains("give tolerance = ..."));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nmodel = \"cubic\"\n")),
+             Catch::Contains("expect.model: found \"cubic\""));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { max = 0 }\ntolerance = 0.2\n")),
+             Catch::Contains("expect.tolerance: only for theory = true or rate = <number>"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = { by = \"l2_error\" }\n")),
+             Catch::Contains("expect.bound.by: metric 'l2_error' is not measured"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = { times = \"power_function_sup\" }\n")),
+             Catch::Contains("expect.bound.by: missing"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = {}\n")),
+             Catch::Contains("expect.bound: give by = \"metric\""));
+  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ntheory = true\ntier = \"\"\n")),
+             Catch::Contains("expect.tier: expected a tier name"));
+  CHECK_THAT(error_of(base + "[[expect]]\nmetric = \"power_function_sup\"\ntheory = \"yes\"\n"),
+             Catch::Contains("expect.theory: expected true"));
+}
+
+TEST_CASE("tier marks on plugin entries and --tier restriction", "[verification]") {
+  std::string text = base;
+  text.replace(text.find("J = 8\n"), 6, "J = 8\ntier = \"quick\"\n");
+  text += R"([[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+theory = true
+tier = "quick"
+[[expect]]
+metric = "power_function_sup"
+kernel = "gaussian"
+theory = true
+)";
+  const auto study = parse_study(text, "s.toml");
+  CHECK(study.kernels.at(0).tiers == std::vector<std::string>{"quick"});
+  CHECK(study.kernels.at(1).tiers == std::vector<std::string>{"quick"});  // degree 2
+  CHECK(study.kernels.at(2).tiers.empty());                                // the Gaussian
+  CHECK(study.kernels.at(0).label() == "bspline degree=1 r=1 n0=4 J=8");  // tiers are not axes
+  CHECK(study_tiers(study) == std::vector<std::string>{"quick"});
+
+  const auto quick = restrict_to_tier(study, "quick");
+  REQUIRE(quick.kernels.size() == 2);  // the B-spline entry expands to degree 1 and 2
+  CHECK(quick.kernels.at(0).name == "bspline");
+  CHECK(quick.targets.size() == 1);  // unmarked axes are not restricted
+  REQUIRE(quick.expectations.size() == 1);
+  CHECK(quick.expectations.at(0).number == 1);
+  CHECK(quick.trials().size() == 20);
+
+  CHECK_THROWS_WITH(restrict_to_tier(study, "quik"),
+                    Catch::Contains("tier 'quik' is not named in this study (tiers: quick)"));
+  // An expectation of the tier that selects only groups outside it is an input error.
+  std::string orphan = text;
+  orphan += "[[expect]]\nmetric = \"power_function_sup\"\nkernel = \"gaussian\"\ntheory = true\ntier = \"quick\"\n";
+  CHECK_THROWS_WITH(restrict_to_tier(parse_study(orphan, "s.toml"), "quick"),
+                    Catch::Contains("expect: in tier 'quick', kernel=gaussian selects no group the tier runs"));
+  CHECK_THAT(error_of(base + "[[target]]\nname = \"sine\"\ntier = 3\n"),
+             Catch::Contains("target.tier: expected a tier name"));
+}
+
+TEST_CASE("theory rates from kernel metadata, converted to the fitted abscissa", "[verification]") {
+  KernelProperties sobolev;
+  sobolev.sobolev_order = 2.0;
+  auto pf = theory_rate("power_function_sup", sobolev, 1);
+  REQUIRE(pf);
+  CHECK(pf->model == RateModel::power_law);
+  CHECK(pf->h_exponent == 1.5);
+  CHECK(pf->sharp);
+  double slope = 0;
+  auto band = theory_interval(*pf, Abscissa::n, 1, 0.1, &slope);
+  CHECK(slope == -1.5);
+  CHECK(band.low == Approx(-1.6));
+  CHECK(band.high == Approx(-1.4));
+  band = theory_interval(*pf, Abscissa::fill_distance, 1, 0.1, &slope);
+  CHECK(slope == 1.5);
+  CHECK(band.low == Approx(1.4));
+
+  const auto l2 = theory_rate("l2_error", sobolev, 1);
+  REQUIRE(l2);
+  CHECK_FALSE(l2->sharp);  // an upper bound: faster convergence is allowed
+  band = theory_interval(*l2, Abscissa::n, 1, 0.1);
+  CHECK(band.low == -infinity);
+  CHECK(band.high == Approx(-1.9));
+  band = theory_interval(*l2, Abscissa::fill_distance, 1, 0.1);
+  CHECK(band.low == Approx(1.9));
+  CHECK(band.high == infinity);
+
+  // cond ~ n q^-(2 tau - d) = h^-2 tau; lambda_min ~ q^(2 tau - d).
+  const auto cond = theory_rate("gram_condition_number", sobolev, 1);
+  REQUIRE(cond);
+  theory_interval(*cond, Abscissa::n, 1, 0.1, &slope);
+  CHECK(slope == 4.0);
+  const auto lambda = theory_rate("gram_min_eigenvalue", sobolev, 1);
+  REQUIRE(lambda);
+  theory_interval(*lambda, Abscissa::n, 1, 0.1, &slope);
+  CHECK(slope == -3.0);
+
+  KernelProperties analytic;
+  analytic.analytic = true;
+  const auto gaussian = theory_rate("gram_condition_number", analytic, 1);
+  REQUIRE(gaussian);
+  CHECK(gaussian->model == RateModel::exponential);
+  CHECK(gaussian->direction == +1);
+  CHECK(theory_rate("power_function_sup", analytic, 1)->direction == -1);
+
+  std::string why;
+  CHECK_FALSE(theory_rate("power_function_sup", KernelProperties{}, 1, &why));
+  CHECK_THAT(why, Catch::Contains("neither analytic nor Sobolev-equivalent"));
+  CHECK_FALSE(theory_rate("fill_distance", sobolev, 1, &why));
+}
+
+TEST_CASE("verdicts: theory passes, a wrong rate fails, scatter is inconclusive", "[verification]") {
+  const Synthetic exact(R"([[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+theory = true
+[[expect]]
+metric = "power_function_sup"
+kernel = "gaussian"
+theory = true
+[[expect]]
+metric = "gram_condition_number"
+theory = true
+[[expect]]
+metric = "power_function_sup"
+degree = 1
+rate = -1.0
+[[expect]]
+metric = "power_function_sup"
+degree = 2
+rate = { max = -1.0 }
+)", textbook);
+  const auto outcomes = exact.verify();
+  REQUIRE(outcomes.size() == 8);  // 2 + 1 + 3 + 1 + 1
+  for (std::size_t i : {0, 1, 2, 3, 4, 5, 7}) {
+    INFO(i << ": " << outcomes[i].expected << " / " << outcomes[i].found << " / " << outcomes[i].reason);
+    CHECK(outcomes[i].verdict == Verdict::pass);
+  }
+  CHECK(outcomes[0].group_label == "kernel=bspline degree=1 r=1");
+  CHECK(outcomes[0].rate == Approx(-0.5));
+  CHECK(outcomes[0].accepted_low == Approx(-0.6));
+  CHECK(outcomes[0].window_from == 10);
+  CHECK(outcomes[0].window_to == 100);
+  CHECK(outcomes[0].window_points == 10);
+  CHECK_THAT(outcomes[0].expected, Catch::Contains("h^0.5 (tau = 1, d = 1)"));
+  CHECK_THAT(outcomes[2].found, Catch::StartsWith("exponential model rate -0.300 per unit n"));
+  CHECK_THAT(outcomes[2].reason, Catch::Contains("its 95% CI [-0.300, -0.300] lies below 0"));
+  CHECK_THAT(outcomes[5].reason, Catch::Contains("lies above 0"));  // Gaussian condition grows
+
+  const auto& wrong = outcomes[6];
+  CHECK(wrong.verdict == Verdict::fail);
+  CHECK(wrong.reason == "the 95% CI lies entirely above -0.900");
+  CHECK_THAT(wrong.expected, Catch::StartsWith("rate -1.00 +- 0.100 against ln n"));
+  CHECK_THAT(wrong.found, Catch::StartsWith("power law rate -0.500 (95% CI [-0.500, -0.500]) on "
+                                            "the window n = 10..100 (10 of 10 points)"));
+
+  const auto counts = count_verdicts(outcomes);
+  CHECK(counts.passed == 7);
+  CHECK(counts.failed == 1);
+  CHECK(check_exit_code(counts, false) == 1);
+  const auto report = format_verification(outcomes, false);
+  CHECK_THAT(report, Catch::Contains("FAIL         #4 power_function_sup, kernel=bspline degree=1 r=1 (s.toml:"));
+  CHECK_THAT(report, Catch::EndsWith("7 passed, 1 failed, 0 inconclusive\n"));
+
+  // The Gaussian's theory fails when its series is algebraic.
+  const Synthetic algebraic("[[expect]]\nmetric = \"power_function_sup\"\nkernel = \"gaussian\"\ntheory = true\n",
+                            [](const TrialSpec& t, const std::string& m) {
+                              return m == "power_function_sup" ? std::pow(static_cast<double>(t.n), -3.0) : 1.0;
+                            });
+  const auto algebraic_outcome = algebraic.verify();
+  REQUIRE(algebraic_outcome.size() == 1);
+  CHECK(algebraic_outcome[0].verdict == Verdict::fail);
+  CHECK_THAT(algebraic_outcome[0].reason,
+             Catch::StartsWith("the power law fits better, not the exponential model"));
+}
+
+TEST_CASE("verdicts: inconclusive when the CI is too wide or the window too short", "[verification]") {
+  // Scatter of 30 % in the degree-2 power function: the CI is wider than +-0.1.
+  Random random(7);
+  std::map<std::size_t, double> noise;
+  for (std::size_t n = 10; n <= 100; n += 10) noise[n] = std::exp(0.3 * random.normal());
+  const Synthetic noisy("[[expect]]\nmetric = \"power_function_sup\"\ndegree = 2\ntheory = true\n",
+                        [&](const TrialSpec& t, const std::string& m) {
+                          return textbook(t, m) * (m == "power_function_sup" ? noise[t.n] : 1.0);
+                        });
+  const auto outcome = noisy.verify();
+  REQUIRE(outcome.size() == 1);
+  CHECK(outcome[0].verdict == Verdict::inconclusive);
+  CHECK_THAT(outcome[0].reason, Catch::Contains("wider than the accepted interval (0.200)"));
+  CHECK(check_exit_code(count_verdicts(outcome), false) == 3);
+  CHECK(check_exit_code(count_verdicts(outcome), true) == 1);
+
+  // Only two unflagged points: no verdict.
+  const Synthetic short_series("[[expect]]\nmetric = \"power_function_sup\"\ndegree = 1\ntheory = true\n",
+                               [](const TrialSpec& t, const std::string& m) {
+                                 return t.n <= 20 ? textbook(t, m) : std::nan("");
+                               });
+  const auto two = short_series.verify();
+  REQUIRE(two.size() == 1);
+  CHECK(two[0].verdict == Verdict::inconclusive);
+  CHECK(two[0].reason == "only 2 points in the window: a verdict needs at least 3");
+
+  CHECK(check_exit_code({}, false) == 0);
+  CHECK(format_verification({}, false) == "no expectations to check (nothing verified)\n");
+}
+
+TEST_CASE("verdicts: bounds report effectivities and fail when exceeded", "[verification]") {
+  const Synthetic holds(R"([[expect]]
+metric = "sup_error"
+bound = { by = "power_function_sup", times = "interpolant_native_norm" }
+[[expect]]
+metric = "sup_error"
+kernel = "gaussian"
+bound = { by = "power_function_sup", constant = 0.001 }
+[[expect]]
+metric = "interpolant_native_norm"
+degree = 1
+bound = { constant = 3.0 }
+)", textbook);
+  const auto outcomes = holds.verify();
+  REQUIRE(outcomes.size() == 5);
+  CHECK(outcomes[4].verdict == Verdict::pass);  // 3 <= 3: a constant bound
+  CHECK(outcomes[4].expected == "interpolant_native_norm <= 3 at every n");
+  CHECK(outcomes[4].effectivity_max == Approx(1.0));
+  for (std::size_t i = 0; i < 3; ++i) {
+    CHECK(outcomes[i].verdict == Verdict::pass);
+    CHECK(outcomes[i].effectivity_max == Approx(0.01 / 3.0));
+    CHECK(outcomes[i].effectivity_min == Approx(0.01 / 3.0));
+  }
+  CHECK(outcomes[3].verdict == Verdict::fail);  // 0.01 pf > 0.001 pf
+  CHECK(outcomes[3].effectivity_max == Approx(10.0));
+  CHECK_THAT(outcomes[3].reason, Catch::StartsWith("the bound is exceeded by a factor 10 at n = "));
+  CHECK_THAT(outcomes[0].found, Catch::StartsWith("effectivity sup_error / bound from 0.00333 to 0.00333"));
+}
+
+TEST_CASE("JUnit XML: one test case per outcome, failures and skips with messages", "[verification]") {
+  Random random(7);
+  const Synthetic mixed(R"([[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+theory = true
+[[expect]]
+metric = "power_function_sup"
+kernel = "gaussian"
+rate = { min = 0 }
+name = "a <wrong> & \"quoted\" one"
+)", textbook);
+  const auto outcomes = mixed.verify();
+  REQUIRE(outcomes.size() == 3);
+  const auto xml = junit_xml({mixed.study, outcomes, false, 1.5, "quick", "2024-01-01T00:00:00Z"});
+  CHECK_THAT(xml, Catch::StartsWith("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"rkhs-study check\" tests=\"3\" failures=\"1\" errors=\"0\" skipped=\"0\" time=\"1.500\">"));
+  CHECK_THAT(xml, Catch::Contains("<testcase classname=\"v.power_function_sup\" name=\"#1 kernel=bspline degree=1 r=1\" file=\"s.toml\" line=\"16\""));
+  CHECK_THAT(xml, Catch::Contains("name=\"#2 a &lt;wrong&gt; &amp; &quot;quoted&quot; one: kernel=gaussian\""));
+  CHECK_THAT(xml, Catch::Contains("<failure type=\"fail\" message=\"FAIL: the 95% CI"));
+  CHECK_THAT(xml, Catch::Contains("<property name=\"tier\" value=\"quick\"/>"));
+  CHECK(xml_escape("a\nb\x01<") == "a&#10;b&lt;");
+  CHECK(xml_escape("a\nb", false) == "a\nb");
+}
