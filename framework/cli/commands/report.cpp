@@ -31,7 +31,12 @@ int command_report(const std::string& directory, const std::string& format,
     std::cout << latex_tables(record);
   } else {
     const auto file = std::filesystem::path(directory) / "report.html";
-    write_file_atomically(file, html_report(record, std::filesystem::path(directory) / "plots"));
+    // The page shows the expectations' verdicts, judged once here.
+    std::optional<std::vector<ExpectationOutcome>> verdicts;
+    if (!study.expectations.empty())
+      verdicts = verify_expectations(study, record.trials, record.results, record.rates);
+    write_file_atomically(file, html_report(record, std::filesystem::path(directory) / "plots",
+                                            verdicts ? &*verdicts : nullptr));
     std::cout << "wrote " << file.string() << "\n";
   }
   return exit_ok;

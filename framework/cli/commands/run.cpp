@@ -137,10 +137,16 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   journal->remove();
   const std::size_t plot_count = arguments.plots ? render_plots(record, out_dir, quiet) : 0;
   // Without plots this run, the page embeds none (not those an earlier run left in plots/).
+  // The page shows the expectations' verdicts, judged once here.
+  std::optional<std::vector<ExpectationOutcome>> verdicts;
+  if (!study.expectations.empty())
+    verdicts = verify_expectations(study, record.trials, record.results, record.rates);
   write_file_atomically(
       std::filesystem::path(out_dir) / "report.html",
-      html_report(record, arguments.plots ? std::filesystem::path(out_dir) / "plots"
-                                          : std::filesystem::path()));
+      html_report(record,
+                  arguments.plots ? std::filesystem::path(out_dir) / "plots"
+                                  : std::filesystem::path(),
+                  verdicts ? &*verdicts : nullptr));
 
   if (!quiet) std::cout << console_tables(record);
   std::cout << fmt::format(

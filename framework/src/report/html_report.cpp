@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "rkhs/core/build_info.hpp"
-#include "rkhs/verify/verification.hpp"
+#include "rkhs/report/rate_table.hpp"
 
 namespace rkhs {
 
@@ -64,9 +64,43 @@ std::string read_file(const std::filesystem::path& file) {
   return text.str();
 }
 
+// Document text in HTML: escaped, with entities for the fit's ± and R².
+std::string html_text(std::string_view text) {
+  std::string out = escape_html(text);
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"±", "&plusmn;"}, {"²", "&sup2;"}}) {
+    for (auto p = out.find(from); p != std::string::npos; p = out.find(from, p + to.size()))
+      out.replace(p, from.size(), to);
+  }
+  return out;
+}
+
+// One rate table and its fit, window and notes.
+std::string rates_table(const RateTable& table) {
+  std::string out = fmt::format(
+      "<p>{}</p>\n<table class=\"rates\"><tr><th>{}</th><th>{}</th><th>rate</th></tr>\n",
+      escape_html(table.group), escape_html(table.axis), escape_html(table.metric));
+  bool any_flagged = false;
+  for (const auto& row : table.rows) {
+    any_flagged = any_flagged || row.flagged;
+    out += fmt::format("<tr{}><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                       row.flagged ? " class=\"flagged\"" : "", document_abscissa(table, row),
+                       document_value(row), document_rate(row, "&ndash;"));
+  }
+  out += "</table>\n";
+  std::string fit = (table.fit ? "fitted rate " : "") + html_text(document_fit(table));
+  if (const auto window = window_text(table); !window.empty())
+    fit += "; window " + html_text(window) +
+           (table.window_note.empty() ? "" : "; " + html_text(table.window_note));
+  if (!table.note.empty()) fit += "<br>" + html_text(table.note);
+  if (any_flagged) fit += "<br>* " + html_text(flagged_value_legend);
+  return out + "<p class=\"fit\">" + fit + "</p>\n";
+}
+
 }  // namespace
 
-std::string html_report(const RunRecord& run, const std::filesystem::path& plots) {
+std::string html_report(const RunRecord& run, const std::filesystem::path& plots,
+                        const std::vector<ExpectationOutcome>* verdicts) {
   const auto& study = run.study;
   const auto& build = build_info();
   std::string mpi_rows;  // a distributed run: one row per MPI rank
@@ -118,12 +152,15 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
                                failed + "</table>\n";
 
   if (!study.expectations.empty()) {
-    const auto outcomes = verify_expectations(study, run.trials, run.results, run.rates);
-    page += "<h2>Expectations</h2>\n<pre class=\"verdicts\">" +
-            escape_html(format_verification(outcomes, false)) + "</pre>\n";
+    page += "<h2>Expectations</h2>\n";
+    page += verdicts ? "<pre class=\"verdicts\">" +
+                           escape_html(format_verification(*verdicts, false)) + "</pre>\n"
+                     : "<p>Not judged in this report (<code>rkhs-study check</code> judges "
+                       "them).</p>\n";
   }
 
   page += "<h2>Rates</h2>\n";
+  const auto tables = rate_tables(run);
   for (const auto& metric : study.metrics) {
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
     const auto svg = plots / ("convergence_" + metric + ".svg");
@@ -132,34 +169,8 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
           "<p><img class=\"plot\" alt=\"convergence of {}\" "
           "src=\"data:image/svg+xml;base64,{}\"></p>\n",
           escape_html(metric), base64(read_file(svg)));
-    for (const auto& series : run.rates) {
-      if (series.metric != metric || series.trials.empty()) continue;
-      page += fmt::format(
-          "<p>{}</p>\n<table class=\"rates\"><tr><th>n</th><th>{}</th><th>rate</th></tr>\n",
-          escape_html(run.trials[series.trials.front()].group_key), escape_html(metric));
-      for (std::size_t k = 0; k < series.trials.size(); ++k) {
-        const double v = series.values[k];
-        const double r = k == 0 ? std::nan("") : series.pairwise[k - 1];
-        page += fmt::format(
-            "<tr{}><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-            series.flagged[k] ? " class=\"flagged\"" : "", run.trials[series.trials[k]].n,
-            std::isnan(v) ? std::string("failed")
-                          : fmt::format("{:.4g}{}", v, series.flagged[k] ? "*" : ""),
-            std::isfinite(r) ? fmt::format("{:.2f}", r) : std::string("&ndash;"));
-      }
-      page += "</table>\n";
-      if (const auto& fit = series.fit)
-        page += fmt::format(
-            "<p class=\"fit\">fitted rate {:.3g} &plusmn; {:.2g} (95% CI [{:.3g}, {:.3g}], R&sup2; "
-            "= {:.3f}, {} points, window n = {}..{}{}){}</p>\n",
-            fit->rate, fit->std_error, fit->ci_low, fit->ci_high, fit->r_squared, fit->points,
-            run.trials[series.trials[fit->used.front()]].n,
-            run.trials[series.trials[fit->used.back()]].n,
-            fit->model == RateModel::exponential ? ", exponential in n" : "",
-            series.note.empty() ? "" : "<br>" + escape_html(series.note));
-      else
-        page += "<p class=\"fit\">no fit: " + escape_html(series.no_fit_reason) + "</p>\n";
-    }
+    for (const auto& table : tables)
+      if (table.metric == metric) page += rates_table(table);
   }
   // Other plots (adaptive studies).
   std::string others;

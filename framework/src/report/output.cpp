@@ -1,25 +1,20 @@
 #include "rkhs/report/output.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/build_info.hpp"
-#include "rkhs/report/convergence_table.hpp"
 
 namespace rkhs {
 
 namespace {
-
-std::string join(const std::vector<std::string>& items, std::string_view separator) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? std::string(separator) : "") + items[i];
-  return out;
-}
 
 std::string csv_row(const std::vector<std::string>& fields) {
   std::string out;
@@ -45,14 +40,26 @@ std::string json_string(std::string_view text) {
   std::string out = "\"";
   for (char c : text) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
       default:
-        if (static_cast<unsigned char>(c) < 0x20) out += fmt::format("\\u{:04x}", static_cast<int>(c));
-        else out += c;
+        if (static_cast<unsigned char>(c) < 0x20)
+          out += fmt::format("\\u{:04x}", static_cast<int>(c));
+        else
+          out += c;
     }
   }
   return out + "\"";
@@ -74,7 +81,7 @@ std::string json_parameters(const ParameterSet& parameters) {
   std::vector<std::string> items;
   for (const auto& [name, value] : parameters.values())
     items.push_back(fmt::format("{}: {}", json_string(name), json_value(value)));
-  return fmt::format("{{{}}}", join(items, ", "));
+  return fmt::format("{{{}}}", fmt::join(items, ", "));
 }
 
 std::string json_plugin(const PluginChoice& choice) {
@@ -82,7 +89,9 @@ std::string json_plugin(const PluginChoice& choice) {
                      json_parameters(choice.parameters));
 }
 
-std::string group_label(const TrialSpec& trial) { return trial.group_key; }
+std::string group_label(const TrialSpec& trial) {
+  return trial.group_key;
+}
 
 }  // namespace
 
@@ -96,7 +105,9 @@ std::string csv_field(const std::string& value) {
   return out + "\"";
 }
 
-std::string csv_number(double value) { return std::isnan(value) ? "" : format_real(value); }
+std::string csv_number(double value) {
+  return std::isnan(value) ? "" : format_real(value);
+}
 
 std::string trials_csv(const RunRecord& run) {
   const auto columns = axis_columns(run.trials);
@@ -114,7 +125,7 @@ std::string trials_csv(const RunRecord& run) {
     row.push_back(result.ok ? "ok" : "failed");
     row.push_back(result.reason);
     row.push_back(result.solve_method);
-    row.push_back(join(result.flags, ";"));
+    row.push_back(fmt::format("{}", fmt::join(result.flags, ";")));
     out += csv_row(row);
   }
   return out;
@@ -123,9 +134,9 @@ std::string trials_csv(const RunRecord& run) {
 std::string rates_csv(const RunRecord& run) {
   const auto columns = axis_columns(run.trials);
   std::vector<std::string> header = columns;
-  for (const char* extra : {"metric", "abscissa", "kind", "model", "n_from", "n_to", "points",
-                            "rate", "std_error", "ci_low", "ci_high", "r_squared", "delta_aic",
-                            "note"})
+  for (const char* extra :
+       {"metric", "abscissa", "kind", "model", "n_from", "n_to", "points", "rate", "std_error",
+        "ci_low", "ci_high", "r_squared", "delta_aic", "note"})
     header.push_back(extra);
   std::string out = csv_row(header);
   for (const auto& series : run.rates) {
@@ -144,7 +155,8 @@ std::string rates_csv(const RunRecord& run) {
     const auto& n_of = [&](std::size_t k) { return run.trials[series.trials[k]].n; };
     // The reported fit ("fit") and the other model's ("alternative_fit"), each on its window.
     const auto reported = series.analysis.reported;
-    const auto other = reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law;
+    const auto other =
+        reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law;
     for (const auto model : {reported, other}) {
       const auto& analysis = series.analysis.analysis(model);
       const auto& fit = analysis.fit;
@@ -167,7 +179,7 @@ std::string rates_csv(const RunRecord& run) {
         if (!analysis.window.note.empty()) notes.push_back(analysis.window.note);
         if (fit && !fit->note.empty()) notes.push_back(fit->note);
       }
-      row.push_back(join(notes, "; "));
+      row.push_back(fmt::format("{}", fmt::join(notes, "; ")));
       out += csv_row(row);
     }
     const auto& window = series.analysis.reported_analysis().window;
@@ -182,9 +194,9 @@ std::string rates_csv(const RunRecord& run) {
       for (int i = 0; i < 5; ++i) row.push_back("");
       const bool doubtful = series.flagged[k] || series.flagged[k + 1];
       row.push_back(doubtful ? "flagged value (not used in the fit)"
-                             : outside(k) || outside(k + 1)
-                                   ? "outside the asymptotic window (not used in the fit)"
-                                   : "");
+                    : outside(k) || outside(k + 1)
+                        ? "outside the asymptotic window (not used in the fit)"
+                        : "");
       out += csv_row(row);
     }
   }
@@ -195,9 +207,10 @@ std::string summary_json(const RunRecord& run) {
   const auto& study = run.study;
   const auto& build = build_info();
   std::string out = "{\n";
-  out += fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
-                     json_string(study.name), json_string(study.description),
-                     json_string(study.source), json_string(study.kind));
+  out +=
+      fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
+                  json_string(study.name), json_string(study.description),
+                  json_string(study.source), json_string(study.kind));
   // A distributed run names its ranks: host, threads and trials run on each.
   std::string mpi;
   if (!run.ranks.empty()) {
@@ -206,7 +219,7 @@ std::string summary_json(const RunRecord& run) {
       ranks.push_back(fmt::format("{{\"host\": {}, \"threads\": {}, \"trials\": {}{}}}",
                                   json_string(r.host), r.threads, r.trials,
                                   r.lost ? ", \"lost\": true" : ""));
-    mpi = fmt::format(", \"mpi_ranks\": [{}]", join(ranks, ", "));
+    mpi = fmt::format(", \"mpi_ranks\": [{}]", fmt::join(ranks, ", "));
   }
   out += fmt::format(
       "  \"provenance\": {{\"version\": {}, \"git_commit\": {}, \"compiler\": {}, "
@@ -219,7 +232,7 @@ std::string summary_json(const RunRecord& run) {
   std::vector<std::string> n_values;
   for (auto n : study.n_values) n_values.push_back(std::to_string(n));
   out += fmt::format("  \"n\": [{}],\n  \"evaluation_points\": {},\n  \"abscissa\": {},\n",
-                     join(n_values, ", "), study.evaluation_points,
+                     fmt::join(n_values, ", "), study.evaluation_points,
                      json_string(abscissa_name(study)));
   std::size_t failed = 0;
   for (const auto& r : run.results) failed += r.ok ? 0 : 1;
@@ -231,7 +244,8 @@ std::string summary_json(const RunRecord& run) {
     const auto& result = run.results[trial.index];
     std::vector<std::string> metrics, flags;
     for (const auto& metric : study.metrics)
-      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[study.metric_index(metric)]));
+      metrics.push_back(json_string(metric) + ": " +
+                        json_number(result.metrics[study.metric_index(metric)]));
     for (const auto& flag : result.flags) flags.push_back(json_string(flag));
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
@@ -240,9 +254,9 @@ std::string summary_json(const RunRecord& run) {
         trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
         json_plugin(trial.centres), trial.n,
         result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
-        json_string(result.ok ? "ok" : "failed"),
-        json_string(result.reason), json_string(result.solve_method), join(flags, ", "),
-        json_number(std::round(result.seconds * 1e4) / 1e4), join(metrics, ", "),
+        json_string(result.ok ? "ok" : "failed"), json_string(result.reason),
+        json_string(result.solve_method), fmt::join(flags, ", "),
+        json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
         trial.index + 1 < run.trials.size() ? "," : "");
   }
   out += "  ],\n  \"rates\": [\n";
@@ -252,7 +266,7 @@ std::string summary_json(const RunRecord& run) {
     const auto n_list = [&](const std::vector<std::size_t>& positions) {
       std::vector<std::string> items;
       for (auto k : positions) items.push_back(std::to_string(run.trials[series.trials[k]].n));
-      return fmt::format("[{}]", join(items, ", "));
+      return fmt::format("[{}]", fmt::join(items, ", "));
     };
     // A model's fit on its window: the fields common to the reported and the alternative fit.
     const auto model_fields = [&](const ModelAnalysis& analysis) {
@@ -283,8 +297,8 @@ std::string summary_json(const RunRecord& run) {
         model_fields(series.analysis.reported_analysis()),
         series.analysis.preferred ? json_string(model_id(*series.analysis.preferred)) : "null",
         series.analysis.decisive() ? "true" : "false", json_string(series.analysis.note),
-        n_list(flagged), join(pairwise, ", "), json_string(series.note), model_fields(alternative),
-        s + 1 < run.rates.size() ? "," : "");
+        n_list(flagged), fmt::join(pairwise, ", "), json_string(series.note),
+        model_fields(alternative), s + 1 < run.rates.size() ? "," : "");
   }
   out += "  ]\n}\n";
   return out;
@@ -332,130 +346,6 @@ std::string timeseries_csv(const RunRecord& run) {
       row.push_back(csv_number(sample.state_error));
       row.push_back(csv_number(sample.lyapunov));
       out += csv_row(row);
-    }
-  }
-  return out;
-}
-
-namespace {
-
-// One metric and group of a run, as a document table needs it.
-struct DocumentTable {
-  std::string metric, group, axis;
-  std::vector<std::string> abscissa, value, rate;
-  std::string fit;  // "-1.50 ± 0.03 (95% CI [-1.53, -1.47], R² = 0.999, 10 points)" or a reason
-};
-
-std::vector<DocumentTable> document_tables(const RunRecord& run) {
-  std::vector<DocumentTable> out;
-  for (const auto& metric : run.study.metrics)
-    for (const auto& series : run.rates) {
-      if (series.metric != metric || series.trials.empty()) continue;
-      const bool in_n = series.analysis.reported == RateModel::exponential ||
-                        run.study.abscissa == Abscissa::n;
-      DocumentTable table{metric, group_label(run.trials[series.trials.front()]),
-                          in_n ? std::string("n") : abscissa_name(run.study), {}, {}, {}, {}};
-      for (std::size_t k = 0; k < series.trials.size(); ++k) {
-        const double x = in_n ? series.n[k] : series.abscissa[k];
-        table.abscissa.push_back(in_n ? fmt::format("{}", run.trials[series.trials[k]].n)
-                                      : fmt::format("{:.4g}", x));
-        const double v = series.values[k];
-        table.value.push_back((std::isnan(v) ? std::string("failed") : fmt::format("{:.4g}", v)) +
-                              (series.flagged[k] ? "*" : ""));
-        const double r = k == 0 ? std::nan("") : series.pairwise[k - 1];
-        table.rate.push_back(std::isfinite(r) ? fmt::format("{:.2f}", r) : std::string("-"));
-      }
-      const auto& fit = series.fit;
-      table.fit = fit && std::isfinite(fit->std_error)
-                      ? fmt::format("{:.3g} ± {:.2g} (95% CI [{:.3g}, {:.3g}], R² = {:.3f}, {} points){}",
-                                    fit->rate, fit->std_error, fit->ci_low, fit->ci_high,
-                                    fit->r_squared, fit->points,
-                                    fit->model == RateModel::exponential ? ", exponential in n" : "")
-                  : fit ? fmt::format("{:.3g} ({} points, no uncertainty)", fit->rate, fit->points)
-                        : "no fit: " + series.no_fit_reason;
-      out.push_back(std::move(table));
-    }
-  return out;
-}
-
-std::string latex_escape(std::string_view text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '_' || c == '%' || c == '&' || c == '#' || c == '$') out += '\\';
-    if (c == '|') {
-      out += "$|$";
-      continue;
-    }
-    out += c;
-  }
-  return out;
-}
-
-}  // namespace
-
-std::string markdown_tables(const RunRecord& run) {
-  std::string out = fmt::format("# {}: rates\n\n", run.study.name);
-  for (const auto& t : document_tables(run)) {
-    std::string group = t.group;
-    for (std::size_t p = group.find('|'); p != std::string::npos; p = group.find('|', p + 2))
-      group.replace(p, 1, "\\|");
-    out += fmt::format("## {}\n\n{}\n\n| {} | {} | rate |\n|---:|---:|---:|\n", t.metric, group,
-                       t.axis, t.metric);
-    for (std::size_t k = 0; k < t.abscissa.size(); ++k)
-      out += fmt::format("| {} | {} | {} |\n", t.abscissa[k], t.value[k], t.rate[k]);
-    out += fmt::format("\nFitted rate: {}\n\n", t.fit);
-  }
-  out += "\\* value flagged: at the round-off floor or from a singular Gram matrix; not fitted.\n";
-  return out;
-}
-
-std::string latex_tables(const RunRecord& run) {
-  std::string out = fmt::format("% {}: rate tables (needs \\usepackage{{booktabs}})\n",
-                                latex_escape(run.study.name));
-  for (const auto& t : document_tables(run)) {
-    out += fmt::format(
-        "\\begin{{table}}[ht]\n\\centering\n\\caption{{{}: {}}}\n\\begin{{tabular}}{{rrr}}\n"
-        "\\toprule\n${}$ & {} & rate \\\\\n\\midrule\n",
-        latex_escape(t.metric), latex_escape(t.group), t.axis, latex_escape(t.metric));
-    for (std::size_t k = 0; k < t.abscissa.size(); ++k)
-      out += fmt::format("{} & {} & {} \\\\\n", t.abscissa[k], t.value[k],
-                         t.rate[k] == "-" ? "--" : t.rate[k]);
-    std::string fit = latex_escape(t.fit);
-    for (const auto& [from, to] : {std::pair<std::string, std::string>{"±", "$\\pm$"},
-                                   {"R²", "$R^2$"}}) {
-      for (auto p = fit.find(from); p != std::string::npos; p = fit.find(from, p + to.size()))
-        fit.replace(p, from.size(), to);
-    }
-    out += fmt::format("\\bottomrule\n\\end{{tabular}}\n\n\\smallskip fitted rate: {}\n\\end{{table}}\n\n",
-                       fit);
-  }
-  return out;
-}
-
-std::string console_tables(const RunRecord& run) {
-  std::string out;
-  for (const auto& metric : run.study.metrics) {
-    for (const auto& series : run.rates) {
-      if (series.metric != metric || series.trials.empty()) continue;
-      // An exponential fit is in n whatever the study's abscissa: the table's axis follows it.
-      const auto model = series.analysis.reported;
-      const bool in_n = model == RateModel::exponential || run.study.abscissa == Abscissa::n;
-      std::vector<TableRow> rows;
-      for (std::size_t k = 0; k < series.trials.size(); ++k)
-        rows.push_back({in_n ? series.n[k] : series.abscissa[k], series.values[k],
-                        static_cast<bool>(series.flagged[k])});
-      out += format_convergence_table(
-          metric, group_label(run.trials[series.trials.front()]),
-          in_n ? std::string("n") : abscissa_name(run.study), rows, series.fit,
-          "value flagged: at the round-off floor or from a singular Gram matrix", model,
-          series.no_fit_reason);
-      if (const auto& window = series.analysis.reported_analysis().window.points; !window.empty()) {
-        out += fmt::format("  window: n = {}, {} of {} points{}{}\n", label_range(series.n, window),
-                           window.size(), series.trials.size(),
-                           series.analysis.note.empty() ? "" : "; ", series.analysis.note);
-      }
-      if (!series.note.empty()) out += "  note: " + series.note + "\n";
-      out += "\n";
     }
   }
   return out;

@@ -57,4 +57,11 @@ std::string format_convergence_table(
         "value flagged: at the round-off floor or from a singular Gram matrix",
     RateModel pairwise_model = RateModel::power_law, std::string_view no_fit_reason = {});
 
+struct RateTable;  // rkhs/report/rate_table.hpp
+
+/// The table of one RateTable of a run, formatted as above with the model's axis, its pairwise
+/// rates (not recomputed: RateTableRow::rate, of the reported model), its fit or no-fit reason
+/// and flagged_value_legend. The window and notes lines are console_tables' (output.hpp).
+std::string format_convergence_table(const RateTable& table);
+
 }  // namespace rkhs

@@ -34,12 +34,14 @@ std::string summary_json(const RunRecord& run);
 std::string estimates_csv(const RunRecord& run);
 /// Adaptive studies: |x - xhat| and V at the output samples of every trial.
 std::string timeseries_csv(const RunRecord& run);
-/// The rate tables as Markdown (one table per metric and group: n, value, pairwise rate, then
-/// the fitted rate with its confidence interval) and as LaTeX (booktabs tables), written as
-/// rates.md and rates.tex. Flagged values carry a '*'.
+/// The rate tables as Markdown (one table per metric and group: the axis n or h, value,
+/// pairwise rate, then the fitted rate with its confidence interval) and as LaTeX (booktabs
+/// tables), written as rates.md and rates.tex. Flagged values carry a '*'. Both render
+/// rate_tables(run) (rkhs/report/rate_table.hpp), as console_tables and html_report do.
 std::string markdown_tables(const RunRecord& run);
 std::string latex_tables(const RunRecord& run);
-/// One ConvergenceTable per metric and group.
+/// One ConvergenceTable per metric and group (format_convergence_table of each RateTable),
+/// each followed by its window and note lines.
 std::string console_tables(const RunRecord& run);
 
 /// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and

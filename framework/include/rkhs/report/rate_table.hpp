@@ -1,0 +1,78 @@
+#pragma once
+// The rate table of a run, built once: one RateTable per metric and group of trials, holding
+// what every rate-table writer shows (in the manner of deal.II's ConvergenceTable, which is
+// filled once and written as text, LaTeX or HTML). The console (console_tables), Markdown
+// (markdown_tables), LaTeX (latex_tables) and HTML (html_report) writers render this model and
+// compute nothing of their own: the axis, the pairwise rates, the fitted rate with its
+// confidence level, the window and the notes all come from here.
+//
+// The model holds numbers; the writers choose their number formats. The document writers
+// (Markdown, LaTeX, HTML) share the cell and fit texts below, so they agree digit for digit.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rkhs/rates/rates.hpp"
+#include "rkhs/report/output.hpp"
+
+namespace rkhs {
+
+/// One point of the refinement axis of one table.
+struct RateTableRow {
+  double abscissa = 0.0;  ///< the table's axis: n, or the fill distance h (see RateTable::axis)
+  std::size_t n = 0;      ///< the trial's number of centres, whatever the axis
+  double value = 0.0;     ///< the metric; NaN for a failed trial
+  bool flagged = false;   ///< excluded from the fit as numerically meaningless
+  /// The pairwise rate of the reported model between the previous row and this one
+  /// (MetricSeries::pairwise); NaN in the first row and where it is undefined.
+  double rate = 0.0;
+};
+
+/// One metric of one group: the rows in increasing n, the reported fit and its context.
+struct RateTable {
+  std::size_t series = 0;  ///< index of the MetricSeries in RunRecord::rates
+  std::string metric;
+  std::string group;  ///< the group's key (every axis but n)
+  /// "n", or "h" when the study fits against the fill distance (StudyDefinition::abscissa);
+  /// an exponential fit is in n whatever the study says, so its table's axis is "n".
+  std::string axis;
+  RateModel model = RateModel::power_law;  ///< the reported model; the pairwise rates are its own
+  std::vector<RateTableRow> rows;
+  std::optional<RateFit> fit;       ///< the reported fit, with its own confidence level
+  std::string no_fit_reason;        ///< why there is no fit ("" when there is one)
+  std::vector<std::size_t> window;  ///< rows of the reported model's asymptotic window
+  std::string window_note;          ///< the model choice (SeriesAnalysis::note), "" when none
+  std::string note;  ///< what was excluded and why (MetricSeries::note), "" when nothing
+
+  /// True when the axis is n (abscissa == n for every row).
+  bool axis_is_n() const { return axis == "n"; }
+};
+
+/// The tables of `run`: for each metric of the study in its order, the non-empty series of
+/// that metric in RunRecord::rates order. Never throws except std::bad_alloc.
+std::vector<RateTable> rate_tables(const RunRecord& run);
+
+/// The legend of the '*' marker on flagged values.
+inline constexpr std::string_view flagged_value_legend =
+    "value flagged: at the round-off floor or from a singular Gram matrix";
+
+// Texts shared by the document writers (Markdown, LaTeX, HTML), UTF-8, unescaped.
+
+/// The axis cell: n as an integer on an n axis, otherwise 4 significant digits.
+std::string document_abscissa(const RateTable& table, const RateTableRow& row);
+/// The value cell: 4 significant digits or "failed", followed by '*' when flagged.
+std::string document_value(const RateTableRow& row);
+/// The rate cell: 2 decimals, or `missing` where there is no rate.
+std::string document_rate(const RateTableRow& row, std::string_view missing = "-");
+/// The fitted rate: "-1.5 ± 0.03 (95% CI [-1.53, -1.47], R² = 0.999, 10 points)" with the
+/// fit's own confidence level (4 significant digits of the percentage), then
+/// ", exponential in n" for the exponential model; "r (m points, no uncertainty)" without a
+/// standard error; "no fit: <reason>" without a fit.
+std::string document_fit(const RateTable& table);
+/// The window of the reported model: "n = 10..80, 4 of 4 points", "" when it is empty.
+std::string window_text(const RateTable& table);
+
+}  // namespace rkhs
