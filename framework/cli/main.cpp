@@ -11,6 +11,7 @@
 #include "commands/session.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/distributed.hpp"
+#include "rkhs/plugin/builtins.hpp"  // plugin_kind_names(), for `list`
 #include "rkhs/run/run.hpp"
 
 namespace {
@@ -73,12 +74,18 @@ int rkhs_study_main(int argc, char** argv) {
   bool no_plots = false;
   run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
 
-  auto* list = app.add_subcommand(
-      "list", "list plugins (kernel, centres, target, plant, law, integrator) or metrics");
-  list->add_option("kind", kind,
-                   "kernel, centres, target, plant, law, integrator or metrics (default: all)")
-      ->check(CLI::IsMember({"kernel", "kernels", "centres", "target", "targets", "plant", "plants",
-                             "law", "laws", "integrator", "integrators", "metric", "metrics"}));
+  // The kinds `list` accepts come from the table of plugin kinds (plugin_kinds.hpp).
+  std::string list_kinds;
+  std::vector<std::string> list_accepts;
+  for (const auto& name : rkhs::plugin_kind_names()) {
+    list_kinds += (list_kinds.empty() ? "" : ", ") + name.singular;
+    list_accepts.push_back(name.singular);
+    if (name.plural != name.singular) list_accepts.push_back(name.plural);
+  }
+  list_accepts.insert(list_accepts.end(), {"metric", "metrics"});
+  auto* list = app.add_subcommand("list", "list plugins (" + list_kinds + ") or metrics");
+  list->add_option("kind", kind, list_kinds + " or metrics (default: all)")
+      ->check(CLI::IsMember(list_accepts));
 
   std::string report_dir, report_format = "html";
   auto* report = app.add_subcommand(
@@ -146,6 +153,7 @@ int rkhs_study_main(int argc, char** argv) {
 
   session.runs_trials = *run || *check;
   session.shard = !run_arguments.shard.empty();
+  run_arguments.plots = !no_plots;
   return run_command(session, argc, argv, [&](rkhs::pipeline::Executor& executor) {
     if (*run) return command_run(run_arguments, executor);
     if (*check) return command_check(check_arguments, executor);

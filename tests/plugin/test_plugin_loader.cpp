@@ -139,6 +139,18 @@ TEST_CASE("plugin error: invalid metadata, and the module's valid kernels are ro
   CHECK_FALSE(kernel_registry().find("invalid_metadata_kernel"));
 }
 
+TEST_CASE("plugin error: a plugin whose info() throws is refused with the exception's message",
+          "[plugin]") {
+  const auto file = module("info_throws");
+  const auto message = refusal(file);
+  using Catch::Matchers::EndsWith;
+  using Catch::Matchers::StartsWith;
+  CHECK_THAT(message, StartsWith(file.string() + ": kernel registration failed: "));
+  CHECK_THAT(message, Catch::Matchers::Contains("TinyKernel<"));
+  CHECK_THAT(message, EndsWith("Throws>: cannot read the declaration"));
+  CHECK_FALSE(kernel_registry().find("valid_before_throwing"));
+}
+
 TEST_CASE("plugin error: a module that registers nothing, or registers inside dlopen", "[plugin]") {
   const auto nothing = module("registers_nothing");
   CHECK(refusal(nothing) ==

@@ -9,7 +9,7 @@
 #include "rkhs/kernel/kernel_algorithms.hpp"
 #include "rkhs/plugin/kernel_contract.hpp"
 #include "rkhs/verify/plugin_verification.hpp"
-#include "rkhs/plugin/builtins.hpp"
+#include "rkhs/plugin/plugin_kinds.hpp"
 
 using namespace rkhs;
 
@@ -76,7 +76,8 @@ struct Scoped {
 
 TEST_CASE("every built-in kernel passes verify-plugin's checks with its defaults",
           "[plugin][verify]") {
-  for (const auto& name : builtin_plugin_names().kernels) {
+  for (const auto builtin : KernelKind::builtins) {
+    const std::string name(builtin);
     const auto v = verify_kernel(name);
     INFO(name << " (" << v.parameters << "): " << v.declared);
     for (const auto& [where, report] : v.contract)

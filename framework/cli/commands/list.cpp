@@ -1,16 +1,13 @@
-// `rkhs-study list [KIND]`: the registered plugins with their parameters, and the metrics.
+// `rkhs-study list [KIND]`: the registered plugins of every kind (plugin_kinds.hpp) with their
+// parameters, and the metrics.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include <iostream>
 
 #include "commands/commands.hpp"
-#include "rkhs/adaptive/adaptive.hpp"
-#include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/approximation.hpp"
-#include "rkhs/approx/centres.hpp"
-#include "rkhs/approx/target.hpp"
-#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/plugin/plugin_kinds.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
 #include "rkhs/run/run.hpp"
 
@@ -44,13 +41,11 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
 
 int command_list(const std::string& kind) {
   const bool all = kind.empty();
-  if (all || kind == "kernel" || kind == "kernels") list_registry(kernel_registry(), std::cout);
-  if (all || kind == "centres") list_registry(centre_registry(), std::cout);
-  if (all || kind == "target" || kind == "targets") list_registry(target_registry(), std::cout);
-  if (all || kind == "plant" || kind == "plants") list_registry(plant_registry(), std::cout);
-  if (all || kind == "law" || kind == "laws") list_registry(law_registry(), std::cout);
-  if (all || kind == "integrator" || kind == "integrators")
-    list_registry(integrator_registry(), std::cout);
+  for_each_plugin_kind([&](auto plugin_kind) {
+    using Kind = decltype(plugin_kind);
+    if (all || kind == Kind::singular || kind == Kind::plural)
+      list_registry(Kind::registry(), std::cout);
+  });
   if (all || kind == "metric" || kind == "metrics") {
     for (const char* study_kind : {"approximation", "adaptive"}) {
       std::cout << "metrics (" << study_kind << " trials):\n";

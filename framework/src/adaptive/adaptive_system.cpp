@@ -5,11 +5,6 @@
 
 namespace rkhs {
 
-IntegratorRegistry& integrator_registry() {
-  static IntegratorRegistry registry("integrator");
-  return registry;
-}
-
 AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B,
                                const Eigen::MatrixXd& P, KernelBasis& basis,
                                const Eigen::MatrixXd& learning_map,

@@ -1,4 +1,5 @@
-// The plant and learning-law registries, and the matrix syntax of study files (parse_matrix).
+// The matrix syntax of study files (parse_matrix). The plant and learning-law registries are
+// defined with the other registries, in plugin/registry.cpp.
 #include <fmt/format.h>
 
 #include <charconv>
@@ -7,16 +8,6 @@
 #include "rkhs/adaptive/plant.hpp"
 
 namespace rkhs {
-
-PlantRegistry& plant_registry() {
-  static PlantRegistry registry("plant");
-  return registry;
-}
-
-LawRegistry& law_registry() {
-  static LawRegistry registry("law");
-  return registry;
-}
 
 namespace {
 

@@ -4,17 +4,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cstdlib>
 #include <mutex>
 
-#include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/core/build_info.hpp"
-#include "rkhs/approx/centres.hpp"
-#include "rkhs/kernel/kernel.hpp"
-#include "rkhs/adaptive/plant.hpp"
 #include "rkhs/plugin/module.hpp"
-#include "rkhs/approx/target.hpp"
+#include "rkhs/plugin/plugin_kinds.hpp"
 
 namespace rkhs {
 
@@ -22,43 +17,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The six registries, each seen through the operations the loader needs.
-struct RegistryView {
-  std::vector<std::string> (*names)();
-  std::size_t (*error_count)();
-  void (*remove)(const std::string&);
-  std::vector<std::string> (*take_errors_after)(std::size_t);
-};
-
-template <auto& registry>
-constexpr RegistryView view_of() {
-  return {[] { return registry().names(); }, [] { return registry().error_count(); },
-          [](const std::string& name) { registry().remove(name); },
-          [](std::size_t count) { return registry().take_errors_after(count); }};
-}
-
-// In the order of LoadedPlugin's lists.
-constexpr std::size_t registry_count = 6;
-constexpr std::array<RegistryView, registry_count> registries{
-    view_of<kernel_registry>(), view_of<centre_registry>(), view_of<target_registry>(),
-    view_of<plant_registry>(),  view_of<law_registry>(),    view_of<integrator_registry>()};
-
-std::array<std::vector<std::string>*, registry_count> lists_of(LoadedPlugin& plugin) {
-  return {&plugin.kernels, &plugin.centres, &plugin.targets,
-          &plugin.plants,  &plugin.laws,    &plugin.integrators};
-}
-
-// What the registries hold, to learn what a module registered and whether it was refused.
+// What the registries hold, per kind (keyed by the kind's singular name), to learn what a
+// module registered and whether it was refused.
 struct RegistryState {
-  std::array<std::vector<std::string>, registry_count> names;
-  std::array<std::size_t, registry_count> errors{};
+  std::map<std::string, std::vector<std::string>, std::less<>> names;
+  std::map<std::string, std::size_t, std::less<>> errors;
 
   static RegistryState take() {
     RegistryState out;
-    for (std::size_t r = 0; r < registry_count; ++r) {
-      out.names[r] = registries[r].names();
-      out.errors[r] = registries[r].error_count();
-    }
+    for_each_plugin_kind([&](auto kind) {
+      using Kind = decltype(kind);
+      out.names[std::string(Kind::singular)] = Kind::registry().names();
+      out.errors[std::string(Kind::singular)] = Kind::registry().error_count();
+    });
     return out;
   }
   bool same_errors(const RegistryState& other) const { return errors == other.errors; }
@@ -73,15 +44,27 @@ std::vector<std::string> added(const std::vector<std::string>& before,
   return out;
 }
 
+// Removes `registered` (per kind, as in LoadedPlugin::registered) from the registries.
+void remove_all(const std::map<std::string, std::vector<std::string>, std::less<>>& registered) {
+  for_each_plugin_kind([&](auto kind) {
+    using Kind = decltype(kind);
+    if (const auto it = registered.find(Kind::singular); it != registered.end())
+      for (const auto& name : it->second) Kind::registry().remove(name);
+  });
+}
+
 // Removes what was registered since `before` and returns the registration errors recorded since.
 std::vector<std::string> roll_back(const RegistryState& before) {
   const auto now = RegistryState::take();
   std::vector<std::string> errors;
-  for (std::size_t r = 0; r < registry_count; ++r) {
-    for (const auto& name : added(before.names[r], now.names[r])) registries[r].remove(name);
-    const auto taken = registries[r].take_errors_after(before.errors[r]);
+  for_each_plugin_kind([&](auto kind) {
+    using Kind = decltype(kind);
+    const std::string key(Kind::singular);
+    for (const auto& name : added(before.names.at(key), now.names.at(key)))
+      Kind::registry().remove(name);
+    const auto taken = Kind::registry().take_errors_after(before.errors.at(key));
     errors.insert(errors.end(), taken.begin(), taken.end());
-  }
+  });
   return errors;
 }
 
@@ -128,8 +111,8 @@ LoadedPlugin load_plugin(const fs::path& file) {
 
   const auto before = RegistryState::take();
   dlerror();
-  // Lazy binding: see plugin.hpp (a module built against another ABI still loads far enough to
-  // say which ABI it was built against). Local: its symbols do not leak into other modules.
+  // Lazy binding: see plugin/module.hpp (a module built against another ABI still loads far enough
+  // to say which ABI it was built against). Local: its symbols do not leak into other modules.
   void* handle = dlopen(canonical.c_str(), RTLD_LAZY | RTLD_LOCAL);
   if (!handle) {
     const char* why = dlerror();
@@ -189,8 +172,8 @@ LoadedPlugin load_plugin(const fs::path& file) {
                      plugin_detail::PendingRegistrations::capacity));
   if (failed > 0)
     fail(
-        fmt::format("{} registration(s) failed without a recorded reason (an exception thrown "
-                    "by a plugin's info()?)",
+        fmt::format("{} registration(s) failed without a recorded reason (out of memory while "
+                    "recording it)",
                     failed));
 
   LoadedPlugin plugin;
@@ -199,11 +182,14 @@ LoadedPlugin load_plugin(const fs::path& file) {
   plugin.rkhs_study_version = built_with;
   plugin.abi_version = abi;
   bool registered = false;
-  const auto lists = lists_of(plugin);
-  for (std::size_t r = 0; r < registry_count; ++r) {
-    *lists[r] = added(before.names[r], after.names[r]);
-    registered = registered || !lists[r]->empty();
-  }
+  for_each_plugin_kind([&](auto kind) {
+    using Kind = decltype(kind);
+    const std::string key(Kind::singular);
+    auto names = added(before.names.at(key), after.names.at(key));
+    registered = registered || !names.empty();
+    if constexpr (requires { Kind::loaded; }) plugin.*Kind::loaded = names;
+    plugin.registered[key] = std::move(names);
+  });
   if (!registered)
     fail(
         "registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, _PLANT, _LAW, "
@@ -227,9 +213,7 @@ bool unload_plugin(const fs::path& file) {
   const auto it = std::find_if(loaded.begin(), loaded.end(),
                                [&](const Module& m) { return m.plugin.file == canonical; });
   if (error || it == loaded.end()) return false;
-  const auto lists = lists_of(it->plugin);
-  for (std::size_t r = 0; r < registry_count; ++r)
-    for (const auto& name : *lists[r]) registries[r].remove(name);
+  remove_all(it->plugin.registered);
   dlclose(it->handle);
   loaded.erase(it);
   return true;

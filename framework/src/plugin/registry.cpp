@@ -1,31 +1,44 @@
+// The registries of every kind of plugin, and the checks over all of them. Everything here
+// iterates the table of kinds (plugin_kinds.hpp).
 #include "rkhs/core/registry.hpp"
 
 #include <algorithm>
 
-#include "rkhs/adaptive/adaptive.hpp"
-#include "rkhs/approx/centres.hpp"
-#include "rkhs/adaptive/plant.hpp"
-#include "rkhs/kernel/kernel.hpp"
 #include "rkhs/plugin/builtins.hpp"
-#include "rkhs/approx/target.hpp"
+#include "rkhs/plugin/plugin_kinds.hpp"
 
 namespace rkhs {
 
-// Registries are function-local statics: constructed on first use, whatever the order in which
-// the registrars of different translation units run.
+namespace {
+
+// A kind's registry, named by its table entry. A function-local static: constructed on first
+// use, whatever the order in which the registrars of different translation units run.
+template <PluginKindDescriptor Kind>
+typename Kind::Registry& registry_of_kind() {
+  static typename Kind::Registry registry{std::string(Kind::singular)};
+  return registry;
+}
+
+}  // namespace
+
+// The accessors declared in each kind's layer (kernel.hpp, centres.hpp, ...).
 KernelRegistry& kernel_registry() {
-  static KernelRegistry registry("kernel");
-  return registry;
+  return registry_of_kind<KernelKind>();
 }
-
 CentreRegistry& centre_registry() {
-  static CentreRegistry registry("centres");
-  return registry;
+  return registry_of_kind<CentresKind>();
 }
-
 TargetRegistry& target_registry() {
-  static TargetRegistry registry("target");
-  return registry;
+  return registry_of_kind<TargetKind>();
+}
+PlantRegistry& plant_registry() {
+  return registry_of_kind<PlantKind>();
+}
+LawRegistry& law_registry() {
+  return registry_of_kind<LawKind>();
+}
+IntegratorRegistry& integrator_registry() {
+  return registry_of_kind<IntegratorKind>();
 }
 
 std::unique_ptr<AnyKernel> make_kernel(std::string_view name, const ParameterSet& parameters,
@@ -68,50 +81,35 @@ std::string closest_name(std::string_view name, const std::vector<std::string>& 
 
 std::vector<std::string> registration_errors() {
   std::vector<std::string> all;
-  for (auto errors : {kernel_registry().errors(), centre_registry().errors(),
-                      target_registry().errors(), plant_registry().errors(),
-                      law_registry().errors(), integrator_registry().errors()})
+  for_each_plugin_kind([&](auto kind) {
+    const auto errors = decltype(kind)::registry().errors();
     all.insert(all.end(), errors.begin(), errors.end());
+  });
   return all;
-}
-
-const BuiltinNames& builtin_plugin_names() {
-  static const BuiltinNames names{
-      .kernels = {"bspline", "gaussian", "matern", "wendland"},
-      .centres = {"random", "uniform"},
-      .targets = {"csv", "iso8608", "sine"},
-      .plants = {"linear", "quarter_car"},
-      .laws = {"gradient", "rkhs"},
-      .integrators = {"dopri5", "rk4", "rk_fehlberg78", "rodas4", "rosenbrock4"},
-  };
-  return names;
 }
 
 std::vector<std::string> missing_builtin_plugins() {
   std::vector<std::string> missing;
-  const auto& builtin = builtin_plugin_names();
-  for (const auto& name : builtin.kernels)
-    if (!kernel_registry().find(name)) missing.push_back("kernel '" + name + "'");
-  for (const auto& name : builtin.centres)
-    if (!centre_registry().find(name)) missing.push_back("centres '" + name + "'");
-  for (const auto& name : builtin.targets)
-    if (!target_registry().find(name)) missing.push_back("target '" + name + "'");
-  for (const auto& name : builtin.plants)
-    if (!plant_registry().find(name)) missing.push_back("plant '" + name + "'");
-  for (const auto& name : builtin.laws)
-    if (!law_registry().find(name)) missing.push_back("law '" + name + "'");
-  for (const auto& name : builtin.integrators)
-    if (!integrator_registry().find(name)) missing.push_back("integrator '" + name + "'");
+  for_each_plugin_kind([&](auto kind) {
+    using Kind = decltype(kind);
+    for (const auto name : Kind::builtins)
+      if (!Kind::registry().find(name))
+        missing.push_back(std::string(Kind::singular) + " '" + std::string(name) + "'");
+  });
   return missing;
 }
 
 void freeze_registries() {
-  kernel_registry().freeze();
-  centre_registry().freeze();
-  target_registry().freeze();
-  plant_registry().freeze();
-  law_registry().freeze();
-  integrator_registry().freeze();
+  for_each_plugin_kind([](auto kind) { decltype(kind)::registry().freeze(); });
+}
+
+std::vector<PluginKindName> plugin_kind_names() {
+  std::vector<PluginKindName> names;
+  for_each_plugin_kind([&](auto kind) {
+    using Kind = decltype(kind);
+    names.push_back({std::string(Kind::singular), std::string(Kind::plural)});
+  });
+  return names;
 }
 
 }  // namespace rkhs

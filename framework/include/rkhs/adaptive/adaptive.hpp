@@ -88,15 +88,11 @@ class Integrator {
 using IntegratorRegistry = Registry<Integrator>;
 IntegratorRegistry& integrator_registry();
 
+/// Registers integrator type T (static info(), constructor from ParameterSet). Never throws; a
+/// failure is recorded in integrator_registry().errors() (register_plugin).
 template <class T>
 bool register_integrator() noexcept {
-  try {
-    return integrator_registry().add(T::info(), [](const ParameterSet& p) {
-      return std::unique_ptr<Integrator>(std::make_unique<T>(p));
-    });
-  } catch (...) {
-    return false;
-  }
+  return register_plugin<T>(integrator_registry());
 }
 
 /// Study-wide settings of adaptive trials ([adaptive] in a study file).

@@ -42,26 +42,15 @@ LawRegistry& law_registry();
 /// Throws std::invalid_argument saying what is wrong.
 Eigen::MatrixXd parse_matrix(std::string_view text, Eigen::Index size = 0);
 
+/// Register plant / learning-law type T (static info(), constructor from ParameterSet). Never
+/// throw; a failure is recorded in the registry's errors() (register_plugin).
 template <class T>
 bool register_plant() noexcept {
-  try {
-    return plant_registry().add(T::info(), [](const ParameterSet& p) {
-      return std::unique_ptr<Plant>(std::make_unique<T>(p));
-    });
-  } catch (...) {
-    return false;
-  }
+  return register_plugin<T>(plant_registry());
 }
-
 template <class T>
 bool register_law() noexcept {
-  try {
-    return law_registry().add(T::info(), [](const ParameterSet& p) {
-      return std::unique_ptr<LearningLaw>(std::make_unique<T>(p));
-    });
-  } catch (...) {
-    return false;
-  }
+  return register_plugin<T>(law_registry());
 }
 
 }  // namespace rkhs

@@ -22,16 +22,11 @@ class CentrePlacement {
 using CentreRegistry = Registry<CentrePlacement>;
 CentreRegistry& centre_registry();
 
-/// Registers placement type P (static info(), constructor from ParameterSet).
+/// Registers placement type P (static info(), constructor from ParameterSet). Never throws; a
+/// failure is recorded in centre_registry().errors() (register_plugin).
 template <class P>
 bool register_centre_placement() noexcept {
-  try {
-    return centre_registry().add(P::info(), [](const ParameterSet& p) {
-      return std::unique_ptr<CentrePlacement>(std::make_unique<P>(p));
-    });
-  } catch (...) {
-    return false;
-  }
+  return register_plugin<P>(centre_registry());
 }
 
 }  // namespace rkhs

@@ -35,15 +35,11 @@ class TargetFunction {
 using TargetRegistry = Registry<TargetFunction, const Domain&>;
 TargetRegistry& target_registry();
 
+/// Registers target type T (static info(), constructor from ParameterSet and Domain). Never
+/// throws; a failure is recorded in target_registry().errors() (register_plugin).
 template <class T>
 bool register_target() noexcept {
-  try {
-    return target_registry().add(T::info(), [](const ParameterSet& p, const Domain& d) {
-      return std::unique_ptr<TargetFunction>(std::make_unique<T>(p, d));
-    });
-  } catch (...) {
-    return false;
-  }
+  return register_plugin<T>(target_registry());
 }
 
 }  // namespace rkhs

@@ -9,7 +9,7 @@
 // list private to the module; nothing of the framework is touched while the module loads. The
 // loader (plugin_loader.hpp) first checks the module's ABI version through an extern "C" entry
 // point that uses no framework type, and only then asks the module to run the recorded calls
-// (rkhs_plugin_register, defined by RKHS_PLUGIN_MODULE in plugin.hpp). A module built against an
+// (rkhs_plugin_register, defined by RKHS_PLUGIN_MODULE in plugin/module.hpp). A module built against an
 // incompatible framework is therefore refused before any of its code builds a PluginInfo or calls
 // into a registry whose layout it misunderstands.
 //
@@ -19,7 +19,7 @@
 
 namespace rkhs::plugin_detail {
 
-/// A recorded registration: calls register_kernel<T>() and friends. Never throws.
+/// A recorded registration: calls register_plugin<T>() (registry.hpp). Never throws.
 using Registration = bool (*)() noexcept;
 
 /// Registrations recorded by a plugin module, in static-initialisation order.
@@ -47,8 +47,8 @@ struct PendingRegistrations {
   return true;
 }
 
-/// Runs the recorded registrations. Returns how many failed (their reasons are in the
-/// registries' errors()), or -1 when the list overflowed. The list is kept: a module that
+/// Runs the recorded registrations. Returns how many failed (their reasons, including the message
+/// of an exception thrown by a plugin's info(), are in the registries' errors()), or -1 when the list overflowed. The list is kept: a module that
 /// dlclose could not unmap (it stays resident, and its initialisers do not run again when it is
 /// reopened) registers again from it.
 [[gnu::visibility("hidden")]] inline int run_pending_registrations() noexcept {

@@ -5,17 +5,22 @@
 // themselves from a namespace-scope registrar object defined by a RKHS_REGISTER_* macro; such
 // registrations run during static initialisation, so `add` never throws: a duplicate name or an
 // invalid declaration is recorded and reported by `errors()` once `main` runs (see
-// report_registration_errors in plugins.hpp). Registries are function-local statics (no static
+// registration_errors in plugin/builtins.hpp). Registries are function-local statics (no static
 // initialisation order problem) and are frozen before trials start: after `freeze()` they are
 // only read, so worker threads read them without locking.
+//
+// This header is generic: it knows no kind of plugin. The kinds (which registries exist, their
+// names, what they make) are listed once, in plugin/plugin_kinds.hpp.
 
 #include <algorithm>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rkhs/core/parameters.hpp"
@@ -93,6 +98,16 @@ class Registry {
   }
 
   const std::string& kind() const noexcept { return kind_; }
+  /// Records a registration error that happened before `add` could be called (register_plugin:
+  /// the plugin's info() threw). Never throws.
+  void record_error(std::string message) noexcept {
+    try {
+      std::lock_guard lock(mutex_);
+      errors_.push_back(std::move(message));
+    } catch (...) {
+      // Out of memory during start-up: nothing sensible can be recorded.
+    }
+  }
   std::vector<std::string> errors() const {
     std::lock_guard lock(mutex_);
     return errors_;
@@ -138,6 +153,48 @@ class Registry {
   std::vector<std::string> errors_;
   bool frozen_ = false;
 };
+
+/// The name of type T as the compiler spells it ("rkhs::Gaussian"), for messages.
+template <class T>
+constexpr std::string_view type_name() noexcept {
+  // GCC: "... type_name() [with T = rkhs::Gaussian; std::string_view = ...]",
+  // Clang: "... type_name() [T = rkhs::Gaussian]".
+  const std::string_view function = __PRETTY_FUNCTION__;
+  const auto start = function.find("T = ");
+  if (start == std::string_view::npos) return function;
+  const auto name = function.substr(start + 4);
+  return name.substr(0, name.find_first_of(";]"));
+}
+
+/// Registers plugin type T into `registry`: its metadata T::info() and a factory that makes
+/// `Made(parameters, args...)` (Made is T itself, or a wrapper such as KernelModel<T>). The one
+/// registration function behind every RKHS_REGISTER_* macro. Never throws: when info() throws,
+/// the exception's message is recorded in the registry's errors() as
+///   "<kind> registration failed: <type T>: <what()>"
+/// and false is returned; every other refusal is recorded by `add` (see there).
+template <class T, class Made = T, class Product, class... Args>
+bool register_plugin(Registry<Product, Args...>& registry) noexcept {
+  auto failed = [&](std::string_view what) {
+    try {
+      registry.record_error(registry.kind() + " registration failed: " +
+                            std::string(type_name<T>()) + ": " + std::string(what));
+    } catch (...) {
+      // Out of memory during start-up: nothing sensible can be recorded.
+    }
+    return false;
+  };
+  try {
+    PluginInfo info = T::info();
+    return registry.add(std::move(info), [](const ParameterSet& parameters, Args... args) {
+      return std::unique_ptr<Product>(
+          std::make_unique<Made>(parameters, std::forward<Args>(args)...));
+    });
+  } catch (const std::exception& e) {
+    return failed(e.what());
+  } catch (...) {
+    return failed("unknown exception");
+  }
+}
 
 }  // namespace rkhs
 

@@ -248,15 +248,10 @@ class KernelModel final : public AnyKernel {
 };
 
 /// Registers kernel type K (its info() and a KernelModel<K> factory) into kernel_registry().
+/// Never throws; a failure is recorded in kernel_registry().errors() (register_plugin).
 template <KernelFunction K>
 bool register_kernel() noexcept {
-  try {
-    return kernel_registry().add(K::info(), [](const ParameterSet& p, const Domain& d) {
-      return std::unique_ptr<AnyKernel>(std::make_unique<KernelModel<K>>(p, d));
-    });
-  } catch (...) {
-    return false;
-  }
+  return register_plugin<K, KernelModel<K>>(kernel_registry());
 }
 
 }  // namespace rkhs

@@ -1,16 +1,18 @@
 #pragma once
 // Loading plugin modules at run time (`--plugin PATH`, `plugins = [...]` in a study file,
 // RKHS_STUDY_PLUGIN_PATH). How a module is checked before it may register anything is explained
-// in plugin.hpp.
+// in plugin/module.hpp.
 //
 // A module is loaded at most once per process: loading the same file again (by any path that
 // resolves to it) returns the first load. A module that fails any check is unloaded and leaves
 // the registries as they were; its registration errors are reported by the PluginError, not by
 // registration_errors(). Modules that loaded stay loaded (the registries hold their factories;
-// only tests unload them, unload_plugin). Load plugins before the registries are frozen (freeze_registries()): a
-// registration into a frozen registry is refused, and so is the module.
+// only tests unload them, unload_plugin). Load plugins before the registries are frozen
+// (freeze_registries()): a registration into a frozen registry is refused, and so is the module.
 
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -27,6 +29,7 @@ namespace rkhs {
 ///   "<path>: duplicate plugin name 'x' (already loaded from <other path>)"
 ///   "<path>: kernel plugin 'gaussian': duplicate name"                       (a registry error)
 ///   "<path>: kernel plugin 'k': parameter 'c': default must be > 0"          (invalid metadata)
+///   "<path>: kernel registration failed: my::Kernel: <what()>"           (its info() threw)
 ///   "<path>: registered nothing (...)", "<path>: registered plugins while loading, ..."
 class PluginError : public std::runtime_error {
  public:
@@ -39,7 +42,11 @@ struct LoadedPlugin {
   std::string name;                ///< RKHS_PLUGIN_MODULE(name)
   std::string rkhs_study_version;  ///< the rkhs-study it was built against
   int abi_version = 0;
-  /// What it registered, sorted, per registry.
+  /// What it registered, sorted, per kind of plugin: keyed by the kind's singular name
+  /// (plugin_kinds.hpp), every kind present.
+  std::map<std::string, std::vector<std::string>, std::less<>> registered;
+  /// The same lists for the kinds that had a member before the table of kinds (each descriptor's
+  /// `loaded`).
   std::vector<std::string> kernels, centres, targets, plants, laws, integrators;
 };
 

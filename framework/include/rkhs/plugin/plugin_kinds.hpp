@@ -1,0 +1,127 @@
+#pragma once
+// The kinds of plugin: the one table that everything which concerns "every kind" iterates.
+//
+// Each kind is a descriptor type:
+//   using Product             the interface its plugins implement (AnyKernel, Plant, ...)
+//   using Registry            Registry<Product, FactoryArgs...> (core/registry.hpp)
+//   singular, plural          names: the registry's kind(), the words `rkhs-study list` accepts
+//   builtins                  the names every build of rkhs-study registers, sorted
+//   registry()                the kind's registry (the accessor declared in the kind's layer)
+//   loaded (optional)         the member of LoadedPlugin that lists what a module registered of
+//                             this kind (kept for the kinds that had one before the table)
+// and PluginKinds lists them, in the order of `rkhs-study list` and of registration_errors().
+//
+// Who iterates the table (for_each_plugin_kind): the registries' definitions (their kind names),
+// registration_errors(), missing_builtin_plugins(), freeze_registries(), plugin_kind_names()
+// (builtins.hpp); the plugin loader's snapshot, comparison and roll-back of the registries
+// (plugin_loader.cpp); `rkhs-study list` and its accepted kind names (cli).
+//
+// A new kind needs: its Registry accessor declared in its layer's header and defined in
+// plugin/registry.cpp (one line, registry_of_kind), a descriptor here, and its entry in
+// PluginKinds. Nothing else lists the kinds.
+//
+// This header names the products of the kernel, approx and adaptive layers, so it lives in the
+// plugin layer, above them; the generic registry and register_plugin<T>() are in core.
+
+#include <concepts>
+#include <iterator>
+#include <string_view>
+#include <tuple>
+
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/target.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/plugin/plugin_loader.hpp"
+
+namespace rkhs {
+
+struct KernelKind {
+  using Product = AnyKernel;
+  using Registry = KernelRegistry;
+  static constexpr std::string_view singular = "kernel";
+  static constexpr std::string_view plural = "kernels";
+  static constexpr std::string_view builtins[] = {"bspline", "gaussian", "matern", "wendland"};
+  static constexpr auto loaded = &LoadedPlugin::kernels;
+  static Registry& registry() { return kernel_registry(); }
+};
+
+struct CentresKind {
+  using Product = CentrePlacement;
+  using Registry = CentreRegistry;
+  static constexpr std::string_view singular = "centres";
+  static constexpr std::string_view plural = "centres";
+  static constexpr std::string_view builtins[] = {"random", "uniform"};
+  static constexpr auto loaded = &LoadedPlugin::centres;
+  static Registry& registry() { return centre_registry(); }
+};
+
+struct TargetKind {
+  using Product = TargetFunction;
+  using Registry = TargetRegistry;
+  static constexpr std::string_view singular = "target";
+  static constexpr std::string_view plural = "targets";
+  static constexpr std::string_view builtins[] = {"csv", "iso8608", "sine"};
+  static constexpr auto loaded = &LoadedPlugin::targets;
+  static Registry& registry() { return target_registry(); }
+};
+
+struct PlantKind {
+  using Product = Plant;
+  using Registry = PlantRegistry;
+  static constexpr std::string_view singular = "plant";
+  static constexpr std::string_view plural = "plants";
+  static constexpr std::string_view builtins[] = {"linear", "quarter_car"};
+  static constexpr auto loaded = &LoadedPlugin::plants;
+  static Registry& registry() { return plant_registry(); }
+};
+
+struct LawKind {
+  using Product = LearningLaw;
+  using Registry = LawRegistry;
+  static constexpr std::string_view singular = "law";
+  static constexpr std::string_view plural = "laws";
+  static constexpr std::string_view builtins[] = {"gradient", "rkhs"};
+  static constexpr auto loaded = &LoadedPlugin::laws;
+  static Registry& registry() { return law_registry(); }
+};
+
+struct IntegratorKind {
+  using Product = Integrator;
+  using Registry = IntegratorRegistry;
+  static constexpr std::string_view singular = "integrator";
+  static constexpr std::string_view plural = "integrators";
+  static constexpr std::string_view builtins[] = {"dopri5", "rk4", "rk_fehlberg78", "rodas4",
+                                                  "rosenbrock4"};
+  static constexpr auto loaded = &LoadedPlugin::integrators;
+  static Registry& registry() { return integrator_registry(); }
+};
+
+/// The table.
+using PluginKinds =
+    std::tuple<KernelKind, CentresKind, TargetKind, PlantKind, LawKind, IntegratorKind>;
+inline constexpr std::size_t plugin_kind_count = std::tuple_size_v<PluginKinds>;
+
+/// What a descriptor must declare (see the file comment).
+template <class Kind>
+concept PluginKindDescriptor = requires {
+  typename Kind::Product;
+  typename Kind::Registry;
+  { Kind::singular } -> std::convertible_to<std::string_view>;
+  { Kind::plural } -> std::convertible_to<std::string_view>;
+  { Kind::registry() } -> std::same_as<typename Kind::Registry&>;
+  std::size(Kind::builtins);
+};
+static_assert([]<class... Kinds>(std::tuple<Kinds...>*) {
+  return (PluginKindDescriptor<Kinds> && ...);
+}(static_cast<PluginKinds*>(nullptr)));
+
+/// Calls visitor(Kind{}) for every kind, in table order (the descriptor is an empty value; use
+/// decltype(kind) for its members).
+template <class Visitor>
+void for_each_plugin_kind(Visitor&& visitor) {
+  std::apply([&](auto... kind) { (visitor(kind), ...); }, PluginKinds{});
+}
+
+}  // namespace rkhs
