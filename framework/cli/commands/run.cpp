@@ -50,7 +50,8 @@ int run_shard(const RunCommand& arguments, const StudyDefinition& study,
   RunOptions options;
   options.threads = arguments.threads;
   stop_on_signals(options);
-  const auto outcome = pipeline::run_study(executor, study, mine, options, arguments.store);
+  const auto outcome = pipeline::run_study(executor, study, mine, options, arguments.store,
+                                           pipeline::Rates::not_fitted);
   if (!arguments.quiet) print_run_sources(outcome, executor);
   if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments.store);
   const auto& stored = outcome.completed->stored;

@@ -1,5 +1,9 @@
 // The MPI side of rkhs/distributed.hpp: the session and the task hand-out protocol.
 //
+// Over 500 lines on purpose: both sides of the protocol (coordinate() on rank 0, serve() on the
+// others) share its tags, message helpers and timeouts, and are kept in one file so that the
+// protocol below can be read, and changed, in one place.
+//
 // Protocol (tags below), rank 0 coordinating, every rank (rank 0 too) running tasks:
 //   worker -> 0  request  int32: how many tasks it takes (threads + 1), sent once
 //   0 -> worker  assign   uint64 ids (none: no more tasks for this job)

@@ -20,7 +20,7 @@ RunRecord CompletedRun::record() const {
 
 PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
                           const std::vector<TrialSpec>& trials, RunOptions options,
-                          const StoreOptions& store_options) {
+                          const StoreOptions& store_options, Rates fit) {
   std::optional<ResultStore> store;
   executor.on_every_process([&] {
     if (!store_options.disabled && executor.is_root()) store.emplace(store_options.file);
@@ -42,7 +42,8 @@ PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
   for (const auto& result : stored->results) failed += result.ok ? 0 : 1;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  auto rates = compute_rates(study, trials, stored->results);
+  auto rates = fit == Rates::fitted ? compute_rates(study, trials, stored->results)
+                                    : std::vector<MetricSeries>{};
   outcome.completed.emplace(CompletedRun{study, trials, std::move(*stored), std::move(rates),
                                          failed, options.threads, seconds, started,
                                          executor.ranks()});

@@ -1,5 +1,7 @@
 #include "rkhs/run/result_store.hpp"
 
+#include "rkhs/run/trial_identity.hpp"
+
 #include <fmt/format.h>
 #include <sqlite3.h>
 
@@ -71,50 +73,7 @@ std::string unescape(std::string_view text) {
   return out;
 }
 
-std::string study_settings(const StudyDefinition& study) {
-  const auto& a = study.adaptive;
-  std::string out = fmt::format(
-      "kind={} L={} periodic={} M={} singular={} mu={} trial_seconds={} matrix_mb={}", study.kind,
-      format_real(study.domain.length), study.domain.periodic, study.evaluation_points,
-      static_cast<int>(study.solver.singular), format_real(study.solver.regularisation),
-      format_real(study.limits.trial_seconds), format_real(study.limits.matrix_megabytes));
-  if (study.kind == "adaptive") {
-    std::vector<double> laps = a.snapshot_laps;
-    out += fmt::format(" v={} laps={} T={} q={} projected={} snapshots=[{}] snapshot_points={} samples={}",
-                       format_real(a.speed), format_real(a.laps), format_real(a.final_time), a.q,
-                       a.projected_road, join_reals(laps), a.snapshot_points, a.samples_per_lap);
-  }
-  return out;
-}
-
 }  // namespace
-
-std::vector<std::string> trial_hashes(const StudyDefinition& study,
-                                      const std::vector<TrialSpec>& trials) {
-  const auto& build = build_info();
-  const std::string common = fmt::format("rkhs-study {} {} | {}", build.version, build.git_commit,
-                                         study_settings(study));
-  std::map<std::string, std::string> data_of_target;  // target label -> data provenance
-  std::vector<std::string> out;
-  out.reserve(trials.size());
-  for (const auto& trial : trials) {
-    const auto label = trial.target.label();
-    auto it = data_of_target.find(label);
-    if (it == data_of_target.end()) {
-      std::string provenance;
-      try {
-        const auto target =
-            target_registry().find(trial.target.name)->factory(trial.target.parameters, study.domain);
-        provenance = target->data_provenance();
-      } catch (const std::exception& e) {
-        provenance = std::string("unavailable: ") + e.what();
-      }
-      it = data_of_target.emplace(label, provenance).first;
-    }
-    out.push_back(sha256_hex(common + " | " + trial.key + " | data=" + it->second));
-  }
-  return out;
-}
 
 StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
                          const RunOptions& options, ResultStore* store, bool fresh,

@@ -1,6 +1,7 @@
 #include "expectation_parser.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,47 +12,10 @@
 #include "rkhs/study/trial_grid.hpp"
 #include "rkhs/core/registry.hpp"
 #include "rkhs/rates/theory.hpp"
+#include "toml_reader.hpp"
 
 namespace rkhs::detail {
 namespace {
-
-// The same message format as study.cpp's Reporter (whose helpers are local to that file).
-[[noreturn]] void fail(const std::string& source, const toml::source_region& where,
-                       std::string_view key, std::string_view message) {
-  std::string out = source;
-  if (where.begin.line > 0) out += fmt::format(":{}:{}", where.begin.line, where.begin.column);
-  out += ": ";
-  if (!key.empty()) out += std::string(key) + ": ";
-  out += message;
-  throw StudyError(out);
-}
-
-std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? std::string(separator) : "") + items[i];
-  return out;
-}
-
-std::string known_list(const std::string& found, const std::vector<std::string>& known) {
-  std::string out = fmt::format("(known: {}", join(known));
-  if (auto guess = closest_name(found, known); !guess.empty())
-    out += fmt::format("; did you mean '{}'?", guess);
-  return out + ")";
-}
-
-std::string show(const toml::node& node) {
-  std::ostringstream out;
-  node.visit([&](auto&& v) { out << v; });
-  return out.str();
-}
-
-std::optional<ParameterValue> scalar(const toml::node& node) {
-  if (auto v = node.as_integer()) return ParameterValue(v->get());
-  if (auto v = node.as_floating_point()) return ParameterValue(v->get());
-  if (auto v = node.as_string()) return ParameterValue(v->get());
-  if (auto v = node.as_boolean()) return ParameterValue(v->get());
-  return std::nullopt;
-}
 
 bool valid_tier_name(const std::string& name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
@@ -105,9 +69,9 @@ class ExpectationReader {
       if (std::find(all.begin(), all.end(), metric) != all.end())
         fail(study_.source, node.source(), key,
              fmt::format("metric '{}' is not measured by this study (study.metrics: {})", metric,
-                         join(study_.metrics)));
+                         fmt::join(study_.metrics, ", ")));
       fail(study_.source, node.source(), key,
-           fmt::format("unknown metric '{}' {}", metric, known_list(metric, study_.metrics)));
+           fmt::format("unknown metric '{}' {}", metric, with_suggestion(metric, study_.metrics)));
     }
     return metric;
   }
@@ -121,7 +85,7 @@ class ExpectationReader {
         fail(study_.source, key.source(), "expect." + name,
              fmt::format("unknown key (an expectation takes {}, and this study's axis columns "
                          "as group selectors: {}{})",
-                         join(reserved_), join(columns_),
+                         fmt::join(reserved_, ", "), fmt::join(columns_, ", "),
                          closest_name(name, allowed).empty()
                              ? std::string()
                              : fmt::format("; did you mean '{}'?", closest_name(name, allowed))));
@@ -132,7 +96,7 @@ class ExpectationReader {
     const auto* node = table.get("metric");
     if (!node)
       fail(study_.source, table.source(), "expect.metric",
-           fmt::format("missing: which metric is expected to behave (one of: {})", join(study_.metrics)));
+           fmt::format("missing: which metric is expected to behave (one of: {})", fmt::join(study_.metrics, ", ")));
     e.metric = metric_at(*node, "expect.metric");
   }
 
@@ -142,7 +106,7 @@ class ExpectationReader {
       if (!node) continue;
       AxisSelector selector{column, {}};
       auto add = [&](const toml::node& item) {
-        auto value = scalar(item);
+        auto value = scalar_value(item);
         if (!value)
           fail(study_.source, item.source(), "expect." + column,
                fmt::format("expected a value or a list of values, found {}", show(item)));
@@ -287,11 +251,11 @@ class ExpectationReader {
         for (const auto& group : groups_)
           if (auto v = axis_values({selector.column}, group).front(); !v.empty()) values.insert(v);
         available.push_back(fmt::format("{}: {}", selector.column,
-                                        join(std::vector<std::string>(values.begin(), values.end()))));
+                                        fmt::join(std::vector<std::string>(values.begin(), values.end()), ", ")));
       }
       fail(study_.source, table.source(), "expect",
            fmt::format("{} selects no group of this study (values in the study: {})",
-                       e.selector_text(), join(available, "; ")));
+                       e.selector_text(), fmt::join(available, "; ")));
     }
     // Each value of a list must select something too: `degree = [1, 5]` where no group has
     // degree 5 is a typo, not a wish.
@@ -314,14 +278,14 @@ class ExpectationReader {
                          single.selector_text(),
                          e.selectors.size() > 1 ? " together with the other selectors" : "",
                          selector.column,
-                         join(std::vector<std::string>(values.begin(), values.end()))));
+                         fmt::join(std::vector<std::string>(values.begin(), values.end()), ", ")));
       }
     }
     if (e.kind != ExpectationKind::theory) return;
     for (const auto* group : selected) {
       const auto kernel = make_kernel(group->kernel.name, group->kernel.parameters, study_.domain);
       std::string why;
-      if (!theory_rate(e.metric, kernel->properties(), 1, &why))
+      if (!theory_rate(e.metric, kernel->properties(), kernel->properties().dimension, &why))
         fail(study_.source, table.get("theory")->source(), "expect.theory",
              fmt::format("kernel {}: {}", group->kernel.label(), why));
     }

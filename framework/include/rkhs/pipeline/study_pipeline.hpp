@@ -34,7 +34,7 @@ struct CompletedRun {
   const StudyDefinition& study;
   const std::vector<TrialSpec>& trials;
   StoredRun stored;                  ///< results in trial order; reused / ran counts
-  std::vector<MetricSeries> rates;   ///< compute_rates of the results
+  std::vector<MetricSeries> rates;   ///< compute_rates of the results (empty: Rates::not_fitted)
   std::size_t failed = 0;            ///< trials whose status is failed
   int threads = 1;                   ///< worker threads of the root process
   double seconds = 0;                ///< wall time of the run
@@ -55,12 +55,16 @@ struct PipelineOutcome {
   std::string store_file;
 };
 
+/// Whether run_study fits rates: for the study's whole grid (study.trials()), not for a subset
+/// of it (a shard), whose results do not cover the grid positions rates are read at.
+enum class Rates { fitted, not_fitted };
+
 /// Runs `trials` of `study` through the store on `executor` with `options` (threads 0: the
 /// executor's default), freezing the registries first. Non-root processes get an empty
 /// outcome once the job is done.
 PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
                           const std::vector<TrialSpec>& trials, RunOptions options,
-                          const StoreOptions& store);
+                          const StoreOptions& store, Rates rates = Rates::fitted);
 
 /// The current UTC time, ISO 8601 ("2026-12-02T01:30:00Z").
 std::string utc_now();

@@ -17,18 +17,12 @@
 #include <vector>
 
 #include "rkhs/run/run.hpp"
+#include "rkhs/run/trial_identity.hpp"  // trial_hashes
 #include "rkhs/study/study.hpp"
 
 struct sqlite3;
 
 namespace rkhs {
-
-/// The content hash of a trial (64 hex digits): its key (every plugin and parameter), the
-/// study-wide settings that change results (kind, domain, evaluation points, solver, limits,
-/// adaptive settings), the data its target reads (SHA-256) and the code version (rkhs-study
-/// version and git commit). One hash per trial, in trial order.
-std::vector<std::string> trial_hashes(const StudyDefinition& study,
-                                      const std::vector<TrialSpec>& trials);
 
 /// A TrialResult as text (round-trip exact: reals are written in their shortest exact form)
 /// and back. Throws std::invalid_argument for text that is not such a record.

@@ -1,0 +1,139 @@
+#include "rkhs/run/trial_identity.hpp"
+
+#include <fmt/format.h>
+
+#include <boost/pfr.hpp>
+#include <map>
+#include <stdexcept>
+#include <type_traits>
+
+#include "rkhs/approx/target.hpp"
+#include "rkhs/core/build_info.hpp"
+#include "rkhs/core/sha256.hpp"
+
+namespace rkhs {
+
+namespace {
+
+template <class T>
+struct is_vector : std::false_type {};
+template <class T, class A>
+struct is_vector<std::vector<T, A>> : std::true_type {};
+
+// Writes `value` canonically to `out`. Returns false for a type it cannot write.
+template <class T>
+bool write_value(const T& value, std::string& out) {
+  if constexpr (std::is_same_v<T, std::string>) {
+    out += '"';
+    for (char c : value) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+    out += '"';
+    return true;
+  } else if constexpr (std::is_same_v<T, bool>) {
+    out += value ? "true" : "false";
+    return true;
+  } else if constexpr (std::is_floating_point_v<T>) {
+    out += format_real(static_cast<double>(value));
+    return true;
+  } else if constexpr (std::is_integral_v<T>) {
+    out += std::to_string(value);
+    return true;
+  } else if constexpr (std::is_enum_v<T>) {
+    out += std::to_string(static_cast<long long>(value));
+    return true;
+  } else if constexpr (std::is_same_v<T, PluginChoice>) {
+    out += value.label();
+    return true;
+  } else if constexpr (is_vector<T>::value) {
+    out += '[';
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      if (i) out += ',';
+      if (!write_value(value[i], out)) return false;
+    }
+    out += ']';
+    return true;
+  } else if constexpr (std::is_aggregate_v<T>) {
+    bool ok = true;
+    out += '{';
+    boost::pfr::for_each_field(value, [&](const auto& field, std::size_t i) {
+      if (i) out += ' ';
+      out += std::to_string(i) + '=';
+      ok = ok && write_value(field, out);
+    });
+    out += '}';
+    return ok;
+  } else {
+    return false;
+  }
+}
+
+}  // namespace
+
+std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
+  return {
+      {&study.name, "name", "a label: renaming a study keeps its results"},
+      {&study.description, "description", "a label"},
+      {&study.source, "source", "where the file was read from, not what it says"},
+      {&study.n_values, "n_values", "each trial's n is in its key"},
+      {&study.kernels, "kernels", "each trial's kernel and its parameters are in its key"},
+      {&study.targets, "targets", "each trial's target is in its key"},
+      {&study.centres, "centres", "each trial's centre placement is in its key"},
+      {&study.plants, "plants", "each trial's plant is in its key"},
+      {&study.laws, "laws", "each trial's learning law is in its key"},
+      {&study.integrators, "integrators", "each trial's integrator is in its key"},
+      {&study.metrics, "metrics",
+       "which metrics are written and fitted; a trial measures and stores all of its kind's"},
+      {&study.abscissa, "abscissa", "what rates are fitted against, after the trials"},
+      {&study.expectations, "expectations", "judged after the trials"},
+      {&study.warnings, "warnings", "messages about the file"},
+  };
+}
+
+std::string study_settings_text(const StudyDefinition& study) {
+  const auto excluded = not_in_identity(study);
+  std::string out;
+  boost::pfr::for_each_field(study, [&](const auto& field, std::size_t i) {
+    for (const auto& e : excluded)
+      if (e.address == static_cast<const void*>(&field)) return;
+    if (!out.empty()) out += ' ';
+    out += std::to_string(i) + '=';
+    if (!write_value(field, out))
+      throw std::logic_error(fmt::format(
+          "trial identity: field {} of StudyDefinition has a type the identity cannot write; "
+          "teach write_value() in trial_identity.cpp, or list it in not_in_identity() with why "
+          "it cannot change a result",
+          i));
+  });
+  return out;
+}
+
+std::vector<std::string> trial_hashes(const StudyDefinition& study,
+                                      const std::vector<TrialSpec>& trials) {
+  const auto& build = build_info();
+  const std::string common = fmt::format("rkhs-study {} {} | {}", build.version, build.git_commit,
+                                         study_settings_text(study));
+  std::map<std::string, std::string> data_of_target;  // target label -> data provenance
+  std::vector<std::string> out;
+  out.reserve(trials.size());
+  for (const auto& trial : trials) {
+    const auto label = trial.target.label();
+    auto it = data_of_target.find(label);
+    if (it == data_of_target.end()) {
+      std::string provenance;
+      try {
+        const auto target = target_registry().find(trial.target.name)->factory(
+            trial.target.parameters, study.domain);
+        provenance = target->data_provenance();
+      } catch (const std::exception& e) {
+        provenance = std::string("unavailable: ") + e.what();
+      }
+      it = data_of_target.emplace(label, provenance).first;
+    }
+    out.push_back(sha256_hex(common + " | " + trial.key + " | data=" + it->second));
+  }
+  return out;
+}
+
+}  // namespace rkhs

@@ -1,0 +1,494 @@
+// Study files read into a StudyDefinition (docs/study-files.md): every section, its keys and
+// values checked, plugin names and parameters resolved against the registries.
+#include "rkhs/study/study.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/adaptive/lyapunov.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/plugin/plugin_loader.hpp"
+#include "rkhs/core/random.hpp"
+#include "rkhs/approx/target.hpp"
+#include "expectation_parser.hpp"
+#include "toml_reader.hpp"
+
+namespace rkhs {
+
+using namespace detail;
+
+namespace {
+
+// n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }
+std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node) {
+  std::vector<std::pair<std::int64_t, toml::source_region>> values;
+  if (const auto* array = node.as_array()) {
+    for (const auto& item : *array) {
+      if (!item.is_integer())
+        report.fail(item.source(), "grid.n",
+                    fmt::format("expected integers, found {} ({})", describe(item), show(item)));
+      values.emplace_back(item.as_integer()->get(), item.source());
+    }
+  } else if (const auto* range = node.as_table()) {
+    check_keys(report, *range, "grid.n.", {"from", "to", "step", "factor"});
+    auto integer = [&](std::string_view key) -> std::optional<std::int64_t> {
+      const auto* v = range->get(key);
+      if (!v) return std::nullopt;
+      if (!v->is_integer())
+        report.fail(v->source(), fmt::format("grid.n.{}", key),
+                    fmt::format("expected an integer, found {} ({})", describe(*v), show(*v)));
+      return v->as_integer()->get();
+    };
+    const auto from = integer("from"), to = integer("to"), step = integer("step"),
+               factor = integer("factor");
+    if (!from || !to)
+      report.fail(range->source(), "grid.n", "a range needs 'from' and 'to'");
+    if (step.has_value() == factor.has_value())
+      report.fail(range->source(), "grid.n", "a range needs exactly one of 'step' or 'factor'");
+    if (step && *step < 1) report.fail(range->get("step")->source(), "grid.n.step",
+                                       fmt::format("must be >= 1, found {}", *step));
+    if (factor && *factor < 2) report.fail(range->get("factor")->source(), "grid.n.factor",
+                                           fmt::format("must be >= 2, found {}", *factor));
+    if (*to < *from)
+      report.fail(range->source(), "grid.n", fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
+    for (std::int64_t v = *from; v <= *to && v > 0; v = step ? v + *step : v * *factor) {
+      values.emplace_back(v, range->source());
+      if (values.size() > 100000) report.fail(range->source(), "grid.n", "more than 100000 values");
+    }
+  } else {
+    report.fail(node.source(), "grid.n",
+                fmt::format("expected an array of integers or a range table "
+                            "{{ from, to, step | factor }}, found {} ({})",
+                            describe(node), show(node)));
+  }
+  if (values.empty()) report.fail(node.source(), "grid.n", "no values");
+  std::vector<std::size_t> n;
+  for (const auto& [v, where] : values) {
+    if (v < 1) report.fail(where, "grid.n", fmt::format("must be >= 1, found {}", v));
+    n.push_back(static_cast<std::size_t>(v));
+  }
+  std::sort(n.begin(), n.end());
+  if (std::adjacent_find(n.begin(), n.end()) != n.end())
+    report.fail(node.source(), "grid.n", "values must be distinct");
+  return n;
+}
+
+// One [[kernel]] / [[target]] / [[centres]] entry: a name and parameters, each a value or an
+// array of values (an axis). Returns every combination, the first parameter varying slowest.
+template <class RegistryType>
+std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml::table& entry,
+                                             std::string_view section,
+                                             const RegistryType& registry) {
+  const std::string prefix = std::string(section) + ".";
+  const std::string name = get_string(report, entry, "name", prefix, std::nullopt);
+  const auto* plugin = registry.find(name);
+  if (!plugin)
+    report.fail(entry.get("name")->source(), prefix + "name",
+                fmt::format("unknown {} '{}' {}", registry.kind(), name,
+                            with_suggestion(name, registry.names())));
+  const auto& specs = plugin->info.parameters;
+  std::vector<std::string> known;
+  for (const auto& spec : specs) known.push_back(spec.name);
+
+  // Axis values per parameter, in declaration order.
+  struct Axis {
+    std::string name;
+    std::vector<std::pair<ParameterValue, toml::source_region>> values;
+  };
+  std::vector<Axis> axes;
+  std::vector<std::string> tiers;
+  for (auto&& [key, node] : entry) {
+    const std::string parameter(key.str());
+    if (parameter == "name") continue;
+    if (parameter == "tier") {  // the tiers this entry belongs to (docs/verification.md)
+      tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
+      continue;
+    }
+    if (std::find(known.begin(), known.end(), parameter) == known.end())
+      report.fail(key.source(), prefix + parameter,
+                  fmt::format("unknown parameter of {} '{}' {}", registry.kind(), name,
+                              known.empty() ? std::string("(it has none)")
+                                            : with_suggestion(parameter, known)));
+    Axis axis{parameter, {}};
+    if (const auto* array = node.as_array()) {
+      if (array->empty()) report.fail(node.source(), prefix + parameter, "empty list of values");
+      for (const auto& item : *array) {
+        auto value = scalar_value(item);
+        if (!value)
+          report.fail(item.source(), prefix + parameter,
+                      fmt::format("expected a value, found {}", describe(item)));
+        axis.values.emplace_back(std::move(*value), item.source());
+      }
+    } else {
+      auto value = scalar_value(node);
+      if (!value)
+        report.fail(node.source(), prefix + parameter,
+                    fmt::format("expected a value or a list of values, found {}", describe(node)));
+      axis.values.emplace_back(std::move(*value), node.source());
+    }
+    axes.push_back(std::move(axis));
+  }
+  std::sort(axes.begin(), axes.end(), [&](const Axis& a, const Axis& b) {
+    return std::find(known.begin(), known.end(), a.name) <
+           std::find(known.begin(), known.end(), b.name);
+  });
+
+  std::vector<PluginChoice> out;
+  std::vector<std::size_t> at(axes.size(), 0);
+  while (true) {
+    std::map<std::string, ParameterValue> given;
+    for (std::size_t a = 0; a < axes.size(); ++a) given[axes[a].name] = axes[a].values[at[a]].first;
+    try {
+      out.push_back({name, ParameterSet::resolve(specs, given), tiers});
+    } catch (const ParameterError& e) {
+      toml::source_region where = entry.source();
+      for (std::size_t a = 0; a < axes.size(); ++a)
+        if (axes[a].name == e.parameter()) where = axes[a].values[at[a]].second;
+      report.fail(where, prefix + e.parameter(), e.what());
+    }
+    std::size_t a = axes.size();
+    while (a > 0 && ++at[a - 1] == axes[a - 1].values.size()) at[--a] = 0;
+    if (a == 0) break;
+  }
+  return out;
+}
+
+template <class RegistryType>
+std::vector<PluginChoice> parse_plugins(const Reporter& report, const toml::table& root,
+                                        std::string_view section, const RegistryType& registry,
+                                        std::optional<std::string> default_name) {
+  const auto* node = root.get(section);
+  if (!node) {
+    if (!default_name)
+      report.fail({}, section,
+                  fmt::format("missing: add at least one [[{}]] table with a name (known: {})",
+                              section, fmt::join(registry.names(), ", ")));
+    const auto& specs = registry.find(*default_name)->info.parameters;
+    return {PluginChoice{*default_name, ParameterSet::resolve(specs, {}), {}}};
+  }
+  std::vector<PluginChoice> out;
+  auto add_entry = [&](const toml::node& item) {
+    if (!item.is_table())
+      report.fail(item.source(), section,
+                  fmt::format("expected a table ([[{}]]), found {}", section, describe(item)));
+    auto choices = parse_plugin_entry(report, *item.as_table(), section, registry);
+    out.insert(out.end(), choices.begin(), choices.end());
+  };
+  if (const auto* array = node->as_array()) {
+    for (const auto& item : *array) add_entry(item);
+  } else {
+    add_entry(*node);
+  }
+  std::set<std::string> seen;
+  for (const auto& choice : out)
+    if (!seen.insert(choice.label()).second)
+      report.fail(node->source(), section, fmt::format("'{}' is listed twice", choice.label()));
+  return out;
+}
+
+AdaptiveSettings parse_adaptive(const Reporter& report, const toml::table& root) {
+  AdaptiveSettings settings;
+  const auto* table = optional_table(report, root, "adaptive");
+  if (!table)
+    report.fail({}, "adaptive", "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
+  check_keys(report, *table, "adaptive.",
+             {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
+              "samples_per_lap"});
+  settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
+  if (table->contains("laps") && table->contains("final_time"))
+    report.fail(table->source(), "adaptive", "give 'laps' or 'final_time', not both");
+  settings.laps = get_number(report, *table, "laps", "adaptive.", 10, 0);
+  settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, -1e-300);
+  settings.q = get_string(report, *table, "q", "adaptive.", std::string("identity"));
+  try {
+    parse_matrix(settings.q, 1);
+  } catch (const std::exception& e) {
+    report.fail(table->get("q")->source(), "adaptive.q", e.what());
+  }
+  const auto road = get_string(report, *table, "road", "adaptive.", std::string("target"));
+  if (road != "target" && road != "projection")
+    report.fail(table->get("road")->source(), "adaptive.road",
+                fmt::format("found \"{}\", expected \"target\" (f) or \"projection\" (Pi_n f, "
+                            "a road in H_n)", road));
+  settings.projected_road = road == "projection";
+  if (const auto* laps = table->get("snapshot_laps")) {
+    const auto* array = laps->as_array();
+    if (!array)
+      report.fail(laps->source(), "adaptive.snapshot_laps",
+                  fmt::format("expected an array of lap numbers, found {}", describe(*laps)));
+    for (const auto& item : *array) {
+      if (!item.is_number() || item.value<double>().value() < 0)
+        report.fail(item.source(), "adaptive.snapshot_laps",
+                    fmt::format("expected a lap number >= 0, found {}", show(item)));
+      settings.snapshot_laps.push_back(item.value<double>().value());
+    }
+  }
+  auto count = [&](std::string_view key, std::size_t fallback) {
+    const double value = get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
+    if (value != std::floor(value) || value > 1e7)
+      report.fail(table->get(key)->source(), fmt::format("adaptive.{}", key),
+                  fmt::format("must be a whole number >= 1, found {}", format_real(value)));
+    return static_cast<std::size_t>(value);
+  };
+  settings.snapshot_points = count("snapshot_points", 0);
+  settings.samples_per_lap = count("samples_per_lap", settings.samples_per_lap);
+  return settings;
+}
+
+// `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
+// before any plugin name in the file is looked up.
+void load_study_plugins(const Reporter& report, const toml::table& root) {
+  const auto* node = root.get("plugins");
+  if (!node) return;
+  const auto* array = node->as_array();
+  if (!array)
+    report.fail(node->source(), "plugins",
+                fmt::format("expected an array of plugin files, found {}", describe(*node)));
+  const auto directory = std::filesystem::path(report.source()).parent_path();
+  for (const auto& item : *array) {
+    if (!item.is_string())
+      report.fail(item.source(), "plugins",
+                  fmt::format("expected a plugin file name, found {}", describe(item)));
+    std::filesystem::path file(item.as_string()->get());
+    if (file.is_relative()) file = directory / file;
+    try {
+      load_plugin(file);
+    } catch (const PluginError& e) {
+      report.fail(item.source(), "plugins", e.what());
+    }
+  }
+}
+
+bool valid_study_name(const std::string& name) {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+  }) && name.front() != '.';
+}
+
+}  // namespace
+
+namespace {
+
+// The metrics measured on the evaluation grid s_m = m L / M: sups and L2 norms over the domain.
+bool measured_on_grid(std::string_view metric) {
+  static constexpr std::string_view grid_metrics[] = {
+      "power_function_sup",   "power_function_floor",  "l2_error",          "sup_error",
+      "error_floor",          "interpolant_l2_error",  "interpolant_sup_error",
+      "gap_to_projection"};
+  return std::find(std::begin(grid_metrics), std::end(grid_metrics), metric) !=
+         std::end(grid_metrics);
+}
+
+// Can the evaluation grid measure what the grid metrics mean? Sups and L2 norms over the domain
+// are taken on M points; with M <= n the grid is no finer than the centres (uniform centres with
+// n a multiple of M are all on it), so it sees the power function and the error at or next to
+// the centres, where they vanish, and reports round-off as if it were the result: refused. With
+// fewer than 4 points per centre spacing the sups may miss the peaks between centres: warned.
+void check_evaluation_grid(const Reporter& report, const toml::table& header,
+                           StudyDefinition& study) {
+  std::vector<std::string> on_grid;
+  for (const auto& metric : study.metrics)
+    if (measured_on_grid(metric)) on_grid.push_back(metric);
+  if (on_grid.empty() || study.n_values.empty()) return;
+  const std::size_t largest_n = study.n_values.back();
+  const std::size_t points = study.evaluation_points;
+  const auto* node = header.get("evaluation_points");
+  const auto where = node ? node->source() : header.source();
+  const std::string given = node ? "" : " (the default)";
+  if (points <= largest_n)
+    report.fail(
+        where, "study.evaluation_points",
+        fmt::format("{} evaluation points{} for up to n = {} centres: the grid is no finer than "
+                    "the centres, so {} would be measured at or next to the centres, where they "
+                    "vanish (round-off), not over the domain; use evaluation_points >= {} (4 per "
+                    "centre spacing) or leave these metrics out of study.metrics",
+                    points, given, largest_n, fmt::join(on_grid, ", "), 4 * largest_n));
+  if (points < 4 * largest_n)
+    study.warnings.push_back(report.locate(
+        where, "study.evaluation_points",
+        fmt::format("warning: {} evaluation points{} give fewer than 4 per centre spacing for "
+                    "n > {}: {} are taken on the grid and may miss the peaks between centres; "
+                    "evaluation_points >= {} avoids it",
+                    points, given, points / 4, fmt::join(on_grid, ", "), 4 * largest_n)));
+}
+
+}  // namespace
+
+StudyDefinition parse_study(std::string_view text, const std::string& source_name) {
+  const Reporter report(source_name);
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& error) {
+    report.fail(error.source(), "", fmt::format("invalid TOML: {}", error.description()));
+  }
+  check_keys(report, root, "",
+             {"study", "domain", "grid", "kernel", "target", "centres", "solver", "limits",
+              "adaptive", "plant", "law", "integrator", "plugins", "expect"});
+  load_study_plugins(report, root);
+
+  StudyDefinition study;
+  study.source = source_name;
+  const auto* header = optional_table(report, root, "study");
+  if (!header) report.fail({}, "study", "missing [study] table (with at least name = \"...\")");
+  check_keys(report, *header, "study.",
+             {"name", "description", "kind", "metrics", "abscissa", "evaluation_points"});
+  study.name = get_string(report, *header, "name", "study.", std::nullopt);
+  if (!valid_study_name(study.name))
+    report.fail(header->get("name")->source(), "study.name",
+                fmt::format("'{}' is not a valid name (letters, digits, '_', '-', '.'; it names "
+                            "the output folder)", study.name));
+  study.description = get_string(report, *header, "description", "study.", std::string{});
+  study.kind = get_string(report, *header, "kind", "study.", std::string("approximation"));
+  if (study.kind != "approximation" && study.kind != "adaptive")
+    report.fail(header->get("kind")->source(), "study.kind",
+                fmt::format("unknown study kind '{}' (known: approximation, adaptive)", study.kind));
+  if (study.kind != "adaptive")
+    for (const char* section : {"adaptive", "plant", "law", "integrator"})
+      if (const auto* node = root.get(section))
+        report.fail(node->source(), section,
+                    "only for adaptive studies: add kind = \"adaptive\" to [study]");
+  const auto abscissa = get_string(report, *header, "abscissa", "study.", std::string("n"));
+  if (abscissa == "n") study.abscissa = Abscissa::n;
+  else if (abscissa == "h" || abscissa == "fill_distance") study.abscissa = Abscissa::fill_distance;
+  else
+    report.fail(header->get("abscissa")->source(), "study.abscissa",
+                fmt::format("found \"{}\", expected \"n\" or \"h\" (fill distance)", abscissa));
+  const double points = get_number(report, *header, "evaluation_points", "study.", 4096, 1);
+  if (points != std::floor(points) || points > 1e8)
+    report.fail(header->get("evaluation_points")->source(), "study.evaluation_points",
+                fmt::format("must be an integer >= 2, found {}", format_real(points)));
+  study.evaluation_points = static_cast<std::size_t>(points);
+
+  const auto& all_metrics = metric_names(study.kind);
+  if (const auto* metrics = header->get("metrics")) {
+    const auto* array = metrics->as_array();
+    if (!array || array->empty())
+      report.fail(metrics->source(), "study.metrics",
+                  fmt::format("expected a non-empty array of metric names (known: {})",
+                              fmt::join(all_metrics, ", ")));
+    std::set<std::string> chosen;
+    for (const auto& item : *array) {
+      if (!item.is_string())
+        report.fail(item.source(), "study.metrics",
+                    fmt::format("expected a metric name, found {}", describe(item)));
+      const std::string metric = item.as_string()->get();
+      if (std::find(all_metrics.begin(), all_metrics.end(), metric) == all_metrics.end())
+        report.fail(item.source(), "study.metrics",
+                    fmt::format("unknown metric '{}' {}", metric, with_suggestion(metric, all_metrics)));
+      chosen.insert(metric);
+    }
+    for (const auto& metric : all_metrics)  // output order is the canonical order
+      if (chosen.contains(metric)) study.metrics.push_back(metric);
+  } else {
+    study.metrics = all_metrics;
+  }
+
+  const auto* domain = optional_table(report, root, "domain");
+  if (!domain) report.fail({}, "domain", "missing [domain] table (length = ... or radius = ...)");
+  check_keys(report, *domain, "domain.", {"length", "radius", "periodic"});
+  if (domain->contains("length") == domain->contains("radius"))
+    report.fail(domain->source(), "domain",
+                "give exactly one of 'length' (metres) or 'radius' (a closed track of length "
+                "2 pi radius)");
+  study.domain.length = domain->contains("length")
+                            ? get_number(report, *domain, "length", "domain.", 0, 0)
+                            : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
+  study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
+
+  const auto* grid = optional_table(report, root, "grid");
+  if (!grid || !grid->contains("n"))
+    report.fail(grid ? grid->source() : toml::source_region{}, "grid.n",
+                "missing: the number of centres, e.g. n = { from = 10, to = 100, step = 10 }");
+  check_keys(report, *grid, "grid.", {"n"});
+  study.n_values = parse_n(report, *grid->get("n"));
+
+  study.kernels = parse_plugins(report, root, "kernel", kernel_registry(), std::nullopt);
+  study.targets = parse_plugins(report, root, "target", target_registry(), std::string("sine"));
+  study.centres = parse_plugins(report, root, "centres", centre_registry(), std::string("uniform"));
+  if (study.kind == "adaptive") {
+    study.plants = parse_plugins(report, root, "plant", plant_registry(), std::string("quarter_car"));
+    study.laws = parse_plugins(report, root, "law", law_registry(), std::string("rkhs"));
+    study.integrators =
+        parse_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4"));
+    study.adaptive = parse_adaptive(report, root);
+    if (study.adaptive.snapshot_points == 0) study.adaptive.snapshot_points = study.evaluation_points;
+  }
+
+  if (const auto* solver = optional_table(report, root, "solver")) {
+    check_keys(report, *solver, "solver.", {"singular", "regularisation"});
+    const auto policy = get_string(report, *solver, "singular", "solver.", std::string("pseudo_inverse"));
+    if (policy == "pseudo_inverse") study.solver.singular = SingularPolicy::pseudo_inverse;
+    else if (policy == "regularised") study.solver.singular = SingularPolicy::regularised;
+    else if (policy == "fail") study.solver.singular = SingularPolicy::fail;
+    else
+      report.fail(solver->get("singular")->source(), "solver.singular",
+                  fmt::format("found \"{}\", expected \"pseudo_inverse\", \"regularised\" or \"fail\"",
+                              policy));
+    study.solver.regularisation = get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
+  }
+  if (const auto* limits = optional_table(report, root, "limits")) {
+    check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes"});
+    study.limits.trial_seconds = get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
+    study.limits.matrix_megabytes =
+        get_number(report, *limits, "matrix_megabytes", "limits.", study.limits.matrix_megabytes, 0);
+  }
+
+  // Build every kernel and target once: a combination that is invalid only for this domain
+  // (e.g. a non-periodic sine on a closed track) is an input error, not a failed trial.
+  auto check_instances = [&](const std::vector<PluginChoice>& choices, std::string_view section,
+                             auto&& make) {
+    for (const auto& choice : choices) {
+      try {
+        make(choice);
+      } catch (const std::exception& e) {
+        report.fail(root.get(section) ? root.get(section)->source() : toml::source_region{},
+                    section, fmt::format("{}: {}", choice.label(), e.what()));
+      }
+    }
+  };
+  check_instances(study.kernels, "kernel", [&](const PluginChoice& c) {
+    kernel_registry().find(c.name)->factory(c.parameters, study.domain);
+  });
+  check_instances(study.targets, "target", [&](const PluginChoice& c) {
+    const auto target = target_registry().find(c.name)->factory(c.parameters, study.domain);
+    for (const auto& note : target->notes())
+      study.warnings.push_back(report.locate(
+          root.get("target") ? root.get("target")->source() : toml::source_region{}, "target",
+          "note: " + note));
+  });
+  check_instances(study.plants, "plant", [&](const PluginChoice& c) {
+    const auto plant = plant_registry().find(c.name)->factory(c.parameters);
+    const auto d = plant->A().rows();
+    const auto Q = parse_matrix(study.adaptive.q, d);
+    if (Q.rows() != d || Q.cols() != d)
+      throw std::invalid_argument(fmt::format("adaptive.q is {} x {}, this plant needs {} x {}",
+                                              Q.rows(), Q.cols(), d, d));
+    solve_lyapunov(plant->A(), Q);
+  });
+  check_evaluation_grid(report, *header, study);
+  study.expectations = detail::parse_expectations(root, study);
+  return study;
+}
+
+StudyDefinition load_study(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw StudyError(fmt::format("{}: cannot open the study file", file.string()));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_study(text.str(), file.string());
+}
+
+}  // namespace rkhs

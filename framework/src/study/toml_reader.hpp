@@ -1,0 +1,82 @@
+#pragma once
+// The one reader of study files' TOML, shared by the study parser (study_file.cpp) and the
+// [[expect]] parser (expectation_parser.cpp). Internal to the framework library (toml++ is a
+// private dependency). Every error is a StudyError "file:line:column: key: message", and an
+// unknown name comes with the known ones and the closest of them.
+
+#include <fmt/format.h>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <toml++/toml.h>
+#include <vector>
+
+#include "rkhs/core/parameters.hpp"
+#include "rkhs/study/study.hpp"
+
+namespace rkhs::detail {
+
+// Raises StudyError at a node's position.
+class Reporter {
+ public:
+  explicit Reporter(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const toml::source_region& where, std::string_view key,
+                         std::string_view message) const {
+    throw StudyError(locate(where, key, message));
+  }
+  const std::string& source() const { return source_; }
+  /// The same position and form as fail(), for a warning.
+  std::string locate(const toml::source_region& where, std::string_view key,
+                     std::string_view message) const {
+    std::string out = source_;
+    if (where.begin.line > 0) out += fmt::format(":{}:{}", where.begin.line, where.begin.column);
+    out += ": ";
+    if (!key.empty()) out += std::string(key) + ": ";
+    return out + std::string(message);
+  }
+
+ private:
+  std::string source_;
+};
+
+/// StudyError at `where` in `source` (the form of Reporter::fail).
+[[noreturn]] void fail(const std::string& source, const toml::source_region& where,
+                       std::string_view key, std::string_view message);
+
+/// "(known: a, b, c; did you mean 'b'?)" for a name `found` that is not among `known`.
+std::string with_suggestion(const std::string& found, const std::vector<std::string>& known);
+
+/// "a string", "an integer", "a number", "a boolean", "an array", "a table", "a date or time".
+std::string_view describe(const toml::node& node);
+
+/// The node as TOML text, for "found ..." in messages.
+std::string show(const toml::node& node);
+
+/// Fails at the first key of `table` not in `allowed` ("unknown key", with a suggestion);
+/// `prefix` ("adaptive.") qualifies the key in the message.
+void check_keys(const Reporter& report, const toml::table& table, std::string_view prefix,
+                const std::vector<std::string>& allowed);
+
+/// The table `root[key]`, nullptr when absent; fails when it is not a table.
+const toml::table* optional_table(const Reporter& report, const toml::table& root,
+                                  std::string_view key);
+
+/// `table[key]` as a string; `fallback` when absent (fails when absent and no fallback, or when
+/// not a string).
+std::string get_string(const Reporter& report, const toml::table& table, std::string_view key,
+                       std::string_view prefix, std::optional<std::string> fallback);
+
+/// `table[key]` as a finite number > `min_exclusive`; `fallback` when absent.
+double get_number(const Reporter& report, const toml::table& table, std::string_view key,
+                  std::string_view prefix, double fallback, double min_exclusive);
+
+/// `table[key]` as a boolean; `fallback` when absent.
+bool get_bool(const Reporter& report, const toml::table& table, std::string_view key,
+              std::string_view prefix, bool fallback);
+
+/// An integer, number, string or boolean node as a parameter value; std::nullopt otherwise.
+std::optional<ParameterValue> scalar_value(const toml::node& node);
+
+}  // namespace rkhs::detail

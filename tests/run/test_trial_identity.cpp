@@ -1,0 +1,152 @@
+// Trial identity (rkhs/run/trial_identity.hpp): every field of the study definition, changed in
+// turn, changes the identity unless it is one of the fields declared unable to change a result,
+// which must then leave it unchanged.
+#include <boost/pfr.hpp>
+#include <cmath>
+#include <catch2/catch.hpp>
+#include <set>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "rkhs/run/run.hpp"
+#include "rkhs/run/trial_identity.hpp"
+
+namespace {
+
+using namespace rkhs;
+
+template <class T>
+struct is_vector : std::false_type {};
+template <class T, class A>
+struct is_vector<std::vector<T, A>> : std::true_type {};
+
+// A different value of the same type.
+template <class T>
+void perturb(T& value) {
+  if constexpr (std::is_same_v<T, std::string>) {
+    value += "x";
+  } else if constexpr (std::is_same_v<T, bool>) {
+    value = !value;
+  } else if constexpr (std::is_floating_point_v<T>) {
+    value = value * 2 + 1;
+  } else if constexpr (std::is_integral_v<T>) {
+    value = value + 1;
+  } else if constexpr (std::is_enum_v<T>) {
+    value = static_cast<T>(static_cast<std::underlying_type_t<T>>(value) + 1);
+  } else if constexpr (is_vector<T>::value) {
+    value.emplace_back();
+  } else {
+    static_assert(std::is_same_v<T, PluginChoice>, "teach perturb() this field type");
+    value.name += "x";
+  }
+}
+
+template <class T>
+constexpr bool is_leaf = std::is_same_v<T, std::string> || std::is_arithmetic_v<T> ||
+                         std::is_enum_v<T> || is_vector<T>::value ||
+                         std::is_same_v<T, PluginChoice> || !std::is_aggregate_v<T>;
+
+// The metrics of a result, bit for bit (NaN equal to NaN).
+bool same_metrics(const TrialResult& a, const TrialResult& b) {
+  if (a.ok != b.ok || a.metrics.size() != b.metrics.size()) return false;
+  for (std::size_t i = 0; i < a.metrics.size(); ++i)
+    if (!(a.metrics[i] == b.metrics[i] || (std::isnan(a.metrics[i]) && std::isnan(b.metrics[i]))))
+      return false;
+  return true;
+}
+
+// Calls check(path) once per leaf of `value` (nested aggregates are walked field by field),
+// with that leaf changed; the leaf is restored afterwards.
+template <class T, class Check>
+void each_leaf_changed(T& value, const std::string& path, const Check& check) {
+  if constexpr (is_leaf<T>) {
+    const T saved = value;
+    perturb(value);
+    check(path);
+    value = saved;
+  } else {
+    boost::pfr::for_each_field(value, [&](auto& field, std::size_t i) {
+      each_leaf_changed(field, path + "." + std::to_string(i), check);
+    });
+  }
+}
+
+const char* adaptive_study = R"(
+[study]
+name = "identity"
+kind = "adaptive"
+evaluation_points = 64
+[domain]
+radius = 1.0
+[grid]
+n = [4, 6]
+[[kernel]]
+name = "gaussian"
+[[target]]
+name = "sine"
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "gradient"
+[[integrator]]
+name = "rosenbrock4"
+[adaptive]
+speed = 0.5
+laps = 1
+snapshot_laps = [1]
+)";
+
+}  // namespace
+
+TEST_CASE("every study setting that can change a result changes the trial identity",
+          "[store][identity]") {
+  const auto study = parse_study(adaptive_study, "identity.toml");
+  const auto trials = study.trials();
+  const auto base_text = study_settings_text(study);
+  const auto base_hashes = trial_hashes(study, trials);
+  const auto base_result = run_trial(study, trials.front(), {});
+  REQUIRE(base_result.ok);
+
+  auto changed = study;
+  const auto excluded = not_in_identity(changed);
+  std::set<std::string> excluded_seen;
+  std::size_t included_leaves = 0;
+  boost::pfr::for_each_field(changed, [&](auto& field, std::size_t i) {
+    const ExcludedField* exclusion = nullptr;
+    for (const auto& e : excluded)
+      if (e.address == static_cast<const void*>(&field)) exclusion = &e;
+    each_leaf_changed(field, std::to_string(i), [&](const std::string& path) {
+      const auto text = study_settings_text(changed);
+      if (exclusion) {
+        INFO("StudyDefinition field " << exclusion->name << " (" << path << "): "
+                                      << exclusion->reason);
+        CHECK(text == base_text);
+        // The claim that it cannot change a result, checked: the trial computes the same.
+        CHECK(same_metrics(run_trial(changed, trials.front(), {}), base_result));
+        excluded_seen.insert(exclusion->name);
+      } else {
+        INFO("StudyDefinition field " << path << " changed, identity text: " << text);
+        CHECK(text != base_text);
+        CHECK(trial_hashes(changed, trials) != base_hashes);
+        ++included_leaves;
+      }
+    });
+  });
+  // Every exclusion names a field of the study definition (none is stale).
+  CHECK(excluded_seen.size() == excluded.size());
+  // kind, domain (2), evaluation points, solver (2), limits (2), adaptive (8) at least.
+  CHECK(included_leaves >= 16);
+}
+
+TEST_CASE("the trial identity is the same for the same study and differs between trials",
+          "[store][identity]") {
+  const auto a = parse_study(adaptive_study, "identity.toml");
+  const auto b = parse_study(adaptive_study, "elsewhere/renamed.toml");
+  const auto ha = trial_hashes(a, a.trials());
+  CHECK(ha == trial_hashes(b, b.trials()));  // the source file is not part of it
+  REQUIRE(ha.size() == 2);
+  CHECK(ha[0] != ha[1]);  // n is in the key
+}
