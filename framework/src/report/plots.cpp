@@ -106,7 +106,8 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
     try {
       const auto& trial = run.trials[series.trials.front()];
       const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, run.study.domain);
-      const auto theory = theory_rate(metric, kernel->properties(), 1);
+      const int dimension = kernel->properties().dimension;
+      const auto theory = theory_rate(metric, kernel->properties(), dimension);
       std::size_t first = series.trials.size();
       for (std::size_t k = 0; k < series.trials.size(); ++k)
         if (!series.flagged[k] && std::isfinite(series.values[k]) && series.values[k] > 0) {
@@ -114,7 +115,8 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
           break;
         }
       if (theory && theory->model == RateModel::power_law && first < series.trials.size() && in_n == (run.study.abscissa == Abscissa::n)) {
-        const double slope = run.study.abscissa == Abscissa::n ? -theory->h_exponent : theory->h_exponent;
+        const double slope =
+            run.study.abscissa == Abscissa::n ? -theory->h_exponent / dimension : theory->h_exponent;
         data += fmt::format("$theory{} << EOD\n", block);
         for (std::size_t k = first; k < series.trials.size(); ++k)
           data += fmt::format("{} {}\n", format_real(x[k]),

@@ -78,7 +78,9 @@ ContractCheck rate_check(const KernelRegistry::Entry& entry, const KernelPropert
                          const Domain& domain) {
   ContractCheck check{"power-function rate", true, false, ""};
   if (props.sobolev_order) {
-    const double expected = -(*props.sobolev_order - 0.5);
+    // sup P ~ h^(tau - d/2) and h ~ n^-1/d.
+    const double d = props.dimension;
+    const double expected = -(*props.sobolev_order - 0.5 * d) / d;
     auto decay = measure_decay(entry, domain, {16, 32, 64, 128, 256, 512, 1024});
     // The finest four points: the asymptotic regime.
     if (decay.n.size() > 4) {

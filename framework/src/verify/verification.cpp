@@ -17,7 +17,6 @@ namespace rkhs {
 namespace {
 
 constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
-constexpr int dimension = 1;  // rkhs-study's domains are tracks and intervals
 // Quasi-uniformity, as far as a finite study can tell: the fill distance decays like n^-1/d and
 // the mesh ratio h / q neither grows nor shrinks, both within this slope.
 constexpr double quasi_uniform_slack = 0.1;
@@ -123,7 +122,8 @@ std::string exclusions(const MetricSeries& series, const ModelAnalysis& analysis
 
 // Whether the centres of a group are quasi-uniform, judged from the trials' fill and separation
 // distances: the sentence for the "expected" line, and whether the theory can be converted.
-std::pair<bool, std::string> quasi_uniformity(const StudyDefinition& study,
+// `dimension`: d of the kernel's domain (KernelProperties::dimension).
+std::pair<bool, std::string> quasi_uniformity(int dimension, const StudyDefinition& study,
                                               const std::vector<TrialSpec>& trials,
                                               const std::vector<TrialResult>& results,
                                               const MetricSeries& series) {
@@ -252,6 +252,7 @@ class Verifier {
     const auto& trial = trials_[series.trials.front()];
     const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study_.domain);
     std::string why;
+    const int dimension = kernel->properties().dimension;
     const auto theory = theory_rate(e.metric, kernel->properties(), dimension, &why);
     if (!theory) {  // the parser rejects this; kept for studies built in code
       o.verdict = Verdict::inconclusive;
@@ -288,7 +289,8 @@ class Verifier {
     const auto interval = theory_interval(*theory, study_.abscissa, dimension, e.tolerance, &slope);
     o.accepted_low = interval.low;
     o.accepted_high = interval.high;
-    const auto [uniform, uniformity] = quasi_uniformity(study_, trials_, results_, series);
+    const auto [uniform, uniformity] =
+        quasi_uniformity(dimension, study_, trials_, results_, series);
     const std::string conversion =
         study_.abscissa == Abscissa::n
             ? fmt::format("slope {} against ln n for quasi-uniform centres (h ~ n^-1/d; measured: {})",

@@ -31,13 +31,17 @@ namespace rkhs {
 /// What approximation theory needs to know about a kernel instance.
 struct KernelProperties {
   bool positive_definite = true;  ///< strictly positive definite on distinct points
-  /// Native space equivalent to the Sobolev space H^tau(Omega) (d = 1): tau. Empty when the
-  /// kernel is analytic (Gaussian) or has no Sobolev-equivalent native space.
+  /// Native space equivalent to the Sobolev space H^tau(Omega) (Omega of `dimension` d): tau.
+  /// Empty when the kernel is analytic (Gaussian) or has no Sobolev-equivalent native space.
   std::optional<double> sobolev_order;
   bool analytic = false;        ///< infinitely smooth, spectral (exponential) convergence
   double support_radius = 0.0;  ///< k(x, y) = 0 when |x - y| >= radius; 0 means global support
   bool stationary = true;       ///< k(x, y) depends on x - y only
   bool periodic = false;        ///< periodised on a periodic domain
+  /// d, the dimension of the domain the kernel is defined on: what the rates theory predicts
+  /// depends on it (h ~ n^-1/d, tau - d/2). 1 for every built-in kernel (tracks and intervals);
+  /// read it from here, never assume it.
+  int dimension = 1;
 };
 
 /// Nonzero entries of a sparse feature vector phi(x), with k(x, y) = sum_f phi_f(x) phi_f(y).
