@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "rkhs/adaptive/adaptive.hpp"
-#include "rkhs/core/cancellation.hpp"
+#include "rkhs/adaptive/stepping.hpp"
 
 namespace rkhs {
 namespace {
@@ -57,58 +57,39 @@ class AdaptiveStepIntegrator : public Integrator {
   bool restart_;
 };
 
-// Steps `try_step` from breakpoint to breakpoint, landing exactly on each.
+// An odeint controlled stepper (or one with its try_step signature, Rodas4Stepper) as a
+// SteppingPolicy: it owns the state as the ublas vector the stepper works on.
 template <class Controlled, class System>
-IntegrationStats drive_adaptive(Controlled& stepper, System system, AdaptiveSystem& adaptive,
-                                Eigen::VectorXd& z, std::span<const double> breakpoints,
-                                const std::function<void(std::size_t, const double*)>& observe,
-                                std::int64_t max_steps, double initial_step, bool reset_segments) {
-  IntegrationStats stats;
-  State x(static_cast<std::size_t>(z.size()));
-  std::copy(z.data(), z.data() + z.size(), x.begin());
-  double t = breakpoints.front();
-  observe(0, &x.data()[0]);
-  double dt = initial_step;
-  for (std::size_t k = 1; k < breakpoints.size(); ++k) {
-    const double end = breakpoints[k];
-    if (!(end > t)) {
-      observe(k, &x.data()[0]);
-      continue;
-    }
-    adaptive.set_segment(t, end);
-    if constexpr (requires { stepper.reset(); })
-      if (reset_segments) stepper.reset();
-    if (dt <= 0) dt = 1e-6 * (end - t);
-    ++stats.segments;
-    while (t < end) {
-      check_cancelled();
-      const bool last = dt >= end - t;
-      double step = last ? end - t : dt;
-      const double before = t;
-      const auto result = stepper.try_step(system, x, t, step);
-      if (result == odeint::success) {
-        ++stats.steps;
-        if (last) t = end;  // land exactly
-        // A step shortened to hit the breakpoint does not shrink the next one.
-        dt = last ? std::max(dt, step) : step;
-      } else {
-        ++stats.rejected_steps;
-        dt = step;
-        if (!(dt > 1e-14 * std::max(std::abs(before), end - before)))
-          throw std::runtime_error(fmt::format("step size underflow at t = {:.6g} s", before));
-      }
-      if (static_cast<std::int64_t>(stats.steps + stats.rejected_steps) > max_steps)
-        throw std::runtime_error(
-            fmt::format("step budget exhausted (max_steps = {}) at t = {:.6g} s of {:.6g} s",
-                        max_steps, t, breakpoints.back()));
-    }
-    for (double v : x)
-      if (!std::isfinite(v))
-        throw std::runtime_error(fmt::format("state became non-finite at t = {:.6g} s", t));
-    observe(k, &x.data()[0]);
+class ControlledPolicy {
+ public:
+  ControlledPolicy(Controlled& stepper, System system, Eigen::Index dimension)
+      : stepper_(stepper), system_(system), x_(static_cast<std::size_t>(dimension)) {}
+  double* state() { return &x_.data()[0]; }
+  StepOutcome try_step(double& t, double& dt) {
+    return stepper_.try_step(system_, x_, t, dt) == odeint::success ? StepOutcome::accepted
+                                                                    : StepOutcome::rejected;
   }
-  std::copy(x.begin(), x.end(), z.data());
-  return stats;
+  void reset()
+    requires requires(Controlled& c) { c.reset(); }
+  {
+    stepper_.reset();
+  }
+
+ private:
+  Controlled& stepper_;
+  System system_;
+  State x_;
+};
+
+template <class Controlled, class System>
+IntegrationStats drive_controlled(Controlled& stepper, System system, AdaptiveSystem& adaptive,
+                                  Eigen::VectorXd& z, std::span<const double> breakpoints,
+                                  const std::function<void(std::size_t, const double*)>& observe,
+                                  std::int64_t max_steps, double initial_step,
+                                  bool reset_segments) {
+  ControlledPolicy<Controlled, System> policy(stepper, system, z.size());
+  return drive_steps(policy, adaptive, z, breakpoints, observe,
+                     {max_steps, initial_step, reset_segments, {}});
 }
 
 /// The coefficients of odeint's rosenbrock4 (Hairer and Wanner's RODAS4) with the sign of
@@ -135,7 +116,7 @@ class Rosenbrock4 final : public AdaptiveStepIntegrator {
       const std::function<void(std::size_t, const double*)>& observe) const override {
     using Stepper = odeint::rosenbrock4<double, CorrectedRosenbrockCoefficients>;
     odeint::rosenbrock4_controller<Stepper> stepper(atol_, rtol_);
-    return drive_adaptive(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), system, z,
+    return drive_controlled(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), system, z,
                           breakpoints, observe, max_steps_, initial_step_, false);
   }
 };
@@ -253,7 +234,7 @@ class Rodas4 final : public AdaptiveStepIntegrator {
       AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
     Rodas4Stepper stepper(system, atol_, rtol_);
-    return drive_adaptive(stepper, 0, system, z, breakpoints, observe, max_steps_, initial_step_,
+    return drive_controlled(stepper, 0, system, z, breakpoints, observe, max_steps_, initial_step_,
                           false);
   }
 };
@@ -269,7 +250,7 @@ class ExplicitAdaptive final : public AdaptiveStepIntegrator {
       const std::function<void(std::size_t, const double*)>& observe) const override {
     auto stepper = odeint::make_controlled(atol_, rtol_, Stepper());
     // Reset per segment: a first-same-as-last derivative must not cross a kink.
-    return drive_adaptive(stepper, Rhs{&system}, system, z, breakpoints, observe, max_steps_,
+    return drive_controlled(stepper, Rhs{&system}, system, z, breakpoints, observe, max_steps_,
                           initial_step_, true);
   }
 };
@@ -293,6 +274,25 @@ struct Fehlberg78 {
 using Dopri5Integrator = ExplicitAdaptive<odeint::runge_kutta_dopri5<State>, Dopri5>;
 using Fehlberg78Integrator = ExplicitAdaptive<odeint::runge_kutta_fehlberg78<State>, Fehlberg78>;
 
+// odeint's classical Runge-Kutta as a SteppingPolicy: every step is accepted at the size it
+// is given (the driver shortens it to land on breakpoints).
+class FixedStep {
+ public:
+  FixedStep(AdaptiveSystem& system, Eigen::Index dimension)
+      : rhs_{&system}, x_(static_cast<std::size_t>(dimension)) {}
+  double* state() { return &x_.data()[0]; }
+  StepOutcome try_step(double& t, double& dt) {
+    stepper_.do_step(rhs_, x_, t, dt);
+    t += dt;
+    return StepOutcome::accepted;
+  }
+
+ private:
+  odeint::runge_kutta4<State> stepper_;
+  Rhs rhs_;
+  State x_;
+};
+
 /// Classical Runge-Kutta with a fixed step (shortened to land on breakpoints).
 class Rk4 final : public Integrator {
  public:
@@ -313,35 +313,11 @@ class Rk4 final : public Integrator {
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
-    IntegrationStats stats;
-    odeint::runge_kutta4<State> stepper;
-    State x(static_cast<std::size_t>(z.size()));
-    std::copy(z.data(), z.data() + z.size(), x.begin());
-    double t = breakpoints.front();
-    observe(0, &x.data()[0]);
-    for (std::size_t k = 1; k < breakpoints.size(); ++k) {
-      const double end = breakpoints[k];
-      system.set_segment(t, end);
-      if (end > t) ++stats.segments;
-      while (t < end) {
-        check_cancelled();
-        const double dt = std::min(step_, end - t);
-        stepper.do_step(Rhs{&system}, x, t, dt);
-        t = (dt == end - t) ? end : t + dt;
-        if (static_cast<std::int64_t>(++stats.steps) > max_steps_)
-          throw std::runtime_error(
-              fmt::format("step budget exhausted (max_steps = {}) at t = {:.6g} s", max_steps_, t));
-      }
-      for (double v : x)
-        if (!std::isfinite(v))
-          throw std::runtime_error(fmt::format(
-              "state became non-finite at t = {:.6g} s (step {} s too large for this stiff "
-              "system?)",
-              t, format_real(step_)));
-      observe(k, &x.data()[0]);
-    }
-    std::copy(x.begin(), x.end(), z.data());
-    return stats;
+    FixedStep policy(system, z.size());
+    return drive_steps(
+        policy, system, z, breakpoints, observe,
+        {max_steps_, step_, false,
+         fmt::format(" (step {} s too large for this stiff system?)", format_real(step_))});
   }
 
  private:

@@ -157,7 +157,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       })
                               : std::function<double(double)>([&](double s) { return target(s); });
 
-  AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed);
+  // A feature basis applies M to its precomputed features, cheaper than M phi for a full M.
+  const auto signal = kernel.feature_count() > 0 ? AdaptiveSystem::LearningSignal::by_basis
+                                                 : AdaptiveSystem::LearningSignal::from_phi;
+  AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed, signal);
   const double final_time = settings.final_time_or_laps(domain.length);
   if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)

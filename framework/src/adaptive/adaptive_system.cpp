@@ -1,7 +1,11 @@
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/stepping.hpp"
 
 namespace rkhs {
 
@@ -9,7 +13,7 @@ AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& 
                                const Eigen::MatrixXd& P, KernelBasis& basis,
                                const Eigen::MatrixXd& learning_map,
                                const std::function<double(double)>& road, const Domain& domain,
-                               double speed)
+                               double speed, LearningSignal signal)
     : A_(A),
       B_(B),
       b_(P * B),
@@ -19,30 +23,49 @@ AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& 
       speed_(speed),
       d_(A.rows()),
       n_(static_cast<Eigen::Index>(basis.size())),
+      signal_(signal),
       phi_(basis.size()),
       psi_(basis.size()),
       plus_(static_cast<std::size_t>(2 * A.rows()) + basis.size()),
       minus_(plus_.size()) {
-  basis_.set_map(learning_map);
+  if (signal_ == LearningSignal::by_basis) {
+    basis_.set_map(learning_map);
+    return;
+  }
+  // The operations of a direct basis's evaluate_mapped: a multiple of the identity (the
+  // gradient law) as a scalar, anything else as a dense product.
+  const Eigen::MatrixXd& map = learning_map;
+  const bool scalar =
+      map.rows() == map.cols() && map.rows() > 0 &&
+      map.isApprox(map(0, 0) * Eigen::MatrixXd::Identity(map.rows(), map.cols()), 0.0);
+  scale_ = scalar ? map(0, 0) : 0.0;
+  if (!scalar) map_ = map;
 }
 
-void AdaptiveSystem::rhs_uncounted(const double* z, double* dz, double t) const {
+void AdaptiveSystem::evaluate_basis(double s) const {
+  basis_.evaluate(s, phi_.data());
+  if (signal_ == LearningSignal::by_basis) {
+    basis_.evaluate_mapped(s, psi_.data());
+  } else if (map_.size() == 0) {
+    for (std::size_t i = 0; i < phi_.size(); ++i) psi_[i] = phi_[i] * scale_;
+  } else {
+    Eigen::Map<Eigen::VectorXd>(psi_.data(), map_.rows()).noalias() =
+        map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), n_);
+  }
+}
+
+void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
+  ++rhs_count_;
   using Vector = Eigen::Map<const Eigen::VectorXd>;
   const double s = arc_length(t);
   const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
   Eigen::Map<Eigen::VectorXd> dx(dz, d_), dxhat(dz + d_, d_), dalpha(dz + 2 * d_, n_);
-  basis_.evaluate(s, phi_.data());
-  basis_.evaluate_mapped(s, psi_.data());
+  evaluate_basis(s);
   const double estimate = Vector(phi_.data(), n_).dot(alpha);
   const double error = b_.dot(x - xhat);  // B^T P (x - xhat)
   dx.noalias() = A_ * x + B_ * road_(s);
   dxhat.noalias() = A_ * xhat + B_ * estimate;
   dalpha = error * Vector(psi_.data(), n_);
-}
-
-void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
-  ++rhs_count_;
-  rhs_uncounted(z, dz, t);
 }
 
 void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt) const {
@@ -51,8 +74,7 @@ void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jac(J, m, m);
   jac.setZero();
   const double s = arc_length(t);
-  basis_.evaluate(s, phi_.data());
-  basis_.evaluate_mapped(s, psi_.data());
+  evaluate_basis(s);
   const Eigen::Map<const Eigen::VectorXd> phi(phi_.data(), n_), psi(psi_.data(), n_);
   jac.block(0, 0, d_, d_) = A_;
   jac.block(d_, d_, d_, d_) = A_;
@@ -74,5 +96,23 @@ void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt
     dfdt[i] =
         (plus_[static_cast<std::size_t>(i)] - minus_[static_cast<std::size_t>(i)]) / (hi - lo);
 }
+
+namespace detail {
+
+void throw_step_underflow(double t) {
+  throw std::runtime_error(fmt::format("step size underflow at t = {:.6g} s", t));
+}
+
+void throw_step_budget_exhausted(std::int64_t max_steps, double t, double final_time) {
+  throw std::runtime_error(
+      fmt::format("step budget exhausted (max_steps = {}) at t = {:.6g} s of {:.6g} s",
+                  max_steps, t, final_time));
+}
+
+void throw_non_finite_state(double t, const std::string& hint) {
+  throw std::runtime_error(fmt::format("state became non-finite at t = {:.6g} s{}", t, hint));
+}
+
+}  // namespace detail
 
 }  // namespace rkhs

@@ -25,13 +25,26 @@ namespace rkhs {
 /// with s = wrap(v t). It is linear in z for given t; the Jacobian is exact and dfdt is a
 /// central difference in t (one-sided at the ends of the current smooth segment, so that no
 /// stencil crosses a kink). Evaluations allocate nothing.
+///
+/// Cost: each rhs() evaluates the basis at one point s, once; each jacobian() evaluates it at s
+/// once and calls rhs() twice (at t +- h, for dfdt), so it costs three basis evaluations and
+/// counts two rhs evaluations. With LearningSignal::from_phi, psi is M applied to that one
+/// phi(s) (n kernel evaluations per rhs for a direct basis); with LearningSignal::by_basis,
+/// psi comes from basis.evaluate_mapped (a second evaluation at s, which for a basis through a
+/// sparse feature map costs O(features at s x n) against M phi's O(n^2) for a full M).
 class AdaptiveSystem {
  public:
+  /// How psi(s) = M phi(s) is obtained (see the class comment).
+  enum class LearningSignal { from_phi, by_basis };
+
   /// `basis` evaluates phi(s); `learning_map` is the n x n matrix M with psi = M phi
   /// (Gamma^-1 I or Gamma^-1 G^-1). `road` is f. All references must outlive the system.
+  /// from_phi applies a multiple of the identity as a scalar (O(n)) and any other M as a dense
+  /// product, with the same operations as a direct basis's evaluate_mapped (bit-identical).
   AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::MatrixXd& P,
                  KernelBasis& basis, const Eigen::MatrixXd& learning_map,
-                 const std::function<double(double)>& road, const Domain& domain, double speed);
+                 const std::function<double(double)>& road, const Domain& domain, double speed,
+                 LearningSignal signal = LearningSignal::from_phi);
 
   Eigen::Index dimension() const noexcept { return 2 * d_ + n_; }
   Eigen::Index plant_dimension() const noexcept { return d_; }
@@ -51,7 +64,8 @@ class AdaptiveSystem {
   std::size_t jacobian_evaluations() const noexcept { return jacobian_count_; }
 
  private:
-  void rhs_uncounted(const double* z, double* dz, double t) const;
+  /// phi_ = phi(s) and psi_ = psi(s): one basis evaluation (from_phi) or two (by_basis).
+  void evaluate_basis(double s) const;
   Eigen::MatrixXd A_;
   Eigen::VectorXd B_, b_;
   KernelBasis& basis_;
@@ -59,6 +73,9 @@ class AdaptiveSystem {
   Domain domain_;
   double speed_;
   Eigen::Index d_, n_;
+  LearningSignal signal_;
+  Eigen::MatrixXd map_;  // from_phi: M, or empty when M is scale_ times the identity
+  double scale_ = 0.0;
   double segment_begin_ = 0, segment_end_ = 0;
   mutable std::vector<double> phi_, psi_, plus_, minus_;
   mutable std::size_t rhs_count_ = 0, jacobian_count_ = 0;
