@@ -163,3 +163,24 @@ TEST_CASE("interpolation errors of a smooth target shrink as centres are added",
     previous = error;
   }
 }
+
+TEST_CASE("the approximation metric table: output order and NaN rules", "[approximation]") {
+  // The output order (trials.csv columns, docs/metrics.md): it must not change.
+  const std::vector<std::string> expected{
+      "fill_distance",        "separation_distance", "gram_condition_number",
+      "gram_min_eigenvalue",  "gram_max_eigenvalue", "power_function_sup",
+      "power_function_floor", "l2_error",            "sup_error",
+      "error_floor",          "interpolant_native_norm"};
+  CHECK(approximation_metric_names() == expected);
+  CHECK(metric_row(ApproximationMetric::l2_error).name == "l2_error");
+  CHECK(metric_row(ApproximationMetric::sup_error).flag == "sup_error_at_floor");
+  std::vector<std::string> may_be_nan;
+  for (const auto& row : MetricTable<ApproximationMetric>::rows)
+    if (row.may_be_nan) may_be_nan.emplace_back(row.name);
+  CHECK(may_be_nan == std::vector<std::string>{"separation_distance"});
+  MetricValues<ApproximationMetric> values;
+  CHECK(values.size() == expected.size());
+  CHECK(std::isnan(values[ApproximationMetric::error_floor]));
+  values[ApproximationMetric::error_floor] = 2.5;
+  CHECK(values[std::size_t{9}] == 2.5);
+}

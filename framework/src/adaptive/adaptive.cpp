@@ -15,25 +15,7 @@
 namespace rkhs {
 
 const std::vector<std::string>& adaptive_metric_names() {
-  static const std::vector<std::string> names{"fill_distance",
-                                              "separation_distance",
-                                              "gram_condition_number",
-                                              "power_function_sup",
-                                              "interpolant_l2_error",
-                                              "interpolant_sup_error",
-                                              "l2_error",
-                                              "sup_error",
-                                              "gap_to_projection",
-                                              "coefficient_error",
-                                              "final_state_error",
-                                              "max_state_error",
-                                              "lyapunov_max_increase",
-                                              "lyapunov_ratio",
-                                              "steps",
-                                              "rejected_steps",
-                                              "segments",
-                                              "rhs_evaluations",
-                                              "jacobian_evaluations"};
+  static const std::vector<std::string> names = metric_table_names<AdaptiveMetric>();
   return names;
 }
 
@@ -97,13 +79,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                      const SolverOptions& solver_options) {
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(centres.size());
-  const auto& names = adaptive_metric_names();
+  using M = AdaptiveMetric;
+  using Static = ApproximationMetric;
   AdaptiveMeasurement out;
-  out.metrics.assign(names.size(), nan);
-  auto set = [&](std::string_view name, double value) {
-    out.metrics[static_cast<std::size_t>(std::find(names.begin(), names.end(), name) -
-                                         names.begin())] = value;
-  };
+  auto& metrics = out.metrics;
 
   // The static part: the space H_n and the projection Pi_n of the target. The Gram matrix, its
   // solver and the cross matrix on the evaluation grid serve the adaptive part too.
@@ -114,15 +93,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   Eigen::MatrixXd cross;
   const auto approximation = measure_approximation(kernel, target, centres, evaluation_points,
                                                    gram, solver, &cross);
-  const auto& approximation_names = approximation_metric_names();
-  auto approximated = [&](std::string_view name) {
-    return approximation.metrics[static_cast<std::size_t>(
-        std::find(approximation_names.begin(), approximation_names.end(), name) -
-        approximation_names.begin())];
-  };
-  for (const char* name :
-       {"fill_distance", "separation_distance", "gram_condition_number", "power_function_sup"})
-    set(name, approximated(name));
+  metrics[M::fill_distance] = approximation.metrics[Static::fill_distance];
+  metrics[M::separation_distance] = approximation.metrics[Static::separation_distance];
+  metrics[M::gram_condition_number] = approximation.metrics[Static::gram_condition_number];
+  metrics[M::power_function_sup] = approximation.metrics[Static::power_function_sup];
   out.solve_method = approximation.solve_method;
   for (const auto& flag : approximation.flags)
     out.flags.push_back(
@@ -209,31 +183,32 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     return domain.l2_norm(std::span<const double>(v.data(), static_cast<std::size_t>(v.size())));
   };
   const Eigen::VectorXd interpolant_residual = f - projection, residual = f - estimate;
-  set("interpolant_l2_error", l2(interpolant_residual));
-  set("interpolant_sup_error", interpolant_residual.cwiseAbs().maxCoeff());
-  set("l2_error", l2(residual));
-  set("sup_error", residual.cwiseAbs().maxCoeff());
-  set("gap_to_projection", l2(estimate - projection));
-  set("final_state_error", (z.head(d) - z.segment(d, d)).norm());
+  metrics[M::interpolant_l2_error] = l2(interpolant_residual);
+  metrics[M::interpolant_sup_error] = interpolant_residual.cwiseAbs().maxCoeff();
+  metrics[M::l2_error] = l2(residual);
+  metrics[M::sup_error] = residual.cwiseAbs().maxCoeff();
+  metrics[M::gap_to_projection] = l2(estimate - projection);
+  metrics[M::final_state_error] = (z.head(d) - z.segment(d, d)).norm();
   double max_state_error = 0, max_increase = 0;
   for (std::size_t k = 0; k < out.samples.size(); ++k) {
     max_state_error = std::max(max_state_error, out.samples[k].state_error);
     if (k > 0)
       max_increase = std::max(max_increase, out.samples[k].lyapunov - out.samples[k - 1].lyapunov);
   }
-  set("max_state_error", max_state_error);
+  metrics[M::max_state_error] = max_state_error;
   if (settings.projected_road) {
     // alpha* is the true coefficient vector only when the road lies in H_n.
     const double v0 = out.samples.front().lyapunov;
-    set("coefficient_error", (alpha - alpha_star).norm() / std::max(alpha_star.norm(), 1e-300));
-    set("lyapunov_max_increase", v0 > 0 ? max_increase / v0 : max_increase);
-    set("lyapunov_ratio", v0 > 0 ? out.samples.back().lyapunov / v0 : nan);
+    metrics[M::coefficient_error] =
+        (alpha - alpha_star).norm() / std::max(alpha_star.norm(), 1e-300);
+    metrics[M::lyapunov_max_increase] = v0 > 0 ? max_increase / v0 : max_increase;
+    metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : nan;
   }
-  set("steps", static_cast<double>(stats.steps));
-  set("rejected_steps", static_cast<double>(stats.rejected_steps));
-  set("segments", static_cast<double>(stats.segments));
-  set("rhs_evaluations", static_cast<double>(system.rhs_evaluations()));
-  set("jacobian_evaluations", static_cast<double>(system.jacobian_evaluations()));
+  metrics[M::steps] = static_cast<double>(stats.steps);
+  metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
+  metrics[M::segments] = static_cast<double>(stats.segments);
+  metrics[M::rhs_evaluations] = static_cast<double>(system.rhs_evaluations());
+  metrics[M::jacobian_evaluations] = static_cast<double>(system.jacobian_evaluations());
   return out;
 }
 

@@ -43,11 +43,7 @@ double separation_distance(std::span<const double> centres, const Domain& domain
 }
 
 const std::vector<std::string>& approximation_metric_names() {
-  static const std::vector<std::string> names{
-      "fill_distance",       "separation_distance", "gram_condition_number",
-      "gram_min_eigenvalue", "gram_max_eigenvalue", "power_function_sup",
-      "power_function_floor", "l2_error",           "sup_error",
-      "error_floor",         "interpolant_native_norm"};
+  static const std::vector<std::string> names = metric_table_names<ApproximationMetric>();
   return names;
 }
 
@@ -100,16 +96,16 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   const auto points = domain.uniform_points(evaluation_points);
 
   ApproximationMeasurement out;
-  out.metrics.assign(approximation_metric_names().size(), nan);
-  auto set = [&](std::size_t index, double value) { out.metrics[index] = value; };
-  set(0, fill_distance(centres, domain));
-  set(1, separation_distance(centres, domain));
+  using M = ApproximationMetric;
+  auto& metrics = out.metrics;
+  metrics[M::fill_distance] = fill_distance(centres, domain);
+  metrics[M::separation_distance] = separation_distance(centres, domain);
 
   const auto& spectrum = solver.spectrum();
   out.solve_method = solver.method();
-  set(2, spectrum.condition_number);
-  set(3, spectrum.lambda_min);
-  set(4, spectrum.lambda_max);
+  metrics[M::gram_condition_number] = spectrum.condition_number;
+  metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
+  metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
   if (spectrum.singular) out.flags.push_back("gram_singular");
 
   // Power function from the cross matrix K_mi = k(s_m, c_i), O(n^2) per point.
@@ -120,8 +116,8 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
   const double power_sup = std::sqrt(data.power_squared.maxCoeff());
   const double power_floor = std::sqrt(round_off * solution_norm_squared.maxCoeff());
-  set(5, power_sup);
-  set(6, power_floor);
+  metrics[M::power_function_sup] = power_sup;
+  metrics[M::power_function_floor] = power_floor;
   if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
 
   // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
@@ -134,10 +130,10 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   const double sup = residual.cwiseAbs().maxCoeff();
   const double error_floor =
       round_off * std::sqrt(solution_norm_squared.maxCoeff()) * alpha.norm();
-  set(7, l2);
-  set(8, sup);
-  set(9, error_floor);
-  set(10, std::sqrt(std::max(0.0, alpha.dot(gram * alpha))));
+  metrics[M::l2_error] = l2;
+  metrics[M::sup_error] = sup;
+  metrics[M::error_floor] = error_floor;
+  metrics[M::interpolant_native_norm] = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
   if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
   if (l2 <= error_floor * std::sqrt(domain.length)) out.flags.push_back("l2_error_at_floor");
   if (cross_out) *cross_out = std::move(data.cross);

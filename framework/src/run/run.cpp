@@ -16,7 +16,9 @@
 #include <optional>
 #include <thread>
 
+#include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/metrics.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/approx/centres.hpp"
 #include "rkhs/kernel/kernel.hpp"
@@ -59,6 +61,12 @@ TrialResult stopped_while_running() {
   return result;
 }
 
+// Whether metric `position` (in metric_names(kind) order) is allowed to be NaN.
+bool metric_may_be_nan(std::string_view kind, std::size_t position) {
+  if (kind == "adaptive") return MetricTable<AdaptiveMetric>::rows[position].may_be_nan;
+  return MetricTable<ApproximationMetric>::rows[position].may_be_nan;
+}
+
 }  // namespace
 
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
@@ -95,7 +103,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
           integrator_registry().find(trial.integrator.name)->factory(trial.integrator.parameters);
       auto measured = measure_adaptive(*kernel, *target, centres, *plant, *law, *integrator,
                                        study.adaptive, study.evaluation_points, study.solver);
-      result.metrics = std::move(measured.metrics);
+      result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.flags = std::move(measured.flags);
       result.samples = std::move(measured.samples);
@@ -104,19 +112,16 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     } else {
       auto measured =
           measure_approximation(*kernel, *target, centres, study.evaluation_points, study.solver);
-      result.metrics = std::move(measured.metrics);
+      result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.flags = std::move(measured.flags);
     }
     check_cancelled();
-    // Metrics that are undefined by design in some trials: a single centre has no separation;
-    // coefficient and Lyapunov metrics need a road in H_n.
-    static const std::vector<std::string> may_be_undefined{
-        "separation_distance", "coefficient_error", "lyapunov_max_increase", "lyapunov_ratio"};
+    // Metrics that are undefined by design in some trials (MetricRow::may_be_nan: a single
+    // centre has no separation; coefficient and Lyapunov metrics need a road in H_n).
     const auto& names = study.all_metrics();
     for (std::size_t i = 0; i < names.size(); ++i)
-      if (std::isnan(result.metrics[i]) &&
-          std::find(may_be_undefined.begin(), may_be_undefined.end(), names[i]) == may_be_undefined.end())
+      if (std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
     result.ok = true;
   } catch (const TrialCancelled&) {

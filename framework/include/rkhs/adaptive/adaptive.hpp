@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/core/registry.hpp"
@@ -127,7 +128,8 @@ struct AdaptiveSettings {
   }
 };
 
-/// Names of the metrics of an adaptive trial, in output order (docs/metrics.md).
+/// Names of the metrics of an adaptive trial, in output order (docs/metrics.md): the names
+/// of MetricTable<AdaptiveMetric> (rkhs/adaptive/metrics.hpp).
 const std::vector<std::string>& adaptive_metric_names();
 
 struct TimeSample {
@@ -142,7 +144,7 @@ struct Snapshot {
 };
 
 struct AdaptiveMeasurement {
-  std::vector<double> metrics;  ///< aligned with adaptive_metric_names()
+  MetricValues<AdaptiveMetric> metrics;  ///< in adaptive_metric_names() order
   std::string solve_method;
   std::vector<std::string> flags;
   std::vector<TimeSample> samples;

@@ -8,6 +8,7 @@
 
 #include "rkhs/core/domain.hpp"
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/approx/metrics.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/approx/target.hpp"
 
@@ -19,7 +20,9 @@ double fill_distance(std::span<const double> centres, const Domain& domain);
 /// Separation distance q = min_{i != j} |c_i - c_j| / 2; NaN for fewer than two centres.
 double separation_distance(std::span<const double> centres, const Domain& domain);
 
-/// Names of the metrics of an approximation trial, in output order.
+/// Names of the metrics of an approximation trial, in output order: the names of
+/// MetricTable<ApproximationMetric> (rkhs/approx/metrics.hpp, which holds their units and
+/// NaN rules).
 ///  fill_distance, separation_distance    geometry of the centres
 ///  gram_condition_number                 lambda_max / lambda_min, +inf when singular
 ///  gram_min_eigenvalue, gram_max_eigenvalue
@@ -33,7 +36,7 @@ double separation_distance(std::span<const double> centres, const Domain& domain
 const std::vector<std::string>& approximation_metric_names();
 
 struct ApproximationMeasurement {
-  std::vector<double> metrics;  ///< aligned with approximation_metric_names()
+  MetricValues<ApproximationMetric> metrics;  ///< in approximation_metric_names() order
   std::string solve_method;     ///< GramSolver::method()
   std::vector<std::string> flags;  ///< gram_singular, power_function_at_floor, sup_error_at_floor, ...
 };

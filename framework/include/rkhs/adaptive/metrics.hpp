@@ -1,0 +1,70 @@
+#pragma once
+// The metric table of adaptive trials (see rkhs/approx/metrics.hpp for what a table holds).
+// The first four are the approximation trial's metrics of the same name; interpolant_* are its
+// l2_error and sup_error (of Pi_n f); the rest measure the learned estimate and the integration.
+
+#include "rkhs/approx/metrics.hpp"
+
+namespace rkhs {
+
+enum class AdaptiveMetric : std::size_t {
+  fill_distance,
+  separation_distance,
+  gram_condition_number,
+  power_function_sup,
+  interpolant_l2_error,
+  interpolant_sup_error,
+  l2_error,
+  sup_error,
+  gap_to_projection,
+  coefficient_error,
+  final_state_error,
+  max_state_error,
+  lyapunov_max_increase,
+  lyapunov_ratio,
+  steps,
+  rejected_steps,
+  segments,
+  rhs_evaluations,
+  jacobian_evaluations,
+};
+
+template <>
+struct MetricTable<AdaptiveMetric> {
+  using M = AdaptiveMetric;
+  static constexpr std::array<MetricRow<M>, 19> rows{{
+      {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
+      {M::separation_distance, "separation_distance", "m",
+       "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
+      {M::gram_condition_number, "gram_condition_number", "1",
+       "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular"},
+      {M::power_function_sup, "power_function_sup", "sqrt([k])", "max_m P_n(s_m) on the grid",
+       false, "power_function_at_floor"},
+      {M::interpolant_l2_error, "interpolant_l2_error", "[f] sqrt(m)",
+       "||f - Pi_n f|| in L2(Omega), f the road", false, "interpolant_l2_error_at_floor"},
+      {M::interpolant_sup_error, "interpolant_sup_error", "[f]", "max_m |f(s_m) - Pi_n f(s_m)|",
+       false, "interpolant_sup_error_at_floor"},
+      {M::l2_error, "l2_error", "[f] sqrt(m)", "||f - fhat(T)|| in L2(Omega)", false, ""},
+      {M::sup_error, "sup_error", "[f]", "max_m |f(s_m) - fhat(T)(s_m)|", false, ""},
+      {M::gap_to_projection, "gap_to_projection", "[f] sqrt(m)",
+       "||fhat(T) - Pi_n f|| in L2(Omega)", false, ""},
+      {M::coefficient_error, "coefficient_error", "1",
+       "|alpha(T) - alpha*| / |alpha*|; NaN unless the road is Pi_n f", true, ""},
+      {M::final_state_error, "final_state_error", "[x]", "|x(T) - xhat(T)|", false, ""},
+      {M::max_state_error, "max_state_error", "[x]", "max over the samples of |x - xhat|", false,
+       ""},
+      {M::lyapunov_max_increase, "lyapunov_max_increase", "1",
+       "largest increase of V between samples / V(0); NaN unless the road is Pi_n f", true, ""},
+      {M::lyapunov_ratio, "lyapunov_ratio", "1", "V(T) / V(0); NaN unless the road is Pi_n f", true,
+       ""},
+      {M::steps, "steps", "count", "accepted integration steps", false, ""},
+      {M::rejected_steps, "rejected_steps", "count", "rejected integration steps", false, ""},
+      {M::segments, "segments", "count", "smooth segments integrated", false, ""},
+      {M::rhs_evaluations, "rhs_evaluations", "count",
+       "right-hand-side evaluations (two per Jacobian included)", false, ""},
+      {M::jacobian_evaluations, "jacobian_evaluations", "count", "Jacobian evaluations", false, ""},
+  }};
+};
+static_assert(table_in_enum_order<AdaptiveMetric>());
+
+}  // namespace rkhs

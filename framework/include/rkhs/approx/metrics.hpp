@@ -1,0 +1,119 @@
+#pragma once
+// Metric tables: for each study kind, one enum naming its metrics and one constexpr table with,
+// per metric, its output name, unit, meaning, whether NaN is a legitimate value and the flag
+// that excludes it from rate fits. The enum order is the output order (trials.csv columns,
+// `rkhs-study list metrics`, docs/metrics.md); trials fill their values by identifier.
+
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace rkhs {
+
+/// One row of a metric table; `id` is the row's position (checked at compile time).
+template <class Metric>
+struct MetricRow {
+  Metric id;
+  std::string_view name;  ///< column of trials.csv, key of study.metrics in study files
+  /// m (arc length), s, 1 (dimensionless), count, [k] (units of the kernel), [f] (of the
+  /// target f), [x] (of the plant state), [V] (of the Lyapunov function), or products of these
+  std::string_view unit;
+  std::string_view doc;   ///< one line
+  bool may_be_nan;        ///< NaN by design in some trials; any other NaN fails the trial
+  std::string_view flag;  ///< the flag that marks a value as round-off (docs/metrics.md), or ""
+};
+
+/// Specialised per metric enum with `static constexpr std::array<MetricRow<Metric>, N> rows`.
+template <class Metric>
+struct MetricTable;
+
+/// True when every row of the table sits at the position of its identifier.
+template <class Metric>
+constexpr bool table_in_enum_order() {
+  const auto& rows = MetricTable<Metric>::rows;
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if (static_cast<std::size_t>(rows[i].id) != i) return false;
+  return true;
+}
+
+template <class Metric>
+constexpr const MetricRow<Metric>& metric_row(Metric metric) {
+  return MetricTable<Metric>::rows[static_cast<std::size_t>(metric)];
+}
+
+/// The names of a table, in table (output) order.
+template <class Metric>
+std::vector<std::string> metric_table_names() {
+  std::vector<std::string> names;
+  for (const auto& row : MetricTable<Metric>::rows) names.emplace_back(row.name);
+  return names;
+}
+
+/// The values of one trial's metrics, NaN until set. Written by identifier
+/// (`values[Metric::l2_error] = e`); read by identifier or by position (aligned with the
+/// table, as study writers index them).
+template <class Metric>
+class MetricValues {
+ public:
+  static constexpr std::size_t count = MetricTable<Metric>::rows.size();
+  MetricValues() : values_(count, std::numeric_limits<double>::quiet_NaN()) {}
+  double& operator[](Metric metric) { return values_[static_cast<std::size_t>(metric)]; }
+  double operator[](Metric metric) const { return values_[static_cast<std::size_t>(metric)]; }
+  double operator[](std::size_t position) const { return values_[position]; }
+  std::size_t size() const noexcept { return values_.size(); }
+  /// The values in table order.
+  const std::vector<double>& values() const& noexcept { return values_; }
+  std::vector<double> values() && noexcept { return std::move(values_); }
+
+ private:
+  std::vector<double> values_;
+};
+
+/// The metrics of an approximation trial (docs/metrics.md).
+enum class ApproximationMetric : std::size_t {
+  fill_distance,
+  separation_distance,
+  gram_condition_number,
+  gram_min_eigenvalue,
+  gram_max_eigenvalue,
+  power_function_sup,
+  power_function_floor,
+  l2_error,
+  sup_error,
+  error_floor,
+  interpolant_native_norm,
+};
+
+template <>
+struct MetricTable<ApproximationMetric> {
+  using M = ApproximationMetric;
+  static constexpr std::array<MetricRow<M>, 11> rows{{
+      {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
+      {M::separation_distance, "separation_distance", "m",
+       "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
+      {M::gram_condition_number, "gram_condition_number", "1",
+       "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular"},
+      {M::gram_min_eigenvalue, "gram_min_eigenvalue", "[k]", "lambda_min(G)", false,
+       "gram_singular"},
+      {M::gram_max_eigenvalue, "gram_max_eigenvalue", "[k]", "lambda_max(G)", false, ""},
+      {M::power_function_sup, "power_function_sup", "sqrt([k])",
+       "max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid", false, "power_function_at_floor"},
+      {M::power_function_floor, "power_function_floor", "sqrt([k])",
+       "round-off level of P_n: max_m sqrt(n eps lambda_max |G^-1 k_X(s_m)|^2)", false, ""},
+      {M::l2_error, "l2_error", "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
+       "l2_error_at_floor"},
+      {M::sup_error, "sup_error", "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
+       "sup_error_at_floor"},
+      {M::error_floor, "error_floor", "[f]",
+       "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, ""},
+      {M::interpolant_native_norm, "interpolant_native_norm", "[f] / sqrt([k])",
+       "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, ""},
+  }};
+};
+static_assert(table_in_enum_order<ApproximationMetric>());
+
+}  // namespace rkhs
