@@ -28,10 +28,7 @@ rkhs::PluginInfo InverseMultiquadric::info() {
       "inverse multiquadric (1 + (d/c)^2)^(-beta), periodised by its Fourier series",
       {rkhs::positive_parameter("beta", 1.0, "exponent beta (> 1/2 on a closed track)"),
        rkhs::positive_parameter("c", 1.0, "shape c, metres")},
-      {{"positive definite", "yes"},
-       {"smoothness", "analytic (spectral convergence)"},
-       {"support", "global"},
-       {"periodic", "Fourier series (Poisson summation), truncated below 1e-16 k(0)"}},
+      {{"periodic", "Fourier series (Poisson summation), truncated below 1e-16 k(0)"}},
   };
 }
 

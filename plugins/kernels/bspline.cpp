@@ -12,7 +12,7 @@ PluginInfo MultiscaleBSpline::info() {
   // r defaults to the degree: the declared default is a placeholder (NaN, printed as "= degree")
   // and the constructor reads r only when the study gave it.
   auto r = positive_parameter("r", std::numeric_limits<double>::quiet_NaN(),
-                              "smoothness r: level j is weighted by 2^{j (1 - 2r)}");
+                              "smoothness r: level j is weighted by 2^{j (1 - 2r)}; Sobolev order tau = r for 1/2 < r < degree + 1/2");
   r.default_doc = "= degree";
   return {
       "bspline",
@@ -21,10 +21,7 @@ PluginInfo MultiscaleBSpline::info() {
        integer_parameter("n0", 4, "cells on level 0, h0 = L / n0 (periodic: n0 >= degree + 1)", 1,
                          max_n0),
        integer_parameter("J", 6, "finest level", 0, max_level)},
-      {{"positive definite", "semidefinite (finite feature map)"},
-       {"smoothness", "tau = r (Sobolev H^r) when 1/2 < r < degree + 1/2"},
-       {"support", "compact, (degree + 1) L / n0"},
-       {"periodic", "by wrapped indices"},
+      {{"periodic", "by wrapped indices"},
        {"features", "n0 (2^{J+1} - 1) periodic, + (J + 1) degree on an interval"}},
   };
 }

@@ -13,10 +13,7 @@ PluginInfo Gaussian::info() {
                         "\"2sigma2\": exp(-d^2/(2 sigma^2)) (paper Sec. 5); "
                         "\"sigma2\": exp(-d^2/sigma^2) (paper Sec. 2)",
                         {"2sigma2", "sigma2"})},
-      {{"positive definite", "yes"},
-       {"smoothness", "analytic (spectral convergence)"},
-       {"support", "global"},
-       {"periodic", "by images, truncated below 1e-16 k(0)"}},
+      {{"periodic", "by images, truncated below 1e-16 k(0)"}},
   };
 }
 

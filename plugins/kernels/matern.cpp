@@ -7,16 +7,13 @@
 namespace rkhs::kernels {
 
 PluginInfo Matern::info() {
-  auto nu = real_parameter("nu", 1.5, "smoothness nu (half-integer)");
+  auto nu = real_parameter("nu", 1.5, "smoothness nu (half-integer); Sobolev order tau = nu + 1/2");
   nu.allowed = {0.5, 1.5, 2.5};
   return {
       "matern",
       "Matern kernel with nu = 1/2, 3/2, 5/2 (scikit-learn convention), periodised by images",
       {nu, positive_parameter("length_scale", 1.0, "length scale l, metres")},
-      {{"positive definite", "yes"},
-       {"smoothness", "tau = nu + 1/2 (Sobolev H^tau)"},
-       {"support", "global"},
-       {"periodic", "sum of all images, in closed form"}},
+      {{"periodic", "sum of all images, in closed form"}},
   };
 }
 

@@ -8,12 +8,9 @@ PluginInfo Wendland::info() {
   return {
       "wendland",
       "Wendland's compactly supported function phi_{1,k}(|x - y| / radius)",
-      {integer_parameter("k", 1, "smoothness k (phi is C^{2k})", 0, 3),
+      {integer_parameter("k", 1, "smoothness k (phi is C^{2k}); Sobolev order tau = k + 1", 0, 3),
        positive_parameter("radius", 1.0, "support radius rho, metres")},
-      {{"positive definite", "yes"},
-       {"smoothness", "tau = k + 1 (Sobolev H^tau)"},
-       {"support", "compact, radius"},
-       {"periodic", "by images (finite sum, exact)"}},
+      {{"periodic", "by images (finite sum, exact)"}},
   };
 }
 

@@ -1,4 +1,4 @@
-// The coupled plant / estimator / learning-law system: exact Jacobian, dF/dt, Lyapunov solver.
+// The coupled plant / estimator / learning-law system: exact Jacobian and dF/dt.
 #include <catch2/catch.hpp>
 #include <numbers>
 
@@ -23,43 +23,6 @@ std::unique_ptr<Plant> quarter_car() {
 }
 
 }  // namespace
-
-TEST_CASE("Lyapunov solver: residual, symmetry, definiteness", "[adaptive]") {
-  const auto plant = quarter_car();
-  for (const std::string q : {"identity", "diag(1e-4, 1, 1e-4, 1)"}) {
-    const Eigen::MatrixXd Q = parse_matrix(q, 4);
-    const auto solution = solve_lyapunov(plant->A(), Q);
-    const Eigen::MatrixXd& P = solution.P;
-    INFO("Q = " << q);
-    CHECK((P - P.transpose()).norm() == 0.0);
-    CHECK(solution.min_eigenvalue > 0);
-    // Backward error at the level of round-off (A has entries of 1.6e5, so the residual
-    // relative to Q alone is about 1e-9 and says nothing).
-    const double backward = (plant->A().transpose() * P + P * plant->A() + Q).norm() /
-                            (2 * plant->A().norm() * P.norm() + Q.norm());
-    CHECK(backward < 1e-14);
-    CHECK(solution.relative_residual == Approx(backward));
-  }
-  // A 2 x 2 closed form: A = diag(-1, -2), Q = I gives P = diag(1/2, 1/4).
-  const auto diagonal = solve_lyapunov(parse_matrix("-1 0; 0 -2"), Eigen::MatrixXd::Identity(2, 2));
-  CHECK(diagonal.P(0, 0) == Approx(0.5).epsilon(1e-14));
-  CHECK(diagonal.P(1, 1) == Approx(0.25).epsilon(1e-14));
-  CHECK(std::abs(diagonal.P(0, 1)) < 1e-15);
-  CHECK_THROWS_WITH(solve_lyapunov(parse_matrix("1 0; 0 -2"), Eigen::MatrixXd::Identity(2, 2)),
-                    Catch::StartsWith("A is not Hurwitz: eigenvalue 1+0i"));
-  CHECK_THROWS_WITH(solve_lyapunov(parse_matrix("-1 0; 0 -2"), parse_matrix("1 2; 2 1")),
-                    "Q must be positive definite");
-}
-
-TEST_CASE("matrix syntax of study files", "[adaptive]") {
-  CHECK(parse_matrix("-1 0; 0 -2") == (Eigen::MatrixXd(2, 2) << -1, 0, 0, -2).finished());
-  CHECK(parse_matrix("1; 0") == (Eigen::MatrixXd(2, 1) << 1, 0).finished());
-  CHECK(parse_matrix("diag(1, 2)") == (Eigen::MatrixXd(2, 2) << 1, 0, 0, 2).finished());
-  CHECK(parse_matrix("identity", 3) == Eigen::MatrixXd::Identity(3, 3));
-  CHECK_THROWS_WITH(parse_matrix("1 2; 3"),
-                    "in matrix \"1 2; 3\": row 2 has 1 entries, row 1 has 2");
-  CHECK_THROWS_WITH(parse_matrix("1 x"), "in matrix \"1 x\": 'x' is not a number");
-}
 
 TEST_CASE("the Jacobian of the coupled system matches finite differences", "[adaptive]") {
   const Domain track{2 * std::numbers::pi * 4, true};

@@ -4,11 +4,13 @@
 // support).
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "plugins/kernels/kernel_test_support.hpp"
 #include "rkhs/kernel/kernel.hpp"
+#include "rkhs/kernel/kernel_algorithms.hpp"
 #include "rkhs/plugin/kernel_contract.hpp"
 
 namespace {
@@ -90,4 +92,40 @@ TEST_CASE("every registered kernel satisfies the kernel contract", "[kernel][con
   // as the Gaussian with sigma = 50, are legitimately skipped).
   INFO(tally.monotonicity_checked << " of " << 2 * tally.kernels << " nested comparisons checked");
   CHECK(tally.monotonicity_checked >= tally.kernels);
+}
+
+namespace {
+
+// A Gaussian that declares a two-dimensional domain, which no domain of this version has.
+struct PlanarClaim {
+  static rkhs::PluginInfo info() { return {"planar_claim", "test kernel", {}, {}}; }
+  PlanarClaim(const rkhs::ParameterSet&, const Domain& domain) : domain_(domain) {}
+  double operator()(double x, double y) const noexcept {
+    const double d = domain_.difference(x, y);
+    return std::exp(-d * d);
+  }
+  rkhs::KernelProperties properties() const noexcept {
+    rkhs::KernelProperties p;
+    p.analytic = true;
+    p.periodic = domain_.periodic;
+    p.dimension = 2;
+    return p;
+  }
+  Domain domain_;
+};
+
+}  // namespace
+
+TEST_CASE("the contract refuses a kernel that declares a dimension the domains do not have",
+          "[kernel][contract]") {
+  const rkhs::KernelModel<PlanarClaim> kernel(rkhs::ParameterSet{}, Domain{8.0, true});
+  const auto report = rkhs::check_kernel_contract(kernel);
+  bool metadata_checked = false;
+  for (const auto& check : report.checks)
+    if (check.name == "metadata") {
+      metadata_checked = true;
+      CHECK_FALSE(check.passed);
+      CHECK_THAT(check.detail, Catch::Contains("dimension 2"));
+    }
+  CHECK(metadata_checked);
 }

@@ -253,52 +253,63 @@ theory = true
 TEST_CASE("theory rates from kernel metadata, converted to the fitted abscissa", "[verification]") {
   KernelProperties sobolev;
   sobolev.sobolev_order = 2.0;
-  auto pf = theory_rate("power_function_sup", sobolev, 1);
+  auto pf = theory_rate("power_function_sup", sobolev);
   REQUIRE(pf);
   CHECK(pf->model == RateModel::power_law);
   CHECK(pf->h_exponent == 1.5);
   CHECK(pf->sharp);
   double slope = 0;
-  auto band = theory_interval(*pf, Abscissa::n, 1, 0.1, &slope);
+  auto band = theory_interval(*pf, Abscissa::n, 0.1, &slope);
   CHECK(slope == -1.5);
   CHECK(band.low == Approx(-1.6));
   CHECK(band.high == Approx(-1.4));
-  band = theory_interval(*pf, Abscissa::fill_distance, 1, 0.1, &slope);
+  band = theory_interval(*pf, Abscissa::fill_distance, 0.1, &slope);
   CHECK(slope == 1.5);
   CHECK(band.low == Approx(1.4));
 
-  const auto l2 = theory_rate("l2_error", sobolev, 1);
+  const auto l2 = theory_rate("l2_error", sobolev);
   REQUIRE(l2);
   CHECK_FALSE(l2->sharp);  // an upper bound: faster convergence is allowed
-  band = theory_interval(*l2, Abscissa::n, 1, 0.1);
+  band = theory_interval(*l2, Abscissa::n, 0.1);
   CHECK(band.low == -infinity);
   CHECK(band.high == Approx(-1.9));
-  band = theory_interval(*l2, Abscissa::fill_distance, 1, 0.1);
+  band = theory_interval(*l2, Abscissa::fill_distance, 0.1);
   CHECK(band.low == Approx(1.9));
   CHECK(band.high == infinity);
 
   // cond ~ n q^-(2 tau - d) = h^-2 tau; lambda_min ~ q^(2 tau - d).
-  const auto cond = theory_rate("gram_condition_number", sobolev, 1);
+  const auto cond = theory_rate("gram_condition_number", sobolev);
   REQUIRE(cond);
-  theory_interval(*cond, Abscissa::n, 1, 0.1, &slope);
+  theory_interval(*cond, Abscissa::n, 0.1, &slope);
   CHECK(slope == 4.0);
-  const auto lambda = theory_rate("gram_min_eigenvalue", sobolev, 1);
+  const auto lambda = theory_rate("gram_min_eigenvalue", sobolev);
   REQUIRE(lambda);
-  theory_interval(*lambda, Abscissa::n, 1, 0.1, &slope);
+  theory_interval(*lambda, Abscissa::n, 0.1, &slope);
   CHECK(slope == -3.0);
 
   KernelProperties analytic;
   analytic.analytic = true;
-  const auto gaussian = theory_rate("gram_condition_number", analytic, 1);
+  const auto gaussian = theory_rate("gram_condition_number", analytic);
   REQUIRE(gaussian);
   CHECK(gaussian->model == RateModel::exponential);
   CHECK(gaussian->direction == +1);
-  CHECK(theory_rate("power_function_sup", analytic, 1)->direction == -1);
+  CHECK(theory_rate("power_function_sup", analytic)->direction == -1);
 
   std::string why;
-  CHECK_FALSE(theory_rate("power_function_sup", KernelProperties{}, 1, &why));
+  CHECK_FALSE(theory_rate("power_function_sup", KernelProperties{}, &why));
   CHECK_THAT(why, Catch::Contains("neither analytic nor Sobolev-equivalent"));
-  CHECK_FALSE(theory_rate("fill_distance", sobolev, 1, &why));
+  CHECK_FALSE(theory_rate("fill_distance", sobolev, &why));
+  // d comes from the kernel's properties: tau = 2 in d = 2 gives h^(tau - d/2) = h^1 for the
+  // power function, n^-1/2 against n (h ~ n^-1/d).
+  KernelProperties plane = sobolev;
+  plane.sobolev_order = 2.0;
+  plane.dimension = 2;
+  const auto pf2 = theory_rate("power_function_sup", plane);
+  REQUIRE(pf2);
+  CHECK(pf2->dimension == 2);
+  CHECK(pf2->h_exponent == Approx(1.0));
+  theory_interval(*pf2, Abscissa::n, 0.1, &slope);
+  CHECK(slope == Approx(-0.5));
 }
 
 TEST_CASE("verdicts: theory passes, a wrong rate fails, scatter is inconclusive", "[verification]") {

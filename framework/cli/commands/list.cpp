@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <iostream>
+#include <type_traits>
 
 #include "commands/commands.hpp"
 #include "rkhs/approx/approximation.hpp"
@@ -32,6 +33,17 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
     const auto& info = registry.find(name)->info;
     out << fmt::format("  {:<10} {}\n", name, info.doc);
     for (const auto& spec : info.parameters) out << describe_parameter(spec) << "\n";
+    if constexpr (std::is_same_v<RegistryType, KernelRegistry>) {
+      // A kernel's facts are its properties() (one source), shown for the default parameters
+      // on a periodic track of length 1.
+      try {
+        out << fmt::format("    [properties at the defaults] {}\n",
+                           describe_properties(kernel_properties(
+                               name, ParameterSet::resolve(info.parameters, {}), Domain{})));
+      } catch (const std::exception& e) {
+        out << fmt::format("    [properties at the defaults] unavailable: {}\n", e.what());
+      }
+    }
     for (const auto& [key, value] : info.traits) out << fmt::format("    [{}] {}\n", key, value);
   }
   out << "\n";
@@ -47,8 +59,8 @@ int command_list(const std::string& kind) {
       list_registry(Kind::registry(), std::cout);
   });
   if (all || kind == "metric" || kind == "metrics") {
-    for (const char* study_kind : {"approximation", "adaptive"}) {
-      std::cout << "metrics (" << study_kind << " trials):\n";
+    for (const auto study_kind : study_kinds) {
+      std::cout << "metrics (" << study_kind_name(study_kind) << " trials):\n";
       for (const auto& name : metric_names(study_kind)) std::cout << "  " << name << "\n";
     }
   }

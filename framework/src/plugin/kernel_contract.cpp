@@ -1,6 +1,7 @@
 #include "rkhs/plugin/kernel_contract.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,12 +17,6 @@ constexpr double epsilon = std::numeric_limits<double>::epsilon();
 
 std::string g(double value) {
   return fmt::format("{:.3g}", value);
-}
-
-std::string join(const std::vector<std::string>& items) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? "; " : "") + items[i];
-  return out;
 }
 
 class Checks {
@@ -133,8 +128,11 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
   if (!(props.support_radius >= 0)) metadata_problems.push_back("negative support radius");
   if (kernel.feature_count() > 0 && props.positive_definite)  // rank <= features
     metadata_problems.push_back("positive definite with a finite feature map");
+  if (props.dimension != 1)
+    metadata_problems.push_back(fmt::format(
+        "dimension {} (every domain of this version is one-dimensional: d = 1)", props.dimension));
   checks.add("metadata", metadata_problems.empty(),
-             metadata_problems.empty() ? "consistent" : join(metadata_problems));
+             metadata_problems.empty() ? "consistent" : fmt::format("{}", fmt::join(metadata_problems, "; ")));
 
   // k(x, x) scale for relative tolerances.
   const Eigen::VectorXd diagonal = kernel.diagonal(points);

@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -87,12 +88,6 @@ Function* symbol(void* handle, const char* name) {
   return reinterpret_cast<Function*>(dlsym(handle, name));
 }
 
-std::string join(const std::vector<std::string>& items, std::string_view separator) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i)
-    out += (i ? std::string(separator) : "") + items[i];
-  return out;
-}
 
 }  // namespace
 
@@ -165,7 +160,7 @@ LoadedPlugin load_plugin(const fs::path& file) {
   if (!after.same_errors(before)) {
     const auto errors = roll_back(before);
     dlclose(handle);
-    throw PluginError(shown + ": " + join(errors, "; "));
+    throw PluginError(fmt::format("{}: {}", shown, fmt::join(errors, "; ")));
   }
   if (failed < 0)
     fail(fmt::format("registers more than {} plugins in one module",

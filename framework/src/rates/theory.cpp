@@ -17,7 +17,8 @@ const std::vector<std::string>& theory_metrics() {
 }
 
 std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
-                                      int dimension, std::string* why) {
+                                      std::string* why) {
+  const int dimension = properties.dimension;
   auto none = [&](std::string reason) -> std::optional<TheoryRate> {
     if (why) *why = std::move(reason);
     return std::nullopt;
@@ -28,6 +29,7 @@ std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelPrope
                             "sup_error, l2_error, gram_min_eigenvalue, gram_condition_number)",
                             metric));
   TheoryRate theory;
+  theory.dimension = dimension;
   if (properties.analytic) {
     theory.model = RateModel::exponential;
     theory.sharp = false;
@@ -64,8 +66,9 @@ std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelPrope
   return theory;
 }
 
-RateInterval theory_interval(const TheoryRate& theory, Abscissa abscissa, int dimension,
-                             double tolerance, double* slope) {
+RateInterval theory_interval(const TheoryRate& theory, Abscissa abscissa, double tolerance,
+                             double* slope) {
+  const int dimension = theory.dimension;
   constexpr double infinity = std::numeric_limits<double>::infinity();
   // Against ln h the slope is the exponent; against ln n (h ~ n^-1/d) it is -exponent / d, and
   // "converges at least as fast" flips from slope >= to slope <=.

@@ -137,7 +137,7 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
 {12}</table>
 )",
       escape_html(study.name), escape_html(study.description), escape_html(study.source),
-      escape_html(study.kind), build.version, build.git_commit, build.compiler, build.build_type,
+      escape_html(std::string(study_kind_name(study.kind))), build.version, build.git_commit, build.compiler, build.build_type,
       escape_html(run.started), run.threads, run.wall_seconds, run.trials.size(), mpi_rows);
 
   // Failed trials first: they are what a reader must not miss.

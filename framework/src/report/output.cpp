@@ -210,7 +210,7 @@ std::string summary_json(const RunRecord& run) {
   out +=
       fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
                   json_string(study.name), json_string(study.description),
-                  json_string(study.source), json_string(study.kind));
+                  json_string(study.source), json_string(study_kind_name(study.kind)));
   // A distributed run names its ranks: host, threads and trials run on each.
   std::string mpi;
   if (!run.ranks.empty()) {
@@ -370,7 +370,7 @@ void write_outputs(const RunRecord& run, const std::filesystem::path& directory)
   write_file_atomically(directory / "summary.json", summary_json(run));
   write_file_atomically(directory / "rates.md", markdown_tables(run));
   write_file_atomically(directory / "rates.tex", latex_tables(run));
-  if (run.study.kind == "adaptive") {
+  if (run.study.kind == StudyKind::adaptive) {
     write_file_atomically(directory / "estimates.csv", estimates_csv(run));
     write_file_atomically(directory / "timeseries.csv", timeseries_csv(run));
   }

@@ -105,9 +105,8 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
     // point: what the fitted line should be parallel to.
     try {
       const auto& trial = run.trials[series.trials.front()];
-      const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, run.study.domain);
-      const int dimension = kernel->properties().dimension;
-      const auto theory = theory_rate(metric, kernel->properties(), dimension);
+      const auto theory = theory_rate(
+          metric, kernel_properties(trial.kernel.name, trial.kernel.parameters, run.study.domain));
       std::size_t first = series.trials.size();
       for (std::size_t k = 0; k < series.trials.size(); ++k)
         if (!series.flagged[k] && std::isfinite(series.values[k]) && series.values[k] > 0) {
@@ -116,7 +115,8 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
         }
       if (theory && theory->model == RateModel::power_law && first < series.trials.size() && in_n == (run.study.abscissa == Abscissa::n)) {
         const double slope =
-            run.study.abscissa == Abscissa::n ? -theory->h_exponent / dimension : theory->h_exponent;
+            run.study.abscissa == Abscissa::n ? -theory->h_exponent / theory->dimension
+                                             : theory->h_exponent;
         data += fmt::format("$theory{} << EOD\n", block);
         for (std::size_t k = first; k < series.trials.size(); ++k)
           data += fmt::format("{} {}\n", format_real(x[k]),
@@ -151,7 +151,7 @@ PlotPlan plot_scripts(const RunRecord& run) {
           "convergence_{}: not plotted: no trial has a finite positive {} (a log axis needs one)",
           metric, metric));
   }
-  if (run.study.kind != "adaptive") return plan;
+  if (run.study.kind != StudyKind::adaptive) return plan;
 
   // Per group: the estimates at each snapshot lap (largest n of the group) against the road,
   // and |x - xhat| and V against time for every n.

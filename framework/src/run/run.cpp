@@ -32,7 +32,7 @@ namespace {
 double estimated_cost(const StudyDefinition& study, const TrialSpec& trial) {
   const auto n = static_cast<double>(trial.n);
   const double static_cost = n * n * n + n * n * static_cast<double>(study.evaluation_points);
-  if (study.kind != "adaptive") return static_cost;
+  if (study.kind != StudyKind::adaptive) return static_cost;
   // One dense LU of the (2d + n) system per step, steps growing with the horizon in laps.
   const double laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
                       study.domain.length;
@@ -62,8 +62,8 @@ TrialResult stopped_while_running() {
 }
 
 // Whether metric `position` (in metric_names(kind) order) is allowed to be NaN.
-bool metric_may_be_nan(std::string_view kind, std::size_t position) {
-  if (kind == "adaptive") return MetricTable<AdaptiveMetric>::rows[position].may_be_nan;
+bool metric_may_be_nan(StudyKind kind, std::size_t position) {
+  if (kind == StudyKind::adaptive) return MetricTable<AdaptiveMetric>::rows[position].may_be_nan;
   return MetricTable<ApproximationMetric>::rows[position].may_be_nan;
 }
 
@@ -96,7 +96,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     const auto placement = centre_registry().find(trial.centres.name)->factory(trial.centres.parameters);
     const auto centres = placement->place(trial.n, study.domain, trial.seed);
     check_cancelled();
-    if (study.kind == "adaptive") {
+    if (study.kind == StudyKind::adaptive) {
       const auto plant = plant_registry().find(trial.plant.name)->factory(trial.plant.parameters);
       const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
       const auto integrator =

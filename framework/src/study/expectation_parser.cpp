@@ -168,10 +168,10 @@ class ExpectationReader {
 
     if (theory) {
       e.kind = ExpectationKind::theory;
-      if (study_.kind != "approximation")
+      if (study_.kind != StudyKind::approximation)
         fail(src, theory->source(), "expect.theory",
              fmt::format("theory rates are known for approximation studies only (this study is "
-                         "kind = \"{}\")", study_.kind));
+                         "kind = \"{}\")", study_kind_name(study_.kind)));
     } else if (rate) {
       e.kind = ExpectationKind::rate;
       read_rate(*rate, tolerance != nullptr, e);
@@ -283,9 +283,10 @@ class ExpectationReader {
     }
     if (e.kind != ExpectationKind::theory) return;
     for (const auto* group : selected) {
-      const auto kernel = make_kernel(group->kernel.name, group->kernel.parameters, study_.domain);
       std::string why;
-      if (!theory_rate(e.metric, kernel->properties(), kernel->properties().dimension, &why))
+      if (!theory_rate(e.metric,
+                       kernel_properties(group->kernel.name, group->kernel.parameters, study_.domain),
+                       &why))
         fail(study_.source, table.get("theory")->source(), "expect.theory",
              fmt::format("kernel {}: {}", group->kernel.label(), why));
     }

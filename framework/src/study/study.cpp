@@ -18,10 +18,18 @@ std::string PluginChoice::label() const {
   return canonical.empty() ? name : name + " " + canonical;
 }
 
-const std::vector<std::string>& metric_names(std::string_view kind) {
-  if (kind == "approximation") return approximation_metric_names();
-  if (kind == "adaptive") return adaptive_metric_names();
-  throw std::invalid_argument(fmt::format("unknown study kind '{}'", kind));
+std::string_view study_kind_name(StudyKind kind) noexcept {
+  return kind == StudyKind::adaptive ? "adaptive" : "approximation";
+}
+
+std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept {
+  for (const auto kind : study_kinds)
+    if (study_kind_name(kind) == name) return kind;
+  return std::nullopt;
+}
+
+const std::vector<std::string>& metric_names(StudyKind kind) {
+  return kind == StudyKind::adaptive ? adaptive_metric_names() : approximation_metric_names();
 }
 
 const std::vector<std::string>& StudyDefinition::all_metrics() const { return metric_names(kind); }

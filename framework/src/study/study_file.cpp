@@ -351,11 +351,13 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                 fmt::format("'{}' is not a valid name (letters, digits, '_', '-', '.'; it names "
                             "the output folder)", study.name));
   study.description = get_string(report, *header, "description", "study.", std::string{});
-  study.kind = get_string(report, *header, "kind", "study.", std::string("approximation"));
-  if (study.kind != "approximation" && study.kind != "adaptive")
+  const auto kind = get_string(report, *header, "kind", "study.", std::string("approximation"));
+  if (const auto known = study_kind_from_name(kind))
+    study.kind = *known;
+  else
     report.fail(header->get("kind")->source(), "study.kind",
-                fmt::format("unknown study kind '{}' (known: approximation, adaptive)", study.kind));
-  if (study.kind != "adaptive")
+                fmt::format("unknown study kind '{}' (known: approximation, adaptive)", kind));
+  if (study.kind != StudyKind::adaptive)
     for (const char* section : {"adaptive", "plant", "law", "integrator"})
       if (const auto* node = root.get(section))
         report.fail(node->source(), section,
@@ -418,7 +420,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   study.kernels = parse_plugins(report, root, "kernel", kernel_registry(), std::nullopt);
   study.targets = parse_plugins(report, root, "target", target_registry(), std::string("sine"));
   study.centres = parse_plugins(report, root, "centres", centre_registry(), std::string("uniform"));
-  if (study.kind == "adaptive") {
+  if (study.kind == StudyKind::adaptive) {
     study.plants = parse_plugins(report, root, "plant", plant_registry(), std::string("quarter_car"));
     study.laws = parse_plugins(report, root, "law", law_registry(), std::string("rkhs"));
     study.integrators =

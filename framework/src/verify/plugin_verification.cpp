@@ -26,20 +26,6 @@ std::string g(double value) {
   return fmt::format("{:.3g}", value);
 }
 
-std::string describe_properties(const KernelProperties& p) {
-  std::string out = p.positive_definite ? "positive definite" : "positive semidefinite";
-  if (p.analytic)
-    out += ", analytic";
-  else if (p.sobolev_order)
-    out += fmt::format(", Sobolev order tau = {}", g(*p.sobolev_order));
-  else
-    out += ", no smoothness declared";
-  out += p.support_radius > 0 ? fmt::format(", support radius {}", g(p.support_radius))
-                              : std::string(", global support");
-  out += p.stationary ? ", stationary" : ", not stationary";
-  return out;
-}
-
 // The power-function sup at uniform centres, with the points at the round-off floor dropped.
 struct Decay {
   std::vector<double> n, sup;

@@ -250,10 +250,9 @@ class Verifier {
 
   void judge_theory(const Expectation& e, const MetricSeries& series, ExpectationOutcome& o) const {
     const auto& trial = trials_[series.trials.front()];
-    const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study_.domain);
     std::string why;
-    const int dimension = kernel->properties().dimension;
-    const auto theory = theory_rate(e.metric, kernel->properties(), dimension, &why);
+    const auto theory = theory_rate(
+        e.metric, kernel_properties(trial.kernel.name, trial.kernel.parameters, study_.domain), &why);
     if (!theory) {  // the parser rejects this; kept for studies built in code
       o.verdict = Verdict::inconclusive;
       o.expected = "theory";
@@ -286,11 +285,11 @@ class Verifier {
       return;
     }
     double slope = 0.0;
-    const auto interval = theory_interval(*theory, study_.abscissa, dimension, e.tolerance, &slope);
+    const auto interval = theory_interval(*theory, study_.abscissa, e.tolerance, &slope);
     o.accepted_low = interval.low;
     o.accepted_high = interval.high;
     const auto [uniform, uniformity] =
-        quasi_uniformity(dimension, study_, trials_, results_, series);
+        quasi_uniformity(theory->dimension, study_, trials_, results_, series);
     const std::string conversion =
         study_.abscissa == Abscissa::n
             ? fmt::format("slope {} against ln n for quasi-uniform centres (h ~ n^-1/d; measured: {})",
@@ -326,7 +325,7 @@ class Verifier {
     const bool has_by = !e.bound.by.empty(), has_times = !e.bound.times.empty();
     const auto by_index = has_by ? study_.metric_index(e.bound.by) : 0;
     const auto times_index = has_times ? study_.metric_index(e.bound.times) : 0;
-    auto flagged = [](const TrialResult& r, const std::string& metric) {
+    auto flagged = [this](const TrialResult& r, const std::string& metric) {
       const auto flag = excluding_flag(metric);
       return !metric.empty() && !flag.empty() &&
              std::find(r.flags.begin(), r.flags.end(), flag) != r.flags.end();

@@ -131,4 +131,13 @@ KernelRegistry& kernel_registry();
 std::unique_ptr<AnyKernel> make_kernel(std::string_view name, const ParameterSet& parameters,
                                        const Domain& domain);
 
+/// The properties of the kernel `name` with `parameters` on `domain`: the one place upper
+/// layers (theory, verdicts, plots, `list`) read a kernel's facts from. Throws as make_kernel.
+KernelProperties kernel_properties(std::string_view name, const ParameterSet& parameters,
+                                   const Domain& domain);
+
+/// The properties in words, for `rkhs-study list` and `verify-plugin`: "positive definite,
+/// Sobolev order tau = 1, support radius 1, stationary, periodic, d = 1".
+std::string describe_properties(const KernelProperties& properties);
+
 }  // namespace rkhs

@@ -40,14 +40,15 @@ struct TheoryRate {
   /// false when theory bounds the metric from above only (it may converge faster).
   bool sharp = true;
   int direction = -1;     ///< exponential: -1 the metric decays, +1 it grows
+  int dimension = 1;      ///< d of the kernel's domain (KernelProperties::dimension)
   std::string statement;  ///< "power_function_sup ~ h^(tau - d/2) = h^0.5 (tau = 1, d = 1)"
 };
 
-/// The theory for `metric` and a kernel with `properties` in `dimension` dimensions, or
+/// The theory for `metric` and a kernel with `properties` (in properties.dimension dimensions), or
 /// std::nullopt with the reason in `*why` (metric without a theory, kernel without a Sobolev
 /// order and not analytic).
 std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
-                                      int dimension, std::string* why = nullptr);
+                                      std::string* why = nullptr);
 
 /// The metrics theory_rate knows.
 const std::vector<std::string>& theory_metrics();
@@ -56,7 +57,7 @@ const std::vector<std::string>& theory_metrics();
 /// algebraic theory: the slope is h_exponent against ln h, -h_exponent / d against ln n
 /// (quasi-uniform centres). Sharp: slope +- tolerance; otherwise one-sided (at least as fast
 /// as the theory, minus the tolerance). `*slope` receives the predicted slope.
-RateInterval theory_interval(const TheoryRate& theory, Abscissa abscissa, int dimension,
-                             double tolerance, double* slope = nullptr);
+RateInterval theory_interval(const TheoryRate& theory, Abscissa abscissa, double tolerance,
+                             double* slope = nullptr);
 
 }  // namespace rkhs

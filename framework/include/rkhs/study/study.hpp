@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -56,11 +57,25 @@ struct StudyLimits {
   double matrix_megabytes = 2048;    ///< a trial whose dense matrices exceed this fails up front
 };
 
+/// What the trials of a study do: approximate a target by kernel interpolation at n centres,
+/// or learn it with an adaptive estimator driven along the track (docs/model.md).
+enum class StudyKind { approximation, adaptive };
+
+/// Every study kind, in the order `rkhs-study list metrics` prints them.
+inline constexpr StudyKind study_kinds[] = {StudyKind::approximation, StudyKind::adaptive};
+
+/// "approximation", "adaptive": the name study files (`kind = ...`), summary.json and
+/// report.html use.
+std::string_view study_kind_name(StudyKind kind) noexcept;
+
+/// The kind `name` stands for; std::nullopt for an unknown name.
+std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept;
+
 struct StudyDefinition {
   std::string name;
   std::string description;
   std::string source;  ///< the file it was read from
-  std::string kind = "approximation";
+  StudyKind kind = StudyKind::approximation;
   Domain domain;
   std::vector<std::size_t> n_values;  ///< increasing, distinct
   std::size_t evaluation_points = 4096;
@@ -70,7 +85,7 @@ struct StudyDefinition {
   Abscissa abscissa = Abscissa::n;
   SolverOptions solver;
   StudyLimits limits;
-  AdaptiveSettings adaptive;  ///< kind = "adaptive" only
+  AdaptiveSettings adaptive;  ///< StudyKind::adaptive only
   std::vector<Expectation> expectations;  ///< [[expect]] tables (rkhs/study/expectation.hpp)
   /// What the file asks for that is valid but doubtful, as "file:line:column: key: why" (e.g. an
   /// evaluation grid too coarse for the largest n); `validate`, `run` and `check` print them.
@@ -96,9 +111,8 @@ struct StudyDefinition {
   std::size_t metric_index(std::string_view metric) const;
 };
 
-/// Every metric a trial of `kind` measures, in output order. Throws std::invalid_argument for
-/// an unknown kind.
-const std::vector<std::string>& metric_names(std::string_view kind);
+/// Every metric a trial of `kind` measures, in output order.
+const std::vector<std::string>& metric_names(StudyKind kind);
 
 /// Reads and validates a study file. Throws StudyError (file, line, column, key, found,
 /// allowed, and a suggestion for misspelt names) for any problem.
