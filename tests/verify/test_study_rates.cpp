@@ -102,3 +102,18 @@ TEST_CASE("compute_rates: a flagged value inside the series is excluded, not a f
   CHECK(power.fit->points == 9);
   CHECK(power.fit->rate == Approx(-2.0).margin(1e-12));
 }
+
+TEST_CASE("the flag that excludes a metric from fits comes from the metric table", "[rates]") {
+  CHECK(excluding_flag(StudyKind::approximation, "gram_condition_number") == "gram_singular");
+  CHECK(excluding_flag(StudyKind::approximation, "gram_min_eigenvalue") == "gram_singular");
+  CHECK(excluding_flag(StudyKind::approximation, "power_function_sup") == "power_function_at_floor");
+  CHECK(excluding_flag(StudyKind::approximation, "sup_error") == "sup_error_at_floor");
+  CHECK(excluding_flag(StudyKind::approximation, "l2_error") == "l2_error_at_floor");
+  CHECK(excluding_flag(StudyKind::approximation, "fill_distance").empty());
+  CHECK(excluding_flag(StudyKind::adaptive, "gram_condition_number") == "gram_singular");
+  CHECK(excluding_flag(StudyKind::adaptive, "power_function_sup") == "power_function_at_floor");
+  // Marked, still fitted (rkhs/approx/metrics.hpp says why).
+  CHECK(excluding_flag(StudyKind::adaptive, "interpolant_sup_error").empty());
+  CHECK(excluding_flag(StudyKind::adaptive, "interpolant_l2_error").empty());
+  CHECK(excluding_flag(StudyKind::adaptive, "no_such_metric").empty());
+}

@@ -71,6 +71,12 @@ std::vector<Breakpoint> breakpoints(const AdaptiveSettings& settings, const Doma
 
 }  // namespace
 
+AdaptiveSystem::LearningSignal learning_signal_for(const AnyKernel& kernel) {
+  // A feature basis applies M to its precomputed features, cheaper than M phi for a full M.
+  return kernel.feature_count() > 0 ? AdaptiveSystem::LearningSignal::by_basis
+                                    : AdaptiveSystem::LearningSignal::from_phi;
+}
+
 AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFunction& target,
                                      std::span<const double> centres, const Plant& plant,
                                      const LearningLaw& law, const Integrator& integrator,
@@ -131,10 +137,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       })
                               : std::function<double(double)>([&](double s) { return target(s); });
 
-  // A feature basis applies M to its precomputed features, cheaper than M phi for a full M.
-  const auto signal = kernel.feature_count() > 0 ? AdaptiveSystem::LearningSignal::by_basis
-                                                 : AdaptiveSystem::LearningSignal::from_phi;
-  AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed, signal);
+  AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed,
+                        learning_signal_for(kernel));
   const double final_time = settings.final_time_or_laps(domain.length);
   if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)

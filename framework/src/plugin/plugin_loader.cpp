@@ -5,6 +5,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <mutex>
 
@@ -185,10 +186,17 @@ LoadedPlugin load_plugin(const fs::path& file) {
     if constexpr (requires { Kind::loaded; }) plugin.*Kind::loaded = names;
     plugin.registered[key] = std::move(names);
   });
-  if (!registered)
-    fail(
-        "registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, _PLANT, _LAW, "
-        "_INTEGRATOR, in the module's sources)");
+  if (!registered) {
+    // The registration macros, RKHS_REGISTER_<KIND>, named from the table of plugin kinds.
+    std::vector<std::string> macros;
+    for_each_plugin_kind([&](auto kind) {
+      std::string suffix(decltype(kind)::singular);
+      for (auto& c : suffix) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      macros.push_back(macros.empty() ? "RKHS_REGISTER_" + suffix + "(Type)" : "_" + suffix);
+    });
+    fail(fmt::format("registered nothing (use {}, or {}, in the module's sources)", macros.front(),
+                     fmt::join(macros.begin() + 1, macros.end(), ", ")));
+  }
   modules().push_back({plugin, handle});
   return plugin;
 }

@@ -6,16 +6,26 @@
 #include <cmath>
 #include <map>
 
+#include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/metrics.hpp"
 
 namespace rkhs {
 
-std::string_view excluding_flag(std::string_view metric) {
-  if (metric == "gram_condition_number" || metric == "gram_min_eigenvalue") return "gram_singular";
-  if (metric == "power_function_sup") return "power_function_at_floor";
-  if (metric == "sup_error") return "sup_error_at_floor";
-  if (metric == "l2_error") return "l2_error_at_floor";
-  return "";
+namespace {
+
+template <class Metric>
+std::string_view excluding_flag_in(std::string_view metric) {
+  for (const auto& row : MetricTable<Metric>::rows)
+    if (row.name == metric) return row.flag_excludes_from_fits ? row.flag : std::string_view();
+  return {};
+}
+
+}  // namespace
+
+std::string_view excluding_flag(StudyKind kind, std::string_view metric) {
+  return kind == StudyKind::adaptive ? excluding_flag_in<AdaptiveMetric>(metric)
+                                     : excluding_flag_in<ApproximationMetric>(metric);
 }
 
 std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
@@ -38,7 +48,7 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
               [&](auto a, auto b) { return trials[a].n < trials[b].n; });
     for (const auto& metric : study.metrics) {
       const std::size_t m = study.metric_index(metric);
-      const auto flag = excluding_flag(metric);
+      const auto flag = excluding_flag(study.kind, metric);
       MetricSeries series;
       series.metric = metric;
       series.group = g;

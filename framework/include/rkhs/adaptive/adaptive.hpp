@@ -82,6 +82,10 @@ class AdaptiveSystem {
   mutable std::size_t rhs_count_ = 0, jacobian_count_ = 0;
 };
 
+/// The learning signal measure_adaptive uses for `kernel`: by_basis for a kernel with a finite
+/// feature map (M applied to its sparse features), from_phi otherwise.
+AdaptiveSystem::LearningSignal learning_signal_for(const AnyKernel& kernel);
+
 struct IntegrationStats {
   std::size_t steps = 0;
   std::size_t rejected_steps = 0;

@@ -25,6 +25,10 @@ struct MetricRow {
   std::string_view doc;   ///< one line
   bool may_be_nan;        ///< NaN by design in some trials; any other NaN fails the trial
   std::string_view flag;  ///< the flag that marks a value as round-off (docs/metrics.md), or ""
+  /// Whether a value carrying `flag` is left out of rate fits (excluding_flag()). True for
+  /// every flag but the adaptive trials' interpolant_*_at_floor, which mark values that fits
+  /// still use (making them excluded changes adaptive studies' fitted rates).
+  bool flag_excludes_from_fits = true;
 };
 
 /// Specialised per metric enum with `static constexpr std::array<MetricRow<Metric>, N> rows`.

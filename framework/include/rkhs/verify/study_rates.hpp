@@ -35,8 +35,10 @@ struct MetricSeries {
   std::string no_fit_reason;            ///< why there is no fit ("" when there is one)
 };
 
-/// The flag that makes a value of `metric` meaningless, or "" when none does.
-std::string_view excluding_flag(std::string_view metric);
+/// The flag that leaves a value of `metric` (a metric of a `kind` trial) out of rate fits, or ""
+/// when none does: read from the kind's metric table (rkhs/approx/metrics.hpp,
+/// rkhs/adaptive/metrics.hpp: `flag` where `flag_excludes_from_fits`).
+std::string_view excluding_flag(StudyKind kind, std::string_view metric);
 
 /// Series for every group and every metric of the study, groups in trial order.
 std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
