@@ -4,6 +4,7 @@
 // fhat = sum_i alpha_i k(c_i, .), integrated in time along a closed track s(t) = (v t) mod L.
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <span>
@@ -117,16 +118,31 @@ bool register_integrator() noexcept {
   return register_plugin<T>(integrator_registry());
 }
 
+/// How an adaptive trial advances in time (docs/model.md, "the lap map").
+///   time_stepping: the integrator steps through every lap;
+///   lap_map: one lap is computed once as the affine map z -> Phi z + c (the monodromy matrix
+///     of the periodic linear system) and N laps are its N-th power, or its fixed point for
+///     laps = "limit"; applies to a periodic domain, a periodic road and a whole number of laps
+///     starting at t = 0;
+///   automatic: the lap map where it applies, time stepping otherwise.
+enum class AdaptiveEngine { automatic, lap_map, time_stepping };
+
 /// Study-wide settings of adaptive trials ([adaptive] in a study file).
 struct AdaptiveSettings {
   double speed = 1.0;                 ///< v, m/s
-  double laps = 10;                   ///< T = laps L / v unless final_time > 0
+  /// T = laps L / v unless final_time > 0. +infinity stands for laps = "limit": the periodic
+  /// steady state (lap map only).
+  double laps = 10;
   double final_time = 0;              ///< s
   std::string q = "identity";         ///< Q of the Lyapunov equation (parse_matrix syntax)
   bool projected_road = false;        ///< drive the plant with Pi_n f (in H_n) instead of f
   std::vector<double> snapshot_laps;  ///< laps at which fhat is recorded (estimates.csv)
   std::size_t snapshot_points = 256;  ///< points of the snapshot grid
   std::size_t samples_per_lap = 20;   ///< output samples for V and |x - xhat|
+  AdaptiveEngine engine = AdaptiveEngine::automatic;
+  double lap_map_rtol = 1e-10;  ///< tolerances of the one lap integrated for the lap map:
+  double lap_map_atol = 1e-12;  ///< its errors grow at most N-fold over N laps
+  bool limit() const noexcept { return std::isinf(laps); }
   double final_time_or_laps(double length) const {
     return final_time > 0 ? final_time : laps * length / speed;
   }
