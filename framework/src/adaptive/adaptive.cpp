@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
 
@@ -23,7 +25,7 @@ namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 
-enum BreakpointRole : unsigned { sample = 1u, snapshot = 2u };
+enum BreakpointRole : unsigned { sample_role = 1u, snapshot_role = 2u };
 
 struct Breakpoint {
   double t;
@@ -31,42 +33,116 @@ struct Breakpoint {
   std::size_t snapshot_index = 0;
 };
 
-// Sample times, snapshot times and (when the integrator restarts there) the times at which
-// s(t) = v t mod L crosses a kink, merged; times closer than 1e-12 T are one breakpoint.
+// From t = start to t = end: sample times (samples_per_lap per lap, evenly spaced, start and
+// end included), snapshot times (when `snapshots`) and, when the integrator restarts there,
+// the times at which s(t) = v t mod L crosses a kink, merged; times closer than 1e-12 end are
+// one breakpoint.
 std::vector<Breakpoint> breakpoints(const AdaptiveSettings& settings, const Domain& domain,
-                                    double final_time, const std::vector<double>& kinks,
-                                    bool restart_at_kinks) {
-  std::vector<Breakpoint> points{{0.0, sample, 0}};
-  const double laps_total = final_time * settings.speed / domain.length;
+                                    double start, double end, const std::vector<double>& kinks,
+                                    bool restart_at_kinks, bool snapshots = true) {
+  std::vector<Breakpoint> points{{start, sample_role, 0}};
+  const double laps_total = (end - start) * settings.speed / domain.length;
   const auto samples = static_cast<std::size_t>(
       std::max(1.0, std::ceil(laps_total * static_cast<double>(settings.samples_per_lap))));
   for (std::size_t k = 1; k <= samples; ++k)
     points.push_back(
-        {final_time * static_cast<double>(k) / static_cast<double>(samples), sample, 0});
-  for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i) {
-    const double t = settings.snapshot_laps[i] * domain.length / settings.speed;
-    if (t <= final_time * (1 + 1e-12)) points.push_back({std::min(t, final_time), snapshot, i});
-  }
+        {start + (end - start) * static_cast<double>(k) / static_cast<double>(samples),
+         sample_role, 0});
+  if (snapshots)
+    for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i) {
+      const double t = settings.snapshot_laps[i] * domain.length / settings.speed;
+      if (t <= end * (1 + 1e-12)) points.push_back({std::min(t, end), snapshot_role, i});
+    }
   if (restart_at_kinks) {
     const double lap_time = domain.length / settings.speed;
-    for (double lap = 0; lap * lap_time < final_time; ++lap)
+    for (double lap = std::floor(start / lap_time); lap * lap_time < end; ++lap)
       for (double kink : kinks) {
         const double t = (lap * domain.length + kink) / settings.speed;
-        if (t > 0 && t < final_time) points.push_back({t, 0, 0});
+        if (t > start && t < end) points.push_back({t, 0, 0});
       }
   }
   std::sort(points.begin(), points.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
   std::vector<Breakpoint> merged;
-  const double tolerance = 1e-12 * final_time;
+  const double tolerance = 1e-12 * end;
   for (const auto& p : points) {
     if (!merged.empty() && p.t - merged.back().t <= tolerance) {
       merged.back().roles |= p.roles;
-      if (p.roles & snapshot) merged.back().snapshot_index = p.snapshot_index;
+      if (p.roles & snapshot_role) merged.back().snapshot_index = p.snapshot_index;
     } else {
       merged.push_back(p);
     }
   }
   return merged;
+}
+
+bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps < 9.2e18; }
+
+// The engine a trial runs with (AdaptiveEngine): the lap map needs whole laps from t = 0 (no
+// final_time) and whole snapshot laps; `automatic` takes it for the limit and when the laps
+// outnumber the columns it integrates (dimension + 1), time stepping otherwise.
+AdaptiveEngine choose_engine(const AdaptiveSettings& settings, Eigen::Index dimension) {
+  const bool applies = settings.final_time <= 0 &&
+                       (settings.limit() || whole(settings.laps)) &&
+                       std::all_of(settings.snapshot_laps.begin(), settings.snapshot_laps.end(),
+                                   [](double lap) { return whole(lap); });
+  switch (settings.engine) {
+    case AdaptiveEngine::time_stepping:
+      if (settings.limit())
+        throw std::invalid_argument("laps = \"limit\" needs the lap map (engine = \"time_stepping\")");
+      return AdaptiveEngine::time_stepping;
+    case AdaptiveEngine::lap_map:
+      if (!applies)
+        throw std::invalid_argument(
+            "the lap map needs a whole number of laps (or \"limit\"), no final_time and whole "
+            "snapshot laps");
+      return AdaptiveEngine::lap_map;
+    case AdaptiveEngine::automatic:
+      break;
+  }
+  if (settings.limit() && !applies)
+    throw std::invalid_argument(
+        "laps = \"limit\" needs the lap map: no final_time and whole snapshot laps");
+  return applies && (settings.limit() || settings.laps > static_cast<double>(dimension + 1))
+             ? AdaptiveEngine::lap_map
+             : AdaptiveEngine::time_stepping;
+}
+
+// The smallest N >= 0 with distance(N) <= fraction distance(0), found by doubling and then
+// bisection (it assumes distance(N) stays below the fraction once it is there, as it does
+// for the contracting learning dynamics). 2^62 when not reached by then.
+template <class Distance>
+std::uint64_t laps_within(Distance&& distance, double fraction) {
+  const double target = fraction * distance(0);
+  if (!(target > 0)) return 0;
+  std::uint64_t high = 1;
+  while (distance(high) > target) {
+    if (high >= (std::uint64_t{1} << 62)) return high;
+    high *= 2;
+  }
+  std::uint64_t low = high / 2;  // distance(low) > target, or low = 0
+  while (high - low > 1) {
+    const std::uint64_t middle = low + (high - low) / 2;
+    (distance(middle) > target ? low : high) = middle;
+  }
+  return high;
+}
+
+// Lap numbers 2 .. laps - 2 at which the lap map's state is sampled: every lap up to 200 laps,
+// beyond that about 50 per decade (rounded to whole laps).
+std::vector<std::uint64_t> lap_boundaries(std::uint64_t laps) {
+  std::vector<std::uint64_t> out;
+  if (laps < 4) return out;
+  const std::uint64_t last = laps - 2;
+  if (last <= 200) {
+    for (std::uint64_t k = 2; k <= last; ++k) out.push_back(k);
+    return out;
+  }
+  for (double x = std::log10(2.0); x <= std::log10(static_cast<double>(last)); x += 0.02) {
+    const auto k = static_cast<std::uint64_t>(std::llround(std::pow(10.0, x)));
+    if (out.empty() || k > out.back()) out.push_back(std::min(k, last));
+  }
+  if (out.back() != last) out.push_back(last);
+  return out;
 }
 
 }  // namespace
@@ -139,15 +215,13 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
 
   AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed,
                         learning_signal_for(kernel));
-  const double final_time = settings.final_time_or_laps(domain.length);
-  if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)
   if (!settings.projected_road)
     for (double kink : target.kink_points()) kinks.push_back(kink);
-  const auto points =
-      breakpoints(settings, domain, final_time, kinks, integrator.restarts_at_kinks());
-  std::vector<double> times(points.size());
-  std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
+  const Eigen::Index m = system.dimension();
+  const double lap_time = domain.length / settings.speed;
+  const AdaptiveEngine engine = choose_engine(settings, m);
+  out.engine = engine == AdaptiveEngine::lap_map ? "lap_map" : "time_stepping";
 
   // V = 1/2 e^T P e + 1/2 Gamma (alpha* - alpha)^T W (alpha* - alpha), W = G (rkhs law) or I.
   const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
@@ -156,31 +230,106 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   out.snapshots.resize(settings.snapshot_laps.size());
   for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
     out.snapshots[i].lap = settings.snapshot_laps[i];
-  auto observe = [&](std::size_t k, const double* z) {
-    check_cancelled();  // every breakpoint, also for integrators from plugins
+  auto sample = [&](double t, const double* z) {
     const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
-    if (points[k].roles & sample) {
-      const Eigen::VectorXd e = x - xhat;
-      const Eigen::VectorXd coefficient_gap = alpha_star - alpha;
-      const double weighted = law.uses_gram_inverse() ? coefficient_gap.dot(gram * coefficient_gap)
-                                                      : coefficient_gap.squaredNorm();
-      out.samples.push_back({points[k].t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
-    }
-    if (points[k].roles & snapshot) {
-      const Eigen::VectorXd estimate = snapshot_cross * alpha;
-      out.snapshots[points[k].snapshot_index].estimate.assign(estimate.data(),
-                                                              estimate.data() + estimate.size());
-    }
+    const Eigen::VectorXd e = x - xhat;
+    const Eigen::VectorXd coefficient_gap = alpha_star - alpha;
+    const double weighted = law.uses_gram_inverse() ? coefficient_gap.dot(gram * coefficient_gap)
+                                                    : coefficient_gap.squaredNorm();
+    out.samples.push_back({t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
   };
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(2 * d + n);
-  const auto stats = integrator.integrate(system, z, times, observe);
+  auto snapshot = [&](std::size_t index, const double* z) {
+    const Eigen::VectorXd estimate =
+        snapshot_cross * Eigen::Map<const Eigen::VectorXd>(z + 2 * d, n);
+    out.snapshots[index].estimate.assign(estimate.data(), estimate.data() + estimate.size());
+  };
+  // Integrates from z at t = start through `points` (times from start on) with the study's
+  // integrator, sampling and taking snapshots where the points say.
+  IntegrationStats stats;
+  auto integrate = [&](Eigen::VectorXd& z, const std::vector<Breakpoint>& points) {
+    std::vector<double> times(points.size());
+    std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
+    auto observe = [&](std::size_t k, const double* state) {
+      check_cancelled();  // every breakpoint, also for integrators from plugins
+      if (points[k].roles & sample_role) sample(points[k].t, state);
+      if (points[k].roles & snapshot_role) snapshot(points[k].snapshot_index, state);
+    };
+    const auto run = integrator.integrate(system, z, times, observe);
+    stats.steps += run.steps;
+    stats.rejected_steps += run.rejected_steps;
+    stats.segments += run.segments;
+  };
+
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(m);
+  std::optional<LapMap> lap_map;
+  if (engine == AdaptiveEngine::time_stepping) {
+    const double final_time = settings.final_time_or_laps(domain.length);
+    if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
+    integrate(z, breakpoints(settings, domain, 0.0, final_time, kinks,
+                             integrator.restarts_at_kinks()));
+  } else {
+    // One lap as an affine map, then N laps (or the limit) through its powers. Samples: the
+    // first lap and, for N laps, the last lap integrated with the study's integrator from the
+    // state the map gives (the last lap's end checks the map: lap_map_residual), and the lap
+    // boundaries in between from the map.
+    std::vector<double> kink_times;
+    for (double kink : kinks) kink_times.push_back(kink / settings.speed);
+    lap_map = compute_lap_map(system, lap_time, kink_times, settings.lap_map_atol,
+                              settings.lap_map_rtol, std::numeric_limits<std::int64_t>::max());
+    stats.steps += lap_map->stats.steps;
+    stats.rejected_steps += lap_map->stats.rejected_steps;
+    stats.segments += lap_map->stats.segments;
+    check_cancelled();
+    const LapPowers powers(*lap_map);
+    const Eigen::VectorXd z0 = z;
+    const auto limit = periodic_limit(*lap_map, z0, d, 100 * settings.lap_map_rtol);
+    metrics[M::learning_spectral_radius] = limit.spectral_radius;
+    metrics[M::slowest_time_constant_laps] = limit.slowest_time_constant_laps;
+    metrics[M::unexcited_directions] = static_cast<double>(limit.unexcited_directions);
+    for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
+      snapshot(i, powers.advance(z0, static_cast<std::uint64_t>(settings.snapshot_laps[i])).data());
+    // Laps until fhat is within 1% (in L2 on the evaluation grid) of its limit.
+    auto distance_to_limit = [&](std::uint64_t laps) {
+      const Eigen::VectorXd state = powers.advance(z0, laps);
+      const Eigen::VectorXd gap = cross * (state.tail(n) - limit.state.tail(n));
+      return domain.l2_norm(
+          std::span<const double>(gap.data(), static_cast<std::size_t>(gap.size())));
+    };
+    metrics[M::laps_to_limit] = static_cast<double>(laps_within(distance_to_limit, 0.01));
+
+    Eigen::VectorXd first = z0;
+    integrate(first, breakpoints(settings, domain, 0.0, lap_time, kinks,
+                                 integrator.restarts_at_kinks(), /*snapshots=*/false));
+    const std::uint64_t laps = settings.limit()
+                                   ? std::max<std::uint64_t>(
+                                         2, static_cast<std::uint64_t>(metrics[M::laps_to_limit]))
+                                   : static_cast<std::uint64_t>(settings.laps);
+    for (std::uint64_t k : lap_boundaries(laps))
+      sample(static_cast<double>(k) * lap_time, powers.advance(z0, k).data());
+    if (settings.limit()) {
+      z = limit.state;
+    } else {
+      z = powers.advance(z0, laps);
+      if (laps >= 2) {
+        Eigen::VectorXd last = powers.advance(z0, laps - 1);
+        const double start = static_cast<double>(laps - 1) * lap_time;
+        integrate(last, breakpoints(settings, domain, start, start + lap_time, kinks,
+                                    integrator.restarts_at_kinks(), /*snapshots=*/false));
+        metrics[M::lap_map_residual] = (last - z).norm() / std::max(z.norm(), 1e-300);
+      } else {
+        metrics[M::lap_map_residual] = (first - z).norm() / std::max(z.norm(), 1e-300);
+      }
+    }
+    std::sort(out.samples.begin(), out.samples.end(),
+              [](const auto& a, const auto& b) { return a.t < b.t; });
+  }
   out.road.resize(snapshot_grid.size());
-  for (std::size_t m = 0; m < snapshot_grid.size(); ++m) out.road[m] = road(snapshot_grid[m]);
+  for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
 
   // Errors at T on the M-point grid.
   const auto grid = domain.uniform_points(evaluation_points);  // the rows of `cross`
   Eigen::VectorXd f(static_cast<Eigen::Index>(grid.size()));
-  for (std::size_t m = 0; m < grid.size(); ++m) f(static_cast<Eigen::Index>(m)) = road(grid[m]);
+  for (std::size_t k = 0; k < grid.size(); ++k) f(static_cast<Eigen::Index>(k)) = road(grid[k]);
   const Eigen::VectorXd alpha = z.tail(n);
   const Eigen::VectorXd estimate = cross * alpha, projection = cross * alpha_star;
   auto l2 = [&](const Eigen::VectorXd& v) {

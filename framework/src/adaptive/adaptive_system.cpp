@@ -69,6 +69,11 @@ void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
 }
 
 void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt) const {
+  jacobian_matrix(t, J);
+  time_derivative(z, t, dfdt);
+}
+
+void AdaptiveSystem::jacobian_matrix(double t, double* J) const {
   ++jacobian_count_;
   const Eigen::Index m = dimension();
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jac(J, m, m);
@@ -81,10 +86,13 @@ void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt
   jac.block(d_, 2 * d_, d_, n_).noalias() = B_ * phi.transpose();
   jac.block(2 * d_, 0, n_, d_).noalias() = psi * b_.transpose();
   jac.block(2 * d_, d_, n_, d_).noalias() = -psi * b_.transpose();
+}
 
+void AdaptiveSystem::time_derivative(const double* z, double t, double* dfdt) const {
   // dF/dt by differences in t, inside the current smooth segment. F depends on t only through
   // s = v t, so the increment is sized in arc length (1e-6 L): small against the scales of f
   // and phi, large enough that round-off in f(s +- h) does not dominate.
+  const Eigen::Index m = dimension();
   const double h = 1e-6 * domain_.length / std::abs(speed_);
   double lo = t - h, hi = t + h;
   if (lo < segment_begin_) lo = t;
@@ -95,6 +103,37 @@ void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt
   for (Eigen::Index i = 0; i < m; ++i)
     dfdt[i] =
         (plus_[static_cast<std::size_t>(i)] - minus_[static_cast<std::size_t>(i)]) / (hi - lo);
+}
+
+void AdaptiveSystem::linearize(double t, CoupledLinearization& out) const {
+  ++jacobian_count_;
+  evaluate_basis(arc_length(t));
+  out.A = &A_;
+  out.B = &B_;
+  out.b = &b_;
+  out.phi = Eigen::Map<const Eigen::VectorXd>(phi_.data(), n_);
+  out.psi = Eigen::Map<const Eigen::VectorXd>(psi_.data(), n_);
+}
+
+void AdaptiveSystem::rhs_columns(const double* Z, double* dZ, Eigen::Index columns,
+                                 double t) const {
+  ++rhs_count_;
+  const double s = arc_length(t);
+  evaluate_basis(s);
+  const Eigen::Index m = dimension();
+  const Eigen::Map<const Eigen::MatrixXd> z(Z, m, columns);
+  Eigen::Map<Eigen::MatrixXd> dz(dZ, m, columns);
+  const Eigen::Map<const Eigen::VectorXd> phi(phi_.data(), n_), psi(psi_.data(), n_);
+  for (Eigen::Index j = 0; j < columns; ++j) {
+    const auto x = z.col(j).segment(0, d_), xhat = z.col(j).segment(d_, d_);
+    const auto alpha = z.col(j).segment(2 * d_, n_);
+    const double error = b_.dot(x - xhat);
+    dz.col(j).segment(0, d_).noalias() = A_ * x;
+    dz.col(j).segment(d_, d_).noalias() = A_ * xhat;
+    dz.col(j).segment(d_, d_) += B_ * phi.dot(alpha);
+    dz.col(j).segment(2 * d_, n_) = error * psi;
+  }
+  dz.col(columns - 1).segment(0, d_) += B_ * road_(s);
 }
 
 namespace detail {

@@ -115,6 +115,8 @@ std::string trials_csv(const RunRecord& run) {
   header.push_back("n");
   header.insert(header.end(), run.study.metrics.begin(), run.study.metrics.end());
   for (const char* extra : {"status", "reason", "solve", "flags"}) header.push_back(extra);
+  const bool adaptive = run.study.kind == StudyKind::adaptive;
+  if (adaptive) header.push_back("engine");
   std::string out = csv_row(header);
   for (const auto& trial : run.trials) {
     const auto& result = run.results[trial.index];
@@ -126,6 +128,7 @@ std::string trials_csv(const RunRecord& run) {
     row.push_back(result.reason);
     row.push_back(result.solve_method);
     row.push_back(fmt::format("{}", fmt::join(result.flags, ";")));
+    if (adaptive) row.push_back(result.engine);
     out += csv_row(row);
   }
   return out;
@@ -250,12 +253,13 @@ std::string summary_json(const RunRecord& run) {
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
         "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
-        "\"flags\": [{}], \"seconds\": {}, \"metrics\": {{{}}}}}{}\n",
+        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}}}{}\n",
         trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
         json_plugin(trial.centres), trial.n,
         result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
         json_string(result.ok ? "ok" : "failed"), json_string(result.reason),
         json_string(result.solve_method), fmt::join(flags, ", "),
+        result.engine.empty() ? std::string() : " \"engine\": " + json_string(result.engine) + ",",
         json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
         trial.index + 1 < run.trials.size() ? "," : "");
   }

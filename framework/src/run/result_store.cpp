@@ -123,6 +123,7 @@ std::string serialize_result(const TrialResult& r) {
   out += fmt::format("ok {}\n", r.ok ? 1 : 0);
   out += "reason " + escape(r.reason) + "\n";
   out += "solve " + escape(r.solve_method) + "\n";
+  if (!r.engine.empty()) out += "engine " + escape(r.engine) + "\n";
   std::string flags;
   for (std::size_t i = 0; i < r.flags.size(); ++i) flags += (i ? ";" : "") + r.flags[i];
   out += "flags " + escape(flags) + "\n";
@@ -151,6 +152,7 @@ TrialResult deserialize_result(std::string_view text) {
     if (field == "ok") r.ok = value == "1";
     else if (field == "reason") r.reason = unescape(value);
     else if (field == "solve") r.solve_method = unescape(value);
+    else if (field == "engine") r.engine = unescape(value);
     else if (field == "flags") {
       const auto flags = unescape(value);
       std::size_t start = 0;

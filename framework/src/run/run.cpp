@@ -105,6 +105,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
                                        study.adaptive, study.evaluation_points, study.solver);
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
+      result.engine = std::move(measured.engine);
       result.flags = std::move(measured.flags);
       result.samples = std::move(measured.samples);
       result.road = std::move(measured.road);

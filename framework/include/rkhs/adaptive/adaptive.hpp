@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/adaptive/coupled_structure.hpp"
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/kernel/kernel.hpp"
@@ -56,6 +57,22 @@ class AdaptiveSystem {
   void rhs(const double* z, double* dz, double t) const;
   /// J = dF/dz (row-major, dimension()^2 doubles, every entry written) and dfdt = dF/dt.
   void jacobian(const double* z, double* J, double t, double* dfdt) const;
+  /// J = dF/dz at t alone (row-major, every entry written): the dense reference of the
+  /// structured stage solves. Counted as a Jacobian evaluation.
+  void jacobian_matrix(double t, double* J) const;
+  /// dfdt = dF/dt at (z, t).
+  void time_derivative(const double* z, double t, double* dfdt) const;
+  /// J(t) in structured form (rkhs/adaptive/coupled_structure.hpp): phi and psi at s(t), and
+  /// the system's A, B and b (which must outlive `out`). One basis evaluation; counted as a
+  /// Jacobian evaluation.
+  void linearize(double t, CoupledLinearization& out) const;
+  /// The columns of the lap map (rkhs/adaptive/lap_map.hpp): dZ = J(t) Z for each of the
+  /// `columns` columns of Z (dimension() rows, column-major), plus the forcing [B f(s); 0; 0]
+  /// in the last column, so that the last column follows the system from its own state and
+  /// the others its sensitivities to the initial state. One basis evaluation; counted as one
+  /// right-hand side.
+  void rhs_columns(const double* Z, double* dZ, Eigen::Index columns, double t) const;
+  const Eigen::MatrixXd& plant_matrix() const noexcept { return A_; }
   /// The smooth segment being integrated (for one-sided differences at its ends).
   void set_segment(double t_begin, double t_end) noexcept {
     segment_begin_ = t_begin;
@@ -140,8 +157,11 @@ struct AdaptiveSettings {
   std::size_t snapshot_points = 256;  ///< points of the snapshot grid
   std::size_t samples_per_lap = 20;   ///< output samples for V and |x - xhat|
   AdaptiveEngine engine = AdaptiveEngine::automatic;
-  double lap_map_rtol = 1e-10;  ///< tolerances of the one lap integrated for the lap map:
-  double lap_map_atol = 1e-12;  ///< its errors grow at most N-fold over N laps
+  /// Tolerances of the one lap integrated for the lap map: its errors grow at most N-fold over
+  /// N laps. atol below about 1e-10 asks for more than round-off allows in the quarter car's
+  /// velocities (computed from forces of 1e5 that cancel): Newton iterations then stall.
+  double lap_map_rtol = 1e-10;
+  double lap_map_atol = 1e-10;
   bool limit() const noexcept { return std::isinf(laps); }
   double final_time_or_laps(double length) const {
     return final_time > 0 ? final_time : laps * length / speed;
@@ -166,6 +186,7 @@ struct Snapshot {
 struct AdaptiveMeasurement {
   MetricValues<AdaptiveMetric> metrics;  ///< in adaptive_metric_names() order
   std::string solve_method;
+  std::string engine;  ///< "time_stepping" or "lap_map" (AdaptiveEngine)
   std::vector<std::string> flags;
   std::vector<TimeSample> samples;
   std::vector<double> road;  ///< f on the snapshot grid

@@ -27,12 +27,17 @@ enum class AdaptiveMetric : std::size_t {
   segments,
   rhs_evaluations,
   jacobian_evaluations,
+  learning_spectral_radius,
+  slowest_time_constant_laps,
+  laps_to_limit,
+  unexcited_directions,
+  lap_map_residual,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 19> rows{{
+  static constexpr std::array<MetricRow<M>, 24> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -63,6 +68,24 @@ struct MetricTable<AdaptiveMetric> {
       {M::rhs_evaluations, "rhs_evaluations", "count",
        "right-hand-side evaluations (two per Jacobian included)", false, ""},
       {M::jacobian_evaluations, "jacobian_evaluations", "count", "Jacobian evaluations", false, ""},
+      {M::learning_spectral_radius, "learning_spectral_radius", "1",
+       "largest |eigenvalue| of the lap map's learning block (xhat, alpha), unexcited "
+       "directions left out; NaN unless engine = lap_map",
+       true, ""},
+      {M::slowest_time_constant_laps, "slowest_time_constant_laps", "laps",
+       "-1 / ln(learning_spectral_radius); NaN unless engine = lap_map", true, ""},
+      {M::laps_to_limit, "laps_to_limit", "laps",
+       "laps until ||fhat - fhat(limit)|| in L2 is 1% of ||fhat(0) - fhat(limit)||; NaN unless "
+       "engine = lap_map",
+       true, ""},
+      {M::unexcited_directions, "unexcited_directions", "count",
+       "directions of z that one lap leaves unchanged (eigenvalue 1 of the lap map); NaN unless "
+       "engine = lap_map",
+       true, ""},
+      {M::lap_map_residual, "lap_map_residual", "1",
+       "|z(T) integrated over the last lap - z(T) from the lap map| / |z(T)|; NaN unless "
+       "engine = lap_map with whole laps",
+       true, ""},
   }};
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

@@ -92,8 +92,8 @@ struct IntegratorKind {
   using Registry = IntegratorRegistry;
   static constexpr std::string_view singular = "integrator";
   static constexpr std::string_view plural = "integrators";
-  static constexpr std::string_view builtins[] = {"dopri5", "rk4", "rk_fehlberg78", "rodas4",
-                                                  "rosenbrock4"};
+  static constexpr std::string_view builtins[] = {"dopri5", "radau5", "rk4", "rk_fehlberg78",
+                                                  "rodas4", "rosenbrock4"};
   static constexpr auto loaded = &LoadedPlugin::integrators;
   static Registry& registry() { return integrator_registry(); }
 };

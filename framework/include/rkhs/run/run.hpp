@@ -22,6 +22,7 @@ struct TrialResult {
   std::string reason;             ///< why the trial failed (empty when ok)
   std::vector<double> metrics;    ///< aligned with study.all_metrics(); NaN if not measured
   std::string solve_method;       ///< how the Gram matrix was solved
+  std::string engine;             ///< adaptive trials: "time_stepping" or "lap_map"
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
   double seconds = 0;             ///< wall time (not part of the deterministic results)
   std::string data_provenance;    ///< the target's external data ("sha256:..."), empty if none

@@ -1,0 +1,51 @@
+#pragma once
+// The linear systems of an implicit step of an AdaptiveSystem, (c I - J(t)) k = r for a real or
+// complex shift c: solved with the structure of J (rkhs/adaptive/coupled_structure.hpp,
+// O(d^3 + n) to factor and O(d^2 + n) per solve), or through the dense (2d + n)^2 matrix, the
+// reference the structured solves are tested against (O((2d + n)^3) per factorisation).
+
+#include <Eigen/Dense>
+#include <complex>
+#include <string_view>
+
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/coupled_structure.hpp"
+
+namespace rkhs {
+
+enum class LinearSolver { structured, dense };
+
+/// "structured" or "dense"; throws std::invalid_argument naming the allowed values.
+LinearSolver linear_solver_from_name(std::string_view name);
+
+/// Factorisations of (c I - J(t)) for one real and, when asked, one complex shift, and solves
+/// with them (each column of the right-hand side in place). The system must outlive it.
+class StageSolves {
+ public:
+  StageSolves(const AdaptiveSystem& system, LinearSolver kind);
+
+  /// J = J(t); factorises (real_shift I - J). Throws SingularStageMatrix when singular.
+  void factor(double t, double real_shift);
+  /// J = J(t); factorises (real_shift I - J) and (complex_shift I - J).
+  void factor(double t, double real_shift, std::complex<double> complex_shift);
+
+  void solve_real(Eigen::Ref<Eigen::MatrixXd> rhs) const;
+  void solve_complex(Eigen::Ref<Eigen::MatrixXcd> rhs) const;
+
+ private:
+  void linearize(double t);
+  const AdaptiveSystem& system_;
+  LinearSolver kind_;
+  // structured
+  CoupledLinearization linearization_;
+  ShiftedCoupledSolver<double> real_;
+  ShiftedCoupledSolver<std::complex<double>> complex_;
+  // dense
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jacobian_;
+  Eigen::MatrixXd real_matrix_;
+  Eigen::MatrixXcd complex_matrix_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> real_lu_;
+  Eigen::PartialPivLU<Eigen::MatrixXcd> complex_lu_;
+};
+
+}  // namespace rkhs
