@@ -28,7 +28,7 @@ and SciPy (README.md in this folder: SciPy is never a dependency of the project)
 Examples:
     compare_adaptive.py studies/paper_synthetic.toml "gaussian/rkhs/10" "bspline:degree=1/rkhs/100"
     compare_adaptive.py studies/paper_synthetic.toml "gaussian/rkhs/100" --integrator rodas4
-    compare_adaptive.py STUDY "gaussian/rkhs/10" --integrator radau5 --integrator-param newton=7
+    compare_adaptive.py STUDY "gaussian/rkhs/10" --integrator radau5 --integrator rodas4:restart_at_kinks=false
 """
 import argparse
 import csv
@@ -141,7 +141,7 @@ def parse_literal(text):
         return text
 
 
-def trial_studies(study, selectors, integrator, laps):
+def trial_studies(study, selectors, integrators, laps):
     """(label, study document) for each trial the selectors name."""
     kernels = [e for entry in study.get("kernel", []) for e in expand_entry(entry)]
     laws = [e for entry in study.get("law", [{"name": "rkhs"}]) for e in expand_entry(entry)]
@@ -168,7 +168,7 @@ def trial_studies(study, selectors, integrator, laps):
                 if table in study:
                     document[table] = study[table]
             document["law"] = [law]
-            document["integrator"] = [integrator]
+            document["integrator"] = [integrators[0]]
             document.setdefault("adaptive", {})
             if laps is not None:
                 document["adaptive"]["laps"] = laps
@@ -186,21 +186,34 @@ def trial_studies(study, selectors, integrator, laps):
 
 
 def run_rkhs_study(executable, study_file, work, extra):
-    out_dir = work / "rkhs-study"
+    work.mkdir(parents=True, exist_ok=True)
+    out_dir = work / "out"
     command = [str(executable), "run", str(study_file), "--out", str(out_dir), "--threads", "1",
                "--quiet", "--no-plots", "--no-store"] + extra
     started = time.perf_counter()
     done = subprocess.run(command, cwd=work, capture_output=True, text=True)
     wall = time.perf_counter() - started
-    if done.returncode != 0:
-        raise SystemExit(f"rkhs-study failed ({done.returncode}):\n{done.stdout}{done.stderr}")
-    with open(out_dir / "trials.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    with open(out_dir / "summary.json") as f:
-        summary = json.load(f)
-    if len(rows) != 1 or len(summary["trials"]) != 1:
+    note = ""
+    if done.returncode == 0:
+        with open(out_dir / "trials.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        with open(out_dir / "summary.json") as f:
+            summary = json.load(f)
+        seconds = float(summary["trials"][0]["seconds"]) if summary["trials"] else math.nan
+        provenance = summary["provenance"]
+    else:
+        # The run died after its trial (a crash while writing outputs, say): the journal, written
+        # as each trial ends, still has the metrics, but not the trial's own time.
+        journal = out_dir / "journal.csv"
+        rows = list(csv.DictReader(open(journal, newline=""))) if journal.exists() else []
+        if not rows:
+            raise SystemExit(f"rkhs-study failed ({done.returncode}):\n{done.stdout}{done.stderr}")
+        print(f"warning: rkhs-study exited with status {done.returncode}; metrics from "
+              f"journal.csv, time = the whole process's wall time", file=sys.stderr)
+        seconds, provenance, note = wall, {"version": "?", "git_commit": "?"}, "process"
+    if len(rows) != 1:
         raise SystemExit(f"{study_file}: expected one trial, rkhs-study ran {len(rows)}")
-    row, trial = rows[0], summary["trials"][0]
+    row = rows[0]
     if row["status"] != "ok":
         raise SystemExit(f"{study_file}: rkhs-study trial failed: {row['reason']}")
     return {"steps": int(float(row["steps"])), "rejected_steps": int(float(row["rejected_steps"])),
@@ -209,10 +222,10 @@ def run_rkhs_study(executable, study_file, work, extra):
             "jacobian_evaluations": int(float(row["jacobian_evaluations"])),
             "l2_error": float(row["l2_error"]), "sup_error": float(row["sup_error"]),
             "interpolant_l2_error": float(row["interpolant_l2_error"]),
-            "final_state_error": float(row["final_state_error"]), "solve": row["solve"],
-            "seconds": float(trial["seconds"]), "run_seconds": wall,
-            "version": summary["provenance"]["version"],
-            "commit": summary["provenance"]["git_commit"]}
+            "final_state_error": float(row["final_state_error"]),
+            "solve": row.get("solve", ""), "seconds": seconds, "run_seconds": wall,
+            "time_note": note, "version": provenance["version"],
+            "commit": provenance["git_commit"]}
 
 
 def run_peer(python, study_file, work, environment, extra):
@@ -243,10 +256,18 @@ def relative_difference(a, b):
 def default_executable():
     if os.environ.get("RKHS_STUDY"):
         return os.environ["RKHS_STUDY"]
-    for preset in ("release", "relwithdebinfo", "debug"):
-        candidate = REPOSITORY / "build" / preset / "rkhs-study"
-        if candidate.exists():
-            return str(candidate)
+    roots = [REPOSITORY]
+    try:  # a linked worktree without a build of its own: the main worktree's build
+        common = subprocess.run(["git", "-C", str(REPOSITORY), "rev-parse", "--git-common-dir"],
+                                capture_output=True, text=True, check=True).stdout.strip()
+        roots.append((REPOSITORY / common).resolve().parent)
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    for root in roots:
+        for preset in ("release", "relwithdebinfo", "debug"):
+            candidate = root / "build" / preset / "rkhs-study"
+            if candidate.exists():
+                return str(candidate)
     return shutil.which("rkhs-study") or "rkhs-study"
 
 
@@ -256,15 +277,19 @@ def main():
         epilog="Trial selectors: KERNEL[:key=value,...]/LAW/N, e.g. gaussian:sigma=1/rkhs/10.")
     parser.add_argument("study", help="an adaptive study file")
     parser.add_argument("trials", nargs="+", help="trial selectors")
-    parser.add_argument("--integrator", help="rkhs-study integrator (default: the study's first)")
+    parser.add_argument("--integrator", action="append", default=[],
+                        metavar="NAME[:KEY=VALUE,...]",
+                        help="rkhs-study integrator, with parameters after a colon (repeatable: "
+                             "each is run on every trial; default: the study's first)")
     parser.add_argument("--integrator-param", action="append", default=[], metavar="KEY=VALUE",
-                        help="a parameter of the rkhs-study integrator (repeatable)")
+                        help="a parameter of every rkhs-study integrator (repeatable)")
     parser.add_argument("--rtol", type=float, help="rtol for both (default: the study's)")
     parser.add_argument("--atol", type=float, help="atol for both (default: the study's)")
     parser.add_argument("--laps", type=float, help="laps for both (default: the study's)")
     parser.add_argument("--rkhs-study", default=default_executable(),
                         help="the rkhs-study executable (default: $RKHS_STUDY, else "
-                             "build/<preset>/rkhs-study of this repository, else PATH)")
+                             "build/<preset>/rkhs-study of this repository or of its main "
+                             "worktree, else PATH)")
     parser.add_argument("--rkhs-study-arg", action="append", default=[], metavar="ARG",
                         help="an extra argument for rkhs-study run (repeatable, e.g. --plugin=X.so)")
     parser.add_argument("--python", default="/usr/bin/python3" if os.path.exists("/usr/bin/python3")
@@ -286,21 +311,26 @@ def main():
         study = tomllib.load(f)
     if study.get("study", {}).get("kind") != "adaptive":
         raise SystemExit(f"{args.study} is not an adaptive study")
-    integrator = dict(study.get("integrator", [{"name": "rosenbrock4"}])[0])
-    if args.integrator and args.integrator != integrator["name"]:
-        integrator = {"name": args.integrator, "rtol": integrator.get("rtol", 1e-6),
-                      "atol": integrator.get("atol", 1e-8)}
-    for item in args.integrator_param:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise SystemExit(f"--integrator-param {item!r}: expected KEY=VALUE")
-        integrator[key.strip()] = parse_literal(value.strip())
-    if args.rtol is not None:
-        integrator["rtol"] = args.rtol
-    if args.atol is not None:
-        integrator["atol"] = args.atol
-    integrator.setdefault("rtol", 1e-6)
-    integrator.setdefault("atol", 1e-8)
+    original = dict(study.get("integrator", [{"name": "rosenbrock4"}])[0])
+    integrators = []
+    for text in args.integrator or [original["name"]]:
+        name, _, rest = text.partition(":")
+        integrator = dict(original) if name == original["name"] else {
+            "name": name, "rtol": original.get("rtol", 1e-6), "atol": original.get("atol", 1e-8)}
+        for item in list(filter(None, rest.split(","))) + args.integrator_param:
+            key, sep, value = item.partition("=")
+            if not sep:
+                raise SystemExit(f"integrator parameter {item!r}: expected KEY=VALUE")
+            integrator[key.strip()] = parse_literal(value.strip())
+        if args.rtol is not None:
+            integrator["rtol"] = args.rtol
+        if args.atol is not None:
+            integrator["atol"] = args.atol
+        integrator.setdefault("rtol", 1e-6)
+        integrator.setdefault("atol", 1e-8)
+        integrators.append(integrator)
+    if len({(i["rtol"], i["atol"]) for i in integrators}) > 1:
+        raise SystemExit("the integrators have different rtol/atol; the peer uses one pair")
 
     environment = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     if args.scipy_root:
@@ -313,7 +343,7 @@ def main():
             filter(None, [str(libraries), environment.get("LD_LIBRARY_PATH")]))
     peer_extra = ["--restart-at-kinks"] if args.peer_restart_at_kinks else []
 
-    trials = trial_studies(study, args.trials, integrator, args.laps)
+    trials = trial_studies(study, args.trials, integrators, args.laps)
     base = pathlib.Path(args.keep) if args.keep else pathlib.Path(tempfile.mkdtemp(prefix="peer-"))
     base.mkdir(parents=True, exist_ok=True)
     results = []
@@ -321,11 +351,17 @@ def main():
         for index, (label, document) in enumerate(trials, start=1):
             work = (base / f"trial-{index}").resolve()
             work.mkdir(parents=True, exist_ok=True)
-            study_file = work / "trial.toml"
-            study_file.write_text(f"# {label}: one trial of {args.study}, written by "
-                                  f"compare_adaptive.py\n" + toml_document(document))
-            print(f"[{index}/{len(trials)}] {label}: rkhs-study ...", file=sys.stderr, flush=True)
-            ours = run_rkhs_study(args.rkhs_study, study_file, work, args.rkhs_study_arg)
+            ours = []
+            for k, integrator in enumerate(integrators):
+                document["integrator"] = [integrator]
+                study_file = work / f"trial-{integrator['name']}-{k + 1}.toml"
+                study_file.write_text(f"# {label}: one trial of {args.study}, written by "
+                                      f"compare_adaptive.py\n" + toml_document(document))
+                print(f"[{index}/{len(trials)}] {label}: rkhs-study {integrator['name']} ...",
+                      file=sys.stderr, flush=True)
+                ours.append(run_rkhs_study(args.rkhs_study, study_file,
+                                           work / f"{integrator['name']}-{k + 1}",
+                                           args.rkhs_study_arg))
             print(f"[{index}/{len(trials)}] {label}: peer ...", file=sys.stderr, flush=True)
             peer = run_peer(args.python, study_file, work, environment, peer_extra)
             results.append((label, peer, ours))
@@ -333,34 +369,52 @@ def main():
         if not args.keep:
             shutil.rmtree(base, ignore_errors=True)
 
-    name = integrator["name"]
-    parameters = ", ".join(f"{k} = {v}" for k, v in integrator.items() if k != "name")
-    version = results[0][2]["version"] if results else "?"
-    commit = results[0][2]["commit"] if results else "?"
-    scipy_version = results[0][1]["scipy"] if results else "?"
-    print(f"Study `{args.study}`; rkhs-study {version} ({commit}) with `{name}` ({parameters}); "
-          f"SciPy {scipy_version} `solve_ivp(method=\"Radau\")` with the exact Jacobian, same "
-          f"rtol/atol; one thread each, run one after the other.\n")
-    print(f"| trial | peer steps | peer s | rkhs-study steps | rkhs-study s | step ratio | "
-          f"speed-up | peer L2 | rkhs-study L2 | L2 rel. diff |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for label, peer, ours in results:
-        print(f"| {label} | {peer['steps']:,} | {peer['seconds']:.2f} | {ours['steps']:,} | "
-              f"{ours['seconds']:.2f} | {peer['steps'] / ours['steps']:.2f} | "
-              f"{peer['seconds'] / ours['seconds']:.1f}x | {peer['l2_error']:.6e} | "
-              f"{ours['l2_error']:.6e} | {relative_difference(peer['l2_error'], ours['l2_error']):.1e} |")
-    print("\nstep ratio = peer steps / rkhs-study steps; speed-up = peer seconds / rkhs-study "
-          "seconds (whole trial in both). Static check, |interpolant L2 (peer) - (rkhs-study)| "
-          "relative, largest: " + (f"{max(relative_difference(p['interpolant_l2_error'], o['interpolant_l2_error']) for _, p, o in results):.1e}" if results else "-"))
+    def describe(integrator):
+        parameters = ", ".join(f"{k} = {v}" for k, v in integrator.items() if k != "name")
+        return f"`{integrator['name']}` ({parameters})"
 
-    if args.csv:
-        columns = ["trial"] + [f"peer_{k}" for k in results[0][1]] + [f"rkhs_study_{k}" for k in results[0][2]]
+    known = [o for _, _, ours in results for o in ours if o["version"] != "?"]
+    version = f"{known[0]['version']} ({known[0]['commit']})" if known else "(version unknown)"
+    scipy_version = results[0][1]["scipy"] if results else "?"
+    print(f"Study `{args.study}`; rkhs-study {version} with "
+          f"{'; '.join(describe(i) for i in integrators)}; SciPy {scipy_version} "
+          f"`solve_ivp(method=\"Radau\")` with the exact Jacobian, same rtol/atol; one thread "
+          f"each, run one after the other.\n")
+    several = len(integrators) > 1
+    print("| trial |" + (" integrator |" if several else "") + " peer steps | peer s | "
+          "rkhs-study steps | rkhs-study s | step ratio | speed-up | peer L2 | rkhs-study L2 | "
+          "L2 rel. diff |")
+    print("|---|" + ("---|" if several else "") + "---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    processes = False
+    for label, peer, ours in results:
+        for integrator, o in zip(integrators, ours):
+            mark = "*" if o["time_note"] else ""
+            processes |= bool(mark)
+            print(f"| {label} |" + (f" {integrator['name']} |" if several else "") +
+                  f" {peer['steps']:,} | {peer['seconds']:.2f} | {o['steps']:,} | "
+                  f"{o['seconds']:.2f}{mark} | {peer['steps'] / o['steps']:.2f} | "
+                  f"{peer['seconds'] / o['seconds']:.1f}x | {peer['l2_error']:.6e} | "
+                  f"{o['l2_error']:.6e} | "
+                  f"{relative_difference(peer['l2_error'], o['l2_error']):.1e} |")
+    static = max((relative_difference(p["interpolant_l2_error"], o["interpolant_l2_error"])
+                  for _, p, ours in results for o in ours), default=math.nan)
+    print("\nstep ratio = peer steps / rkhs-study steps; speed-up = peer seconds / rkhs-study "
+          "seconds (the whole trial in both). Static check (kernel, centres, Gram solve): largest "
+          f"relative difference of the interpolant's L2 error {static:.1e}.")
+    if processes:
+        print("* rkhs-study did not finish its run normally: metrics from journal.csv, time of "
+              "the whole process.")
+
+    if args.csv and results:
+        peer_keys, our_keys = list(results[0][1]), list(results[0][2][0])
         with open(args.csv, "w", newline="") as f:
             writer = csv.writer(f)
-            writer.writerow(columns)
+            writer.writerow(["trial", "integrator"] + [f"peer_{k}" for k in peer_keys] +
+                            [f"rkhs_study_{k}" for k in our_keys])
             for label, peer, ours in results:
-                writer.writerow([label] + list(peer.values()) + list(ours.values()))
-
+                for integrator, o in zip(integrators, ours):
+                    writer.writerow([label, integrator["name"]] + [peer[k] for k in peer_keys] +
+                                    [o[k] for k in our_keys])
 
 if __name__ == "__main__":
     main()
