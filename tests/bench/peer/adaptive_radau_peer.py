@@ -325,28 +325,42 @@ def make_basis(entry, L, centres):
     raise SystemExit(f"the peer has no kernel '{entry['name']}'")
 
 
-def learning_inverse(G, solver):
-    """G^-1 as GramSolver forms it: Cholesky, or for a G singular to working precision the
-    pseudo-inverse (eigenvalues <= n eps lambda_max dropped) or the regularised inverse."""
-    n = G.shape[0]
-    values, vectors = np.linalg.eigh(G)
-    cutoff = n * EPS * values[-1]
-    if values[0] > cutoff:
-        try:
-            factor = scipy.linalg.cho_factor(G, lower=True)
-            return scipy.linalg.cho_solve(factor, np.eye(n)), "cholesky"
-        except np.linalg.LinAlgError:
-            pass
-    policy = solver.get("singular", "pseudo_inverse")
-    if policy == "fail":
-        raise RuntimeError("Gram matrix singular to working precision")
-    if policy == "regularised":
-        mu = float(solver.get("regularisation", 0.0)) or n * EPS
-        factor = scipy.linalg.cho_factor(G + mu * values[-1] * np.eye(n), lower=True)
-        return scipy.linalg.cho_solve(factor, np.eye(n)), f"regularised (mu = {mu:.3e} lambda_max)"
-    keep = values > cutoff
-    V = vectors[:, keep]
-    return (V / values[keep]) @ V.T, f"pseudo-inverse (rank {int(keep.sum())} of {n})"
+class GramSolve:
+    """Solves with G as GramSolver does: Cholesky, or for a G singular to working precision
+    (lambda_min <= n eps lambda_max) the pseudo-inverse dropping the eigenvalues at or below
+    that cutoff, applied as V (V^T b / lambda) (never as an explicit G^+ times b: with
+    eigenvalues near 1e-13 lambda_max that product loses ten digits), or the regularised
+    Cholesky factorisation of G + mu lambda_max I."""
+
+    def __init__(self, G, solver):
+        n = G.shape[0]
+        values, vectors = np.linalg.eigh(G)
+        cutoff = n * EPS * values[-1]
+        self.cholesky = None
+        if values[0] > cutoff:
+            try:
+                self.cholesky = scipy.linalg.cho_factor(G, lower=True)
+                self.method = "cholesky"
+                return
+            except np.linalg.LinAlgError:
+                pass
+        policy = solver.get("singular", "pseudo_inverse")
+        if policy == "fail":
+            raise RuntimeError("Gram matrix singular to working precision")
+        if policy == "regularised":
+            mu = float(solver.get("regularisation", 0.0)) or n * EPS
+            self.cholesky = scipy.linalg.cho_factor(G + mu * values[-1] * np.eye(n), lower=True)
+            self.method = f"regularised (mu = {mu:.3e} lambda_max)"
+            return
+        keep = values > cutoff
+        self.vectors, self.values = vectors[:, keep], values[keep]
+        self.method = f"pseudo-inverse (rank {int(keep.sum())} of {n})"
+
+    def solve(self, b):
+        if self.cholesky is not None:
+            return scipy.linalg.cho_solve(self.cholesky, b)
+        projected = self.vectors.T @ b
+        return self.vectors @ (projected / (self.values if b.ndim == 1 else self.values[:, None]))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -386,11 +400,12 @@ def run_trial(trial, settings, counter, restart_at_kinks=False):
     P = scipy.linalg.solve_continuous_lyapunov(A.T, -Q)  # A^T P + P A = -Q
     b = P @ B
     G = basis.gram()
-    inverse, solve = learning_inverse(G, settings["solver"])
+    gram_solve = GramSolve(G, settings["solver"])
+    solve = gram_solve.method
     gamma = float(trial["law"].get("gamma", 1e-3))
     law = trial["law"]["name"]
     if law == "rkhs":
-        M = inverse / gamma
+        M = gram_solve.solve(np.eye(n)) / gamma
     elif law == "gradient":
         M = np.eye(n) / gamma
     else:
@@ -400,7 +415,7 @@ def run_trial(trial, settings, counter, restart_at_kinks=False):
     grid = L * np.arange(settings["evaluation_points"]) / settings["evaluation_points"]
     cross = basis.cross(grid)
     f_grid = road(grid)
-    alpha_star = inverse @ road(centres)
+    alpha_star = gram_solve.solve(road(centres))
     l2 = lambda v: math.sqrt(float(np.sum(v * v)) * L / len(v))
 
     v = settings["speed"]
