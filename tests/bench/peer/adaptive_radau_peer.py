@@ -471,12 +471,18 @@ def run_trial(trial, settings, counter, restart_at_kinks=False):
     counter.count = 0
     steps = nfev = njev = nlu = 0
     integration_wall = time.perf_counter()
+    step = None  # a restart carries the last full step over (SciPy's own first step otherwise)
     for t0, t1 in zip(bounds[:-1], bounds[1:]):
+        first = min(step, t1 - t0) if step and settings["carry_step"] else None
         sol = solve_ivp(rhs, (t0, t1), z, method="Radau", rtol=settings["rtol"],
-                        atol=settings["atol"], jac=jacobian, dense_output=False)
+                        atol=settings["atol"], jac=jacobian, dense_output=False, first_step=first)
         if sol.status != 0:
             raise RuntimeError(f"solve_ivp failed: {sol.message}")
         steps += len(sol.t) - 1
+        if len(sol.t) > 2:
+            step = max(sol.t[-2] - sol.t[-3], sol.t[-1] - sol.t[-2])
+        elif len(sol.t) == 2:
+            step = max(step or 0.0, sol.t[-1] - sol.t[-2])
         nfev, njev, nlu = nfev + sol.nfev, njev + sol.njev, nlu + sol.nlu
         z = sol.y[:, -1].copy()
     integration_seconds = time.perf_counter() - integration_wall
@@ -520,6 +526,9 @@ def main(argv=None):
     parser.add_argument("--restart-at-kinks", action="store_true",
                         help="integrate segment by segment between the kinks of phi(s(t)), as "
                              "rkhs-study does (default: one solve_ivp call over [0, T])")
+    parser.add_argument("--carry-step", action="store_true",
+                        help="with --restart-at-kinks: start each segment with the last step "
+                             "size of the one before (default: SciPy's first-step selection)")
     parser.add_argument("--out", help="CSV file of the results (default: standard output)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     args = parser.parse_args(argv)
@@ -547,6 +556,7 @@ def main(argv=None):
         "solver": study.get("solver", {}),
         "rtol": args.rtol if args.rtol is not None else float(integrator.get("rtol", 1e-6)),
         "atol": args.atol if args.atol is not None else float(integrator.get("atol", 1e-8)),
+        "carry_step": args.carry_step,
     }
     if adaptive.get("road", "target") != "target":
         raise SystemExit("the peer drives the plant with the target itself only (road = \"target\")")

@@ -370,7 +370,8 @@ def main():
             shutil.rmtree(base, ignore_errors=True)
 
     def describe(integrator):
-        parameters = ", ".join(f"{k} = {v}" for k, v in integrator.items() if k != "name")
+        parameters = ", ".join(f"{k} = {toml_value(v)}" for k, v in integrator.items()
+                               if k != "name")
         return f"`{integrator['name']}` ({parameters})"
 
     known = [o for _, _, ours in results for o in ours if o["version"] != "?"]
@@ -380,6 +381,11 @@ def main():
           f"{'; '.join(describe(i) for i in integrators)}; SciPy {scipy_version} "
           f"`solve_ivp(method=\"Radau\")` with the exact Jacobian, same rtol/atol; one thread "
           f"each, run one after the other.\n")
+    def short(integrator):  # the name and the parameters that are not the tolerances
+        extra = [f"{k}={toml_value(v)}" for k, v in integrator.items()
+                 if k not in ("name", "rtol", "atol")]
+        return integrator["name"] + (f" ({', '.join(extra)})" if extra else "")
+
     several = len(integrators) > 1
     print("| trial |" + (" integrator |" if several else "") + " peer steps | peer s | "
           "rkhs-study steps | rkhs-study s | step ratio | speed-up | peer L2 | rkhs-study L2 | "
@@ -390,7 +396,7 @@ def main():
         for integrator, o in zip(integrators, ours):
             mark = "*" if o["time_note"] else ""
             processes |= bool(mark)
-            print(f"| {label} |" + (f" {integrator['name']} |" if several else "") +
+            print(f"| {label} |" + (f" {short(integrator)} |" if several else "") +
                   f" {peer['steps']:,} | {peer['seconds']:.2f} | {o['steps']:,} | "
                   f"{o['seconds']:.2f}{mark} | {peer['steps'] / o['steps']:.2f} | "
                   f"{peer['seconds'] / o['seconds']:.1f}x | {peer['l2_error']:.6e} | "
@@ -421,7 +427,7 @@ def main():
                             [f"rkhs_study_{k}" for k in our_keys])
             for label, peer, ours in results:
                 for integrator, o in zip(integrators, ours):
-                    writer.writerow([label, integrator["name"]] + [peer[k] for k in peer_keys] +
+                    writer.writerow([label, short(integrator)] + [peer[k] for k in peer_keys] +
                                     [o[k] for k in our_keys])
 
 if __name__ == "__main__":
