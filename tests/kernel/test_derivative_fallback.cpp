@@ -150,8 +150,10 @@ TEST_CASE("a kernel with a kink point and no derivative(): one-sided at the kink
       basis->evaluate_mapped_derivative(s, mapped);
       for (int i = 0; i < 2; ++i) {
         INFO(kernel->name() << ", s = " << s << ", centre " << centres[i]);
-        CHECK(dphi[i] == Approx(kernel->derivative(centres[i], s)).epsilon(1e-12));
-        CHECK(mapped[i] == Approx(3.0 * dphi[i]).epsilon(1e-12));
+        // The feature basis differences features (and mapped features), rounded unlike k and
+        // 3 phi: the quotient amplifies that rounding, eps |k| / h ~ 1e-9 here.
+        CHECK(dphi[i] == Approx(kernel->derivative(centres[i], s)).margin(1e-8));
+        CHECK(mapped[i] == Approx(3.0 * dphi[i]).margin(3e-8));
       }
     }
   }

@@ -271,7 +271,8 @@ TEST_CASE("every built-in kernel has exact derivatives, and its basis gives the 
         // bases) and the identity.
         Eigen::MatrixXd general(4, 9);
         for (Eigen::Index i = 0; i < 4; ++i)
-          for (Eigen::Index j = 0; j < 9; ++j) general(i, j) = std::sin(1.0 + 3.0 * i + 0.7 * j);
+          for (Eigen::Index j = 0; j < 9; ++j)
+            general(i, j) = std::sin(1.0 + 3.0 * double(i) + 0.7 * double(j));
         for (const Eigen::MatrixXd& map :
              {general, Eigen::MatrixXd(2.5 * Eigen::MatrixXd::Identity(9, 9)),
               Eigen::MatrixXd(Eigen::MatrixXd::Identity(9, 9))}) {

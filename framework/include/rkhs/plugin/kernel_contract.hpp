@@ -25,6 +25,7 @@
 //                       |s - c| = support radius, and an interval's ends
 //   basis derivative    a basis' evaluate_derivative equals derivative(c_i, s), and
 //                       evaluate_mapped_derivative equals T times it, to 1e-12 of the same scale
+//                       (plus the rounding a difference quotient amplifies, without closed forms)
 //   power function      P^2 >= 0, P^2 = 0 at the centres, P^2 non-increasing from 4 to 8 to 16
 //                       nested centres (skipped, with the reason, when round-off makes the
 //                       comparison meaningless)

@@ -221,7 +221,7 @@ class MultiscaleBSpline {
       out[0] = 0.0;
       return;
     }
-    std::array<double, max_degree> lower{};
+    std::array<double, max_degree + 1> lower{};  // room for pieces() of any degree
     pieces(degree - 1, t, lower.data());
     for (int i = 0; i <= degree; ++i)
       out[i] = (i < degree ? lower[i] : 0.0) - (i > 0 ? lower[i - 1] : 0.0);
