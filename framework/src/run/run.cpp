@@ -12,7 +12,6 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
-#include <numeric>
 #include <optional>
 #include <thread>
 
@@ -28,16 +27,6 @@
 namespace rkhs {
 
 namespace {
-
-double estimated_cost(const StudyDefinition& study, const TrialSpec& trial) {
-  const auto n = static_cast<double>(trial.n);
-  const double static_cost = n * n * n + n * n * static_cast<double>(study.evaluation_points);
-  if (study.kind != StudyKind::adaptive) return static_cost;
-  // One dense LU of the (2d + n) system per step, steps growing with the horizon in laps.
-  const double laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
-                      study.domain.length;
-  return static_cost + laps * (n + 8) * (n + 8) * (n + 8) * 1e3;
-}
 
 // Dense matrices of a trial: Gram (twice, with its eigenvectors) and the cross matrix.
 double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
@@ -146,17 +135,6 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   if (!result.ok)
     std::fill(result.metrics.begin(), result.metrics.end(), std::numeric_limits<double>::quiet_NaN());
   return result;
-}
-
-std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
-                                             const std::vector<TrialSpec>& trials) {
-  std::vector<double> cost(trials.size());
-  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = estimated_cost(study, trials[i]);
-  std::vector<std::size_t> order(trials.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
-  return order;
 }
 
 namespace {

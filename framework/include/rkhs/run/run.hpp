@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/run/trial_cost.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
@@ -64,12 +65,8 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
 /// process must end with std::_Exit (after flushing its output), not by returning from main.
 bool trials_abandoned() noexcept;
 
-/// The positions of `trials` ordered by estimated cost, largest first (ties keep grid order):
-/// the order in which trials are started, so that long trials do not end a run alone.
-std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
-                                             const std::vector<TrialSpec>& trials);
-
-/// Runs `trials` concurrently, largest first; results in the order of `trials`.
+/// Runs `trials` concurrently, largest first (largest_first_order); results in the order of
+/// `trials`.
 std::vector<TrialResult> run_trials(const StudyDefinition& study,
                                     const std::vector<TrialSpec>& trials,
                                     const RunOptions& options);
