@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <thread>
 
 #include "rkhs/approx/approximation.hpp"
@@ -263,6 +264,74 @@ laps = )" + laps + "\n",
   auto timed = study;
   timed.adaptive.final_time = study.domain.length / 10.0;
   CHECK(adaptive_trial_shape(timed, trials[0]).laps == Approx(1.0));
+}
+
+namespace {
+
+// A study whose grid order is not its order by cost: n = 6, 30, 12, 24 for each of two kernels.
+StudyDefinition unsorted_study() {
+  return parse_study(R"([study]
+name = "unsorted"
+evaluation_points = 128
+[domain]
+radius = 2
+[grid]
+n = [6, 30, 12, 24]
+[[kernel]]
+name = "gaussian"
+sigma = [0.5, 1.0]
+[[kernel]]
+name = "wendland"
+radius = 1.5
+)", "unsorted.toml");
+}
+
+}  // namespace
+
+TEST_CASE("trials start in decreasing estimated cost, for any thread count", "[run]") {
+  const auto study = unsorted_study();
+  const auto trials = study.trials();
+  REQUIRE(trials.size() == 12);
+  const auto order = largest_first_order(study, trials);
+  // The order is by decreasing cost, and it is not the grid order (else this test proves nothing).
+  for (std::size_t k = 0; k + 1 < order.size(); ++k)
+    CHECK(estimated_trial_cost(study, trials[order[k]]) >=
+          estimated_trial_cost(study, trials[order[k + 1]]));
+  std::vector<std::size_t> grid(trials.size());
+  std::iota(grid.begin(), grid.end(), std::size_t{0});
+  REQUIRE(order != grid);
+  for (const int threads : {1, 2, 3}) {
+    INFO(threads << " threads");
+    std::vector<std::size_t> started;  // appended under the scheduler's mutex
+    RunOptions options;
+    options.threads = threads;
+    options.on_trial_started = [&](const TrialSpec& trial) { started.push_back(trial.index); };
+    const auto results = run_trials(study, trials, options);
+    CHECK(started == order);
+    for (const auto& result : results) CHECK(result.ok);
+  }
+}
+
+TEST_CASE("results are in grid order whatever order the trials ran in", "[run]") {
+  const auto study = unsorted_study();
+  const auto trials = study.trials();
+  std::vector<std::size_t> finished;
+  RunOptions options;
+  options.threads = 3;
+  options.on_trial_finished = [&](const TrialSpec& trial, const TrialResult&) {
+    finished.push_back(trial.index);
+  };
+  const auto results = run_trials(study, trials, options);
+  REQUIRE(results.size() == trials.size());
+  CHECK(finished.size() == trials.size());
+  // Slot i holds trial i's result: the one a lone run_trial of trial i gives, bit for bit.
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    INFO(trials[i].key);
+    const auto alone = run_trial(study, trials[i]);
+    REQUIRE(results[i].ok);
+    CHECK(bitwise_equal(results[i].metrics, alone.metrics));
+    CHECK(results[i].solve_method == alone.solve_method);
+  }
 }
 
 namespace {
