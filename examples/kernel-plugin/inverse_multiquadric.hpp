@@ -19,6 +19,10 @@
 // whose terms decay like exp(-c w_j): about 37 L / (2 pi c) terms reach 1e-16 of k(0). The
 // series is truncated there (omitted terms < 1e-16 F(0)/L, bound in the .cpp). Every kept
 // coefficient is positive, so the truncated kernel is itself positive semidefinite.
+// derivative(x, y) = d/dy k(x, y) (optional for a kernel; without it rkhs-study differences k):
+// 2 beta (x - y) / c^2 (1 + ((x - y) / c)^2)^(-beta - 1) on an interval, and the series
+// differentiated term by term, (2 pi / L) sum_j j a_j sin(j theta), on a closed track (its terms
+// j a_j still decay like exp(-c w_j), so the truncation costs ~ 37 L / (2 pi c) eps k(0) / c).
 // Properties: strictly positive definite (F > 0), analytic (F decays exponentially: spectral
 // convergence), global support, stationary.
 // Fails: ParameterError for beta <= 1/2 on a closed track, or when more than 10^6 Fourier terms
@@ -46,12 +50,23 @@ class InverseMultiquadric {
     return fourier_series(domain_.difference(x, y));
   }
 
+  /// d/dy k(x, y), the derivative of the section k(x, .).
+  double derivative(double x, double y) const noexcept {
+    if (!domain_.periodic) return -profile_slope(x - y);
+    return fourier_series_slope(domain_.difference(x, y));
+  }
+
   rkhs::KernelProperties properties() const noexcept;
 
   /// k0 at signed distance d.
   double profile(double d) const noexcept {
     const double r = d / c_;
     return std::pow(1.0 + r * r, -beta_);
+  }
+  /// d/dd k0(d) at signed distance d.
+  double profile_slope(double d) const noexcept {
+    const double r = d / c_;
+    return -2.0 * beta_ * r / c_ * std::pow(1.0 + r * r, -beta_ - 1.0);
   }
   /// Terms of the Fourier series after the constant (0 on an interval).
   std::size_t fourier_terms() const noexcept {
@@ -72,6 +87,22 @@ class InverseMultiquadric {
       cosj = next;
     }
     return sum;
+  }
+
+  /// -d/dd of fourier_series(d) = (2 pi / L) sum_j j a_j sin(j theta), by the same recurrence.
+  double fourier_series_slope(double d) const noexcept {
+    const double frequency = 2.0 * 3.14159265358979323846 / domain_.length;
+    const double theta = frequency * d;
+    const double cos1 = std::cos(theta), sin1 = std::sin(theta);
+    double cosj = 1.0, sinj = 0.0, sum = 0.0, j = 0.0;
+    for (double a : coefficients_) {
+      sum += j * a * sinj;
+      const double next = cosj * cos1 - sinj * sin1;
+      sinj = sinj * cos1 + cosj * sin1;
+      cosj = next;
+      j += 1.0;
+    }
+    return frequency * sum;
   }
 
   double beta_;

@@ -68,6 +68,7 @@ MultiscaleBSpline::MultiscaleBSpline(const ParameterSet& parameters, const Domai
   for (int j = 0; j <= levels_; ++j) {
     scale_[j] = std::ldexp(1.0, j);
     weight_[j] = std::exp2(0.5 * j * (1.0 - 2.0 * r_));
+    slope_weight_[j] = weight_[j] * scale_[j] * n0_ / length_;
     offset_[j + 1] = offset_[j] + (n0_ << j) + (periodic_ ? 0 : degree_);
   }
 }

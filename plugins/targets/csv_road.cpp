@@ -212,6 +212,20 @@ class CsvRoad final : public TargetFunction {
       out[m] = raw(origin_ + s) - offset_ - slope_ * s;
     }
   }
+  /// The derivative of the interpolant (less the detrending slope), at points mapped into the
+  /// domain as by evaluate(). At a sample, where a linear interpolant's slope jumps, the
+  /// right-hand derivative (the piece that starts there); at s = L on an interval the left-hand
+  /// one (the section ends there).
+  void derivative(std::span<const double> points, std::span<double> out) const override {
+    for (std::size_t m = 0; m < points.size(); ++m) {
+      double s = points[m];
+      s = periodic_ ? std::fmod(s, length_) : std::clamp(s, 0.0, length_);
+      if (s < 0) s += length_;
+      const bool at_end = !periodic_ && s == length_;
+      out[m] = raw_slope(origin_ + s, at_end) - slope_;
+    }
+  }
+  bool has_exact_derivative() const override { return true; }
   std::string data_provenance() const override { return provenance_; }
   std::vector<std::string> notes() const override { return notes_; }
   std::vector<double> kink_points() const override { return kinks_; }
@@ -361,6 +375,21 @@ class CsvRoad final : public TargetFunction {
     if (cubic_)
       value += ((a * a * a - a) * second_[i] + (b * b * b - b) * second_[i + 1]) * h * h / 6;
     return value;
+  }
+
+  // d/du of raw(u): on the piece [u_i, u_i+1) holding u (right-hand at a sample), or, with
+  // `left`, on the piece (u_i, u_i+1] (left-hand).
+  double raw_slope(double u, bool left) const {
+    const auto bound = left ? std::lower_bound(u_.begin() + 1, u_.end() - 1, u)
+                            : std::upper_bound(u_.begin() + 1, u_.end() - 1, u);
+    const std::size_t i = static_cast<std::size_t>(bound - u_.begin()) - 1;
+    const double h = u_[i + 1] - u_[i];
+    double slope = (z_[i + 1] - z_[i]) / h;
+    if (cubic_) {
+      const double a = (u_[i + 1] - u) / h, b = (u - u_[i]) / h;
+      slope += ((3 * b * b - 1) * second_[i + 1] - (3 * a * a - 1) * second_[i]) * h / 6;
+    }
+    return slope;
   }
 
   // Mean of the interpolant over [origin, origin + L]: Simpson's rule on every piece between

@@ -33,6 +33,18 @@ double Harmonics::evaluate(double s, double length) const {
   return sum;
 }
 
+double Harmonics::slope(double s, double length) const {
+  const double frequency = 2 * std::numbers::pi / length;
+  const double phase = frequency * s;
+  double sum = 0;
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    const double wavenumber = static_cast<double>(k[i]);
+    const double angle = phase * wavenumber;
+    sum += wavenumber * (sine[i] * std::cos(angle) - cosine[i] * std::sin(angle));
+  }
+  return frequency * sum;
+}
+
 Harmonics iso8608_harmonics(const Iso8608Settings& settings, double length) {
   const double dn = 1.0 / length;
   const auto first =
@@ -116,6 +128,11 @@ class Iso8608Road final : public TargetFunction {
     for (std::size_t m = 0; m < points.size(); ++m)
       out[m] = harmonics_.evaluate(points[m], length_);
   }
+  /// The harmonics' sum differentiated term by term (Harmonics::slope).
+  void derivative(std::span<const double> points, std::span<double> out) const override {
+    for (std::size_t m = 0; m < points.size(); ++m) out[m] = harmonics_.slope(points[m], length_);
+  }
+  bool has_exact_derivative() const override { return true; }
 
  private:
   double length_;

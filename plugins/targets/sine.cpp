@@ -33,6 +33,12 @@ class SineTarget final : public TargetFunction {
     for (std::size_t m = 0; m < points.size(); ++m)
       out[m] = amplitude_ * std::sin(wavenumber_ * points[m] + phase_);
   }
+  /// f'(s) = amplitude (2 pi cycles / L) cos(2 pi cycles s / L + phase).
+  void derivative(std::span<const double> points, std::span<double> out) const override {
+    for (std::size_t m = 0; m < points.size(); ++m)
+      out[m] = amplitude_ * wavenumber_ * std::cos(wavenumber_ * points[m] + phase_);
+  }
+  bool has_exact_derivative() const override { return true; }
 
  private:
   double amplitude_, wavenumber_, phase_;

@@ -9,6 +9,7 @@
 
 #include "../study_data_support.hpp"
 #include "cli_support.hpp"
+#include "rkhs/study/study.hpp"
 
 namespace fs = std::filesystem;
 
@@ -59,6 +60,26 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
                                        "target_phase,centres,centres_offset,n,fill_distance,"));
   CHECK_THAT(trials, Catch::Contains(",status,reason,solve,flags\n"));
   CHECK(std::count(trials.begin(), trials.end(), '\n') == 7);
+  {
+    // Rows in grid order (degree, n) although trials start largest first (n = 32 first).
+    const auto grid = rkhs::parse_study(small_study, "study.toml").trials();
+    std::istringstream rows(trials);
+    std::string line;
+    std::getline(rows, line);  // header: kernel,degree,...,n,...
+    std::vector<std::string> seen, expected;
+    while (std::getline(rows, line)) {
+      std::vector<std::string> fields;
+      std::istringstream in(line);
+      for (std::string field; std::getline(in, field, ',');) fields.push_back(field);
+      REQUIRE(fields.size() > 11);
+      seen.push_back(fields[1] + " " + fields[11]);  // degree, n
+    }
+    for (const auto& trial : grid)
+      expected.push_back(rkhs::format_real(trial.kernel.parameters.real("degree")) + " " +
+                         std::to_string(trial.n));
+    CHECK(seen == expected);
+    CHECK(expected.front() == "1 8");
+  }
   const auto rates = read(dir / "out" / "rates.csv");
   CHECK_THAT(rates, Catch::Contains("metric,abscissa,kind,model,n_from,n_to,points,rate,std_error,"
                                     "ci_low,ci_high,r_squared,delta_aic,note"));

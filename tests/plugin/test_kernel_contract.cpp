@@ -129,3 +129,91 @@ TEST_CASE("the contract refuses a kernel that declares a dimension the domains d
     }
   CHECK(metadata_checked);
 }
+
+namespace {
+
+// A Gaussian whose derivative() has the wrong sign: d/ds exp(-(s - c)^2 / 2) is -(s - c) k,
+// this says +(s - c) k.
+struct WrongSlope {
+  static rkhs::PluginInfo info() { return {"wrong_slope", "test kernel", {}, {}}; }
+  WrongSlope(const rkhs::ParameterSet&, const Domain& domain) : domain_(domain) {}
+  double operator()(double x, double y) const noexcept {
+    const double d = x - y;
+    return std::exp(-0.5 * d * d);
+  }
+  double derivative(double x, double y) const noexcept { return (y - x) * (*this)(x, y); }
+  rkhs::KernelProperties properties() const noexcept {
+    rkhs::KernelProperties p;
+    p.analytic = true;
+    p.periodic = false;
+    return p;
+  }
+  Domain domain_;
+};
+
+// The same Gaussian with the right derivative, and with none (the difference quotient).
+struct RightSlope : WrongSlope {
+  static rkhs::PluginInfo info() { return {"right_slope", "test kernel", {}, {}}; }
+  using WrongSlope::WrongSlope;
+  double derivative(double x, double y) const noexcept { return (x - y) * (*this)(x, y); }
+};
+struct NoSlope {
+  static rkhs::PluginInfo info() { return {"no_slope", "test kernel", {}, {}}; }
+  NoSlope(const rkhs::ParameterSet&, const Domain&) {}
+  double operator()(double x, double y) const noexcept {
+    const double d = x - y;
+    return std::exp(-0.5 * d * d);
+  }
+  rkhs::KernelProperties properties() const noexcept {
+    rkhs::KernelProperties p;
+    p.analytic = true;
+    p.periodic = false;
+    return p;
+  }
+};
+
+const rkhs::ContractCheck* find_check(const rkhs::ContractReport& report, const std::string& name) {
+  for (const auto& check : report.checks)
+    if (check.name == name) return &check;
+  return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("the contract's derivative check fails a wrong derivative and passes right ones",
+          "[kernel][contract][derivative]") {
+  const Domain interval{10.0, false};
+  const auto wrong =
+      rkhs::check_kernel_contract(rkhs::KernelModel<WrongSlope>(rkhs::ParameterSet{}, interval));
+  const auto* check = find_check(wrong, "derivative");
+  REQUIRE(check != nullptr);
+  INFO(check->detail);
+  CHECK_FALSE(check->passed);
+  CHECK_THAT(check->detail, Catch::Contains("closed form"));
+  CHECK_FALSE(wrong.passed());
+
+  for (const auto& report :
+       {rkhs::check_kernel_contract(rkhs::KernelModel<RightSlope>(rkhs::ParameterSet{}, interval)),
+        rkhs::check_kernel_contract(rkhs::KernelModel<NoSlope>(rkhs::ParameterSet{}, interval))}) {
+    for (const char* name : {"derivative", "basis derivative"}) {
+      const auto* right = find_check(report, name);
+      REQUIRE(right != nullptr);
+      INFO(name << ": " << right->detail);
+      CHECK(right->passed);
+      CHECK_FALSE(right->skipped);
+    }
+  }
+}
+
+TEST_CASE("richardson_derivative: Ridders' extrapolation to near round-off",
+          "[contract][derivative]") {
+  double error = 0;
+  const double slope =
+      rkhs::richardson_derivative([](double t) { return std::sin(3 * t); }, 0.4, 0.5, error);
+  CHECK(slope == Approx(3 * std::cos(1.2)).margin(1e-11));
+  CHECK(error < 1e-9);
+  // A narrow function from a wide starting step: the smaller starts find it.
+  const double narrow = rkhs::richardson_derivative(
+      [](double t) { return std::exp(-t * t / (2e-4)); }, 0.01, 2.0, error);
+  CHECK(narrow == Approx(-0.01 / 1e-4 * std::exp(-1e-4 / 2e-4)).epsilon(1e-8));
+}

@@ -5,12 +5,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <thread>
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/kernel/kernel_algorithms.hpp"
 #include "rkhs/run/run.hpp"
+#include "rkhs/run/trial_cost.hpp"
 #include "rkhs/study/study.hpp"
 
 using namespace rkhs;
@@ -158,6 +160,178 @@ sigma = [0.5, 1.0]
   auto sorted = order;
   std::sort(sorted.begin(), sorted.end());
   CHECK(sorted == std::vector<std::size_t>{0, 1, 2, 3, 4, 5});
+}
+
+TEST_CASE("the cost estimate grows with n and with the horizon in laps", "[run][cost]") {
+  for (std::size_t n = 1; n < 400; n = n * 3 / 2 + 1)
+    CHECK(approximation_trial_cost(n + 1, 512) > approximation_trial_cost(n, 512));
+  for (const bool implicit : {true, false}) {
+    for (const bool lap_map : {false, true}) {
+      INFO("implicit " << implicit << ", lap map " << lap_map);
+      AdaptiveTrialShape shape{10, 4, 10.0, implicit, lap_map};
+      for (std::size_t n = 1; n < 400; n = n * 3 / 2 + 1) {
+        auto larger = shape;
+        shape.n = n;
+        larger.n = n + 1;
+        CHECK(adaptive_trial_cost(larger, 256) > adaptive_trial_cost(shape, 256));
+        // Adaptive work comes on top of an approximation trial's.
+        CHECK(adaptive_trial_cost(shape, 256) > approximation_trial_cost(n, 256));
+      }
+    }
+  }
+  // Stepping through time: more laps cost more; a larger plant too.
+  AdaptiveTrialShape shape{50, 4, 1.0, true, false};
+  for (const double laps : {0.5, 1.0, 2.0, 10.0, 100.0}) {
+    auto longer = shape;
+    shape.laps = laps;
+    longer.laps = laps * 1.5;
+    CHECK(adaptive_trial_cost(longer, 256) > adaptive_trial_cost(shape, 256));
+  }
+  auto larger_plant = shape;
+  larger_plant.plant_dimension = 8;
+  CHECK(adaptive_trial_cost(larger_plant, 256) > adaptive_trial_cost(shape, 256));
+  // An implicit integrator (an LU per step) costs more than an explicit one at the same n.
+  auto explicit_shape = shape;
+  explicit_shape.implicit_integrator = false;
+  CHECK(adaptive_trial_cost(shape, 256) > adaptive_trial_cost(explicit_shape, 256));
+  // With a lap map the horizon does not matter: about 2d + n laps, whatever `laps` says.
+  auto mapped = shape;
+  mapped.lap_map = true;
+  mapped.laps = 1000;
+  auto short_map = mapped;
+  short_map.laps = 1;
+  auto stepped = shape;
+  stepped.laps = 2.0 * 4 + 50;
+  CHECK(adaptive_trial_cost(mapped, 256) == adaptive_trial_cost(short_map, 256));
+  CHECK(adaptive_trial_cost(mapped, 256) == adaptive_trial_cost(stepped, 256));
+}
+
+TEST_CASE("a study's trials are costed from their n, horizon, plant and integrator",
+          "[run][cost]") {
+  const auto adaptive = [](const std::string& laps) {
+    return parse_study(R"([study]
+name = "costs"
+kind = "adaptive"
+evaluation_points = 256
+[domain]
+radius = 4.0
+[grid]
+n = [20, 40]
+[[kernel]]
+name = "gaussian"
+[[law]]
+name = "rkhs"
+[[plant]]
+name = "linear"
+[[plant]]
+name = "quarter_car"
+[[integrator]]
+name = "rk4"
+[[integrator]]
+name = "rodas4"
+[adaptive]
+speed = 10.0
+laps = )" + laps + "\n",
+                       "costs.toml");
+  };
+  const auto study = adaptive("2");
+  const auto trials = study.trials();
+  REQUIRE(trials.size() == 8);
+  for (const auto& trial : trials) {
+    INFO(trial.key);
+    const auto shape = adaptive_trial_shape(study, trial);
+    CHECK(shape.n == trial.n);
+    CHECK(shape.plant_dimension == (trial.plant.name == "quarter_car" ? 4u : 1u));
+    CHECK(shape.laps == Approx(2.0));
+    CHECK(shape.implicit_integrator == (trial.integrator.name == "rodas4"));
+    CHECK_FALSE(shape.lap_map);  // no study forces the lap map yet
+    CHECK(estimated_trial_cost(study, trial) ==
+          adaptive_trial_cost(shape, study.evaluation_points));
+    // Each axis moves the estimate the way it moves the work.
+    for (const auto& other : trials) {
+      const bool same_but_n = other.plant.name == trial.plant.name &&
+                              other.integrator.name == trial.integrator.name;
+      if (same_but_n && other.n > trial.n)
+        CHECK(estimated_trial_cost(study, other) > estimated_trial_cost(study, trial));
+    }
+  }
+  // The same trials over a longer horizon (laps = 10 instead of 2) cost more.
+  const auto longer = adaptive("10");
+  const auto longer_trials = longer.trials();
+  for (std::size_t i = 0; i < trials.size(); ++i)
+    CHECK(estimated_trial_cost(longer, longer_trials[i]) > estimated_trial_cost(study, trials[i]));
+  // A horizon given as a final time counts in laps too: one lap's time at 10 m/s is 1 lap.
+  auto timed = study;
+  timed.adaptive.final_time = study.domain.length / 10.0;
+  CHECK(adaptive_trial_shape(timed, trials[0]).laps == Approx(1.0));
+}
+
+namespace {
+
+// A study whose grid order is not its order by cost: n = 6, 30, 12, 24 for each of two kernels.
+StudyDefinition unsorted_study() {
+  return parse_study(R"([study]
+name = "unsorted"
+evaluation_points = 128
+[domain]
+radius = 2
+[grid]
+n = [6, 30, 12, 24]
+[[kernel]]
+name = "gaussian"
+sigma = [0.5, 1.0]
+[[kernel]]
+name = "wendland"
+radius = 1.5
+)", "unsorted.toml");
+}
+
+}  // namespace
+
+TEST_CASE("trials start in decreasing estimated cost, for any thread count", "[run]") {
+  const auto study = unsorted_study();
+  const auto trials = study.trials();
+  REQUIRE(trials.size() == 12);
+  const auto order = largest_first_order(study, trials);
+  // The order is by decreasing cost, and it is not the grid order (else this test proves nothing).
+  for (std::size_t k = 0; k + 1 < order.size(); ++k)
+    CHECK(estimated_trial_cost(study, trials[order[k]]) >=
+          estimated_trial_cost(study, trials[order[k + 1]]));
+  std::vector<std::size_t> grid(trials.size());
+  std::iota(grid.begin(), grid.end(), std::size_t{0});
+  REQUIRE(order != grid);
+  for (const int threads : {1, 2, 3}) {
+    INFO(threads << " threads");
+    std::vector<std::size_t> started;  // appended under the scheduler's mutex
+    RunOptions options;
+    options.threads = threads;
+    options.on_trial_started = [&](const TrialSpec& trial) { started.push_back(trial.index); };
+    const auto results = run_trials(study, trials, options);
+    CHECK(started == order);
+    for (const auto& result : results) CHECK(result.ok);
+  }
+}
+
+TEST_CASE("results are in grid order whatever order the trials ran in", "[run]") {
+  const auto study = unsorted_study();
+  const auto trials = study.trials();
+  std::vector<std::size_t> finished;
+  RunOptions options;
+  options.threads = 3;
+  options.on_trial_finished = [&](const TrialSpec& trial, const TrialResult&) {
+    finished.push_back(trial.index);
+  };
+  const auto results = run_trials(study, trials, options);
+  REQUIRE(results.size() == trials.size());
+  CHECK(finished.size() == trials.size());
+  // Slot i holds trial i's result: the one a lone run_trial of trial i gives, bit for bit.
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    INFO(trials[i].key);
+    const auto alone = run_trial(study, trials[i]);
+    REQUIRE(results[i].ok);
+    CHECK(bitwise_equal(results[i].metrics, alone.metrics));
+    CHECK(results[i].solve_method == alone.solve_method);
+  }
 }
 
 namespace {

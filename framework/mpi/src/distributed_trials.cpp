@@ -9,6 +9,7 @@
 
 #include "rkhs/distributed.hpp"
 #include "rkhs/core/sha256.hpp"
+#include "rkhs/run/trial_cost.hpp"
 
 namespace rkhs::distributed {
 
@@ -118,7 +119,8 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
     distribute(session, job);
     return std::nullopt;
   }
-  // Rank 0: the trials the store lacks are handed out, largest first; each result is committed
+  // Rank 0: the trials the store lacks are handed out, largest first (largest_first_order, as
+  // in a run without MPI); each result is committed
   // (through `storing`) as it arrives.
   const TrialExecutor coordinate = [&](const StudyDefinition&,
                                        const std::vector<TrialSpec>& pending,

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "rkhs/core/random.hpp"
+#include "rkhs/kernel/kernel_algorithms.hpp"
 
 namespace rkhs {
 
@@ -52,7 +53,164 @@ Spectrum spectrum_of(const Eigen::MatrixXd& gram) {
   return s;
 }
 
+// Distance from s to the nearest of the sorted points `kinks` (periodic distance on a periodic
+// domain); infinity when there are none.
+double distance_to_nearest(const Domain& domain, const std::vector<double>& kinks, double s) {
+  double nearest = std::numeric_limits<double>::infinity();
+  if (kinks.empty()) return nearest;
+  const double x = domain.wrap(s);
+  const auto next = std::lower_bound(kinks.begin(), kinks.end(), x);
+  if (next != kinks.end()) nearest = std::min(nearest, domain.distance(x, *next));
+  if (next != kinks.begin()) nearest = std::min(nearest, domain.distance(x, *(next - 1)));
+  if (domain.periodic) {
+    nearest = std::min(nearest, domain.distance(x, kinks.front()));
+    nearest = std::min(nearest, domain.distance(x, kinks.back()));
+  }
+  return nearest;
+}
+
+// The derivative checks (header): derivative() against Richardson extrapolation, and a basis'
+// derivatives against derivative().
+void check_derivatives(const AnyKernel& kernel, double scale, Checks& checks) {
+  const Domain& domain = kernel.domain();
+  const double length = domain.length;
+  const double radius = kernel.properties().support_radius;
+  auto kinks = kernel.kink_points();
+  std::sort(kinks.begin(), kinks.end());
+  const auto centres = golden_ratio_points(7, length, 0.42);
+  const auto points = golden_ratio_points(29, length, 0.17);
+
+  // Where k(c, .) may not be smooth: the kernel's kink points, s = c, |s - c| = radius (a
+  // stationary kernel's profile may have kinks there), and an interval's ends. The reference
+  // needs a smooth stretch around s; pairs closer than 1e-6 L to one are left out.
+  struct Pair {
+    double centre, point, derivative, reference;
+  };
+  std::vector<Pair> pairs;
+  int left_out = 0;
+  double largest_slope = 0;
+  for (double c : centres) {
+    for (double s : points) {
+      double gap = std::min(distance_to_nearest(domain, kinks, s), domain.distance(s, c));
+      if (radius > 0)
+        gap = std::min({gap, domain.distance(s, c + radius), domain.distance(s, c - radius)});
+      if (!domain.periodic) gap = std::min({gap, s, length - s});
+      if (gap < 1e-6 * length) {
+        ++left_out;
+        continue;
+      }
+      double error = 0;
+      const double reference =
+          richardson_derivative([&](double t) { return kernel.evaluate(c, t); }, s,
+                                std::min(0.5 * gap, 0.05 * length), error);
+      pairs.push_back({c, s, kernel.derivative(c, s), reference});
+      largest_slope = std::max(largest_slope, std::abs(reference));
+    }
+  }
+  // A slope scale with the units of dk/ds, nonzero for a kernel whose sections are flat.
+  const double slope_scale = std::max(largest_slope, scale / length);
+  double worst = 0;
+  std::string worst_at = "";
+  for (const auto& pair : pairs) {
+    const double deviation = std::abs(pair.derivative - pair.reference) / slope_scale;
+    if (!(deviation <= worst)) {  // NaN too
+      worst = std::isnan(deviation) ? std::numeric_limits<double>::infinity() : deviation;
+      worst_at = fmt::format(" at c = {}, s = {}: {} against {}", g(pair.centre), g(pair.point),
+                             g(pair.derivative), g(pair.reference));
+    }
+  }
+  if (pairs.empty()) {
+    checks.skip("derivative", "every sample point is within 1e-6 L of a possible kink");
+  } else {
+    checks.at_most(
+        "derivative",
+        fmt::format("{} ({}) at {} pairs (c, s), max |dk/ds - Richardson| / "
+                    "max(max |dk/ds|, max k / L){}",
+                    kernel.has_exact_derivative() ? "closed form" : "difference quotient",
+                    kernel.name(), pairs.size(), worst_at),
+        worst, 1e-6);
+  }
+
+  // A basis' derivatives: evaluate_derivative against derivative(c_i, s), at scattered points
+  // and at the centres themselves; evaluate_mapped_derivative against T dphi(s).
+  const auto basis_centres = golden_ratio_points(12, length, 0.63);
+  const auto basis = kernel.basis(basis_centres);
+  Random random(hash64(kernel.name() + " derivative"));
+  Eigen::MatrixXd map(5, 12);
+  for (Eigen::Index i = 0; i < map.rows(); ++i)
+    for (Eigen::Index j = 0; j < map.cols(); ++j) map(i, j) = 2 * random.uniform() - 1;
+  basis->set_map(map);
+  const double map_norm = map.cwiseAbs().rowwise().sum().maxCoeff();
+  Eigen::VectorXd dphi(12), mapped(5);
+  double basis_error = 0, mapped_error = 0;
+  auto compare_at = [&](double s) {
+    basis->evaluate_derivative(s, dphi.data());
+    for (Eigen::Index i = 0; i < 12; ++i)
+      basis_error = std::max(
+          basis_error, std::abs(dphi(i) - kernel.derivative(basis_centres[i], s)) / slope_scale);
+    basis->evaluate_mapped_derivative(s, mapped.data());
+    mapped_error = std::max(mapped_error,
+                            (mapped - map * dphi).cwiseAbs().maxCoeff() / (slope_scale * map_norm));
+    if (std::isnan(dphi.sum() + mapped.sum()))
+      basis_error = std::numeric_limits<double>::infinity();
+  };
+  for (double s : points) compare_at(s);
+  for (double c : basis_centres) compare_at(c);
+  // Closed forms: the same products summed in another order, ~n eps. Difference quotients of a
+  // feature basis difference Phi_c f(s) (or T Phi_c f(s)), rounded unlike k(c, s): the quotient
+  // amplifies that rounding by 1 / h, so up to ~16 eps max k / h more.
+  const double step = DerivativeStencil::relative_step * length;
+  const double tolerance =
+      1e-12 + (kernel.has_exact_derivative() ? 0.0 : 16 * epsilon * scale / (step * slope_scale));
+  checks.at_most("basis derivative",
+                 "max |evaluate_derivative - derivative(c_i, s)|, |evaluate_mapped_derivative - "
+                 "T dphi| / slope scale, at 29 points and the 12 centres",
+                 std::max(basis_error, mapped_error), tolerance);
+}
+
 }  // namespace
+
+double richardson_derivative(const std::function<double(double)>& f, double s, double largest_step,
+                             double& error) {
+  // Ridders' method (Numerical Recipes, 3rd ed., section 5.7): each row shrinks h by 1.4, each
+  // column eliminates one more even power of h; a run stops when the diagonal's change exceeds
+  // twice its best error estimate (higher order is no longer paying). Several starting steps
+  // cover kernels whose width is far below the largest step the stretch allows.
+  constexpr int rows = 12;
+  constexpr double shrink = 1.4, shrink2 = shrink * shrink, safe = 2.0;
+  double best = std::numeric_limits<double>::quiet_NaN();
+  error = std::numeric_limits<double>::infinity();
+  auto central = [&](double h) {
+    const double ahead = s + h, behind = s - h;
+    return (f(ahead) - f(behind)) / (ahead - behind);
+  };
+  for (double start : {1.0, 1e-1, 1e-2, 1e-3}) {
+    double table[rows][rows];
+    double h = start * largest_step;
+    double run_error = std::numeric_limits<double>::infinity();
+    table[0][0] = central(h);
+    for (int i = 1; i < rows; ++i) {
+      h /= shrink;
+      table[0][i] = central(h);
+      double factor = shrink2;
+      for (int j = 1; j <= i; ++j) {
+        table[j][i] = (table[j - 1][i] * factor - table[j - 1][i - 1]) / (factor - 1);
+        factor *= shrink2;
+        const double estimate = std::max(std::abs(table[j][i] - table[j - 1][i]),
+                                         std::abs(table[j][i] - table[j - 1][i - 1]));
+        if (estimate <= run_error) {
+          run_error = estimate;
+          if (estimate <= error) {
+            error = estimate;
+            best = table[j][i];
+          }
+        }
+      }
+      if (std::abs(table[i][i] - table[i - 1][i - 1]) >= safe * run_error) break;
+    }
+  }
+  return best;
+}
 
 bool ContractReport::passed() const noexcept {
   return std::all_of(checks.begin(), checks.end(), [](const auto& c) { return c.passed; });
@@ -244,6 +402,8 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
       cross_error =
           std::max(cross_error, std::abs(cross(m, i) - kernel.evaluate(points[m], centres[i])));
   checks.at_most("cross matrix", "max |K_mi - k(s_m, c_i)| / max k", cross_error / scale, 1e-14);
+
+  check_derivatives(kernel, scale, checks);
 
   // Power function on nested uniform centres 4 -> 8 -> 16: >= 0, ~0 at the centres,
   // non-increasing as centres are added.

@@ -12,7 +12,6 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
-#include <numeric>
 #include <optional>
 #include <thread>
 
@@ -28,16 +27,6 @@
 namespace rkhs {
 
 namespace {
-
-double estimated_cost(const StudyDefinition& study, const TrialSpec& trial) {
-  const auto n = static_cast<double>(trial.n);
-  const double static_cost = n * n * n + n * n * static_cast<double>(study.evaluation_points);
-  if (study.kind != StudyKind::adaptive) return static_cost;
-  // One dense LU of the (2d + n) system per step, steps growing with the horizon in laps.
-  const double laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
-                      study.domain.length;
-  return static_cost + laps * (n + 8) * (n + 8) * (n + 8) * 1e3;
-}
 
 // Dense matrices of a trial: Gram (twice, with its eigenvectors) and the cross matrix.
 double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
@@ -149,17 +138,6 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   return result;
 }
 
-std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
-                                             const std::vector<TrialSpec>& trials) {
-  std::vector<double> cost(trials.size());
-  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = estimated_cost(study, trials[i]);
-  std::vector<std::size_t> order(trials.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
-  return order;
-}
-
 namespace {
 
 std::atomic<bool> abandoned_any{false};
@@ -179,6 +157,11 @@ struct RunState {
   bool abandoned = false;     // run_trials has returned: no more writes, no more callbacks
 };
 
+// One oneTBB task per trial. A task does not run the trial of its own index: it claims the next
+// trial of `order` (largest first) when it starts, under the mutex that also calls
+// on_trial_started, so trials start in exactly that order whatever the thread count and
+// whichever task a thread happens to take (a thread that steals takes the far end of a range,
+// which here would be the cheapest trials).
 void run_in_arena(RunState& state) {
   const auto order = largest_first_order(state.study, state.trials);
   const auto& options = state.options;
@@ -188,33 +171,32 @@ void run_in_arena(RunState& state) {
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   tbb::task_arena arena(threads);
+  std::size_t claimed = 0;  // trials of `order` taken by a task (guarded by state.mutex)
   arena.execute([&] {
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, order.size(), 1),
-        [&](const tbb::blocked_range<std::size_t>& range) {
-          for (std::size_t k = range.begin(); k != range.end(); ++k) {
-            const std::size_t i = order[k];
-            TrialResult result;
-            if (options.stop_requested && options.stop_requested()) {
-              result = not_started();
-            } else {
-              {
-                std::lock_guard lock(state.mutex);
-                if (state.abandoned) return;
-                state.phase[i] = RunState::running;
-                if (options.on_trial_started) options.on_trial_started(state.trials[i]);
-              }
-              result = run_trial(state.study, state.trials[i], options.stop_requested);
-            }
+        std::size_t{0}, order.size(), std::size_t{1},
+        [&](std::size_t) {
+          const bool stop = options.stop_requested && options.stop_requested();
+          std::size_t i = 0;
+          {
             std::lock_guard lock(state.mutex);
             if (state.abandoned) return;
-            state.phase[i] = RunState::done;
-            state.results[i] = std::move(result);
-            if (!state.results[i].skipped && options.on_trial_finished)
-              options.on_trial_finished(state.trials[i], state.results[i]);
-            ++state.finished;
-            state.changed.notify_all();
+            i = order[claimed++];
+            if (!stop) {
+              state.phase[i] = RunState::running;
+              if (options.on_trial_started) options.on_trial_started(state.trials[i]);
+            }
           }
+          TrialResult result =
+              stop ? not_started() : run_trial(state.study, state.trials[i], options.stop_requested);
+          std::lock_guard lock(state.mutex);
+          if (state.abandoned) return;
+          state.phase[i] = RunState::done;
+          state.results[i] = std::move(result);
+          if (!state.results[i].skipped && options.on_trial_finished)
+            options.on_trial_finished(state.trials[i], state.results[i]);
+          ++state.finished;
+          state.changed.notify_all();
         },
         tbb::simple_partitioner());
   });

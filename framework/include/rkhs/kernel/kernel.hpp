@@ -9,9 +9,13 @@
 //                                                   when the domain is periodic
 //   KernelProperties properties() const;
 // and, optionally, a sparse feature map (FeatureMapKernel) through which Gram and cross
-// matrices are assembled. It registers with RKHS_REGISTER_KERNEL(K) in its own .cpp file.
-// Hot loops (Gram assembly, cross matrices, error evaluation) are instantiated for K, so the
-// compiler inlines k(x, y); type erasure happens once per trial, at AnyKernel.
+// matrices are assembled, and the derivative of its sections in closed form
+// (DifferentiableKernel: derivative(c, s) = d/ds k(c, s); for a feature map also
+// feature_derivatives, DifferentiableFeatureMapKernel). Without them, derivatives are difference
+// quotients (DerivativeStencil in kernel_algorithms.hpp). It registers with RKHS_REGISTER_KERNEL(K)
+// in its own .cpp file. Hot loops (Gram assembly, cross matrices, error evaluation) are
+// instantiated for K, so the compiler inlines k(x, y); type erasure happens once per trial, at
+// AnyKernel.
 
 #include <Eigen/Dense>
 #include <concepts>
@@ -75,6 +79,25 @@ concept FeatureMapKernel = KernelFunction<K> && requires(const K& k, double x, S
   { k.feature_count() } -> std::convertible_to<std::size_t>;
 };
 
+/// A kernel whose sections have a derivative in closed form: `k.derivative(c, s)` is
+/// d/ds k(c, s), the derivative in the SECOND argument, periodised like k(c, s) on a periodic
+/// domain. Where the section is not differentiable (a kink), it is the right-hand derivative
+/// unless the kernel's header says otherwise.
+template <class K>
+concept DifferentiableKernel = KernelFunction<K> && requires(const K& k, double x, double y) {
+  { k.derivative(x, y) } -> std::convertible_to<double>;
+};
+
+/// A feature-map kernel with the derivatives of its features in closed form:
+/// `feature_derivatives(s, f)` clears f and appends d/ds of the features at s with the SAME
+/// indices in the same order as features(s, f) (so a basis can apply them to columns it
+/// precomputed for features(); no allocation once f has grown to its largest size).
+template <class K>
+concept DifferentiableFeatureMapKernel = FeatureMapKernel<K> &&
+    requires(const K& k, double x, SparseFeatures& f) {
+  k.feature_derivatives(x, f);
+};
+
 /// The n kernel sections phi_i = k(c_i, .) at fixed centres, evaluated at one point at a time:
 /// the inner loop of an ODE right-hand side. One virtual call evaluates all n sections with the
 /// concrete kernel inlined; nothing is allocated after construction. Not thread-safe (it owns
@@ -90,6 +113,13 @@ class KernelBasis {
   virtual void set_map(const Eigen::MatrixXd& map) = 0;
   /// out = T phi(s), out.size() == T.rows().
   virtual void evaluate_mapped(double s, double* out) const = 0;
+  /// dphi[i] = d/ds k(c_i, s) for i < size(): the kernel's closed form where it has one
+  /// (AnyKernel::has_exact_derivative()), otherwise the difference quotient of
+  /// DerivativeStencil (kernel_algorithms.hpp: step 1e-7 L, one-sided next to a kink), the
+  /// same values as AnyKernel::derivative. Nothing is allocated.
+  virtual void evaluate_derivative(double s, double* dphi) const = 0;
+  /// out = T dphi(s), T the map of set_map (out.size() == T.rows()). Nothing is allocated.
+  virtual void evaluate_mapped_derivative(double s, double* out) const = 0;
 };
 
 /// A kernel instance behind a virtual interface: the registry boundary. Each method runs a
@@ -105,6 +135,14 @@ class AnyKernel {
 
   /// k(x, y). A virtual call per value: use the matrix methods in loops.
   virtual double evaluate(double x, double y) const = 0;
+  /// d/dy k(x, y), the derivative of the section k(x, .) (periodised on a periodic domain). A
+  /// virtual call per value, for tests and contracts: use KernelBasis along a path. The kernel's
+  /// closed form when has_exact_derivative(), otherwise a difference quotient with step
+  /// 1e-7 L, one-sided next to a kink point (DerivativeStencil in kernel_algorithms.hpp).
+  virtual double derivative(double x, double y) const = 0;
+  /// True when the kernel type gives its derivatives in closed form (DifferentiableKernel or
+  /// DifferentiableFeatureMapKernel).
+  virtual bool has_exact_derivative() const noexcept = 0;
   /// G_ij = k(c_i, c_j), n x n, symmetric.
   virtual Eigen::MatrixXd gram(std::span<const double> centres) const = 0;
   /// K_mi = k(s_m, c_i), points.size() x centres.size().

@@ -4,9 +4,15 @@
 //   - feature-map kernels (B-splines): G = Phi Phi^T with Phi sparse, cost O(support) per row;
 //   - compactly supported kernels: only pairs closer than the support radius are evaluated;
 //   - global kernels: the dense double loop, one inlined k(x, y) per entry.
+// Derivatives of the sections, d/ds k(c, s), come from the kernel's closed form
+// (DifferentiableKernel, DifferentiableFeatureMapKernel) or, without one, from the difference
+// quotient of DerivativeStencil.
 
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "rkhs/kernel/kernel.hpp"
@@ -71,6 +77,107 @@ void for_each_pair_within(const Domain& domain, double radius, std::span<const d
 
 }  // namespace detail
 
+/// The difference quotient that stands in for d/ds where a kernel type has no closed form:
+/// f'(s) ~ sum_j weight_j f(point_j), for any function f of s (one section k(c, .) for
+/// AnyKernel::derivative, all n sections at once for a KernelBasis: the same points and weights,
+/// so both give the same values).
+///
+/// Step h = 1e-7 L. The central difference (f(s + h) - f(s - h)) / 2h errs by h^2 |f'''| / 6
+/// (truncation) plus about eps max|f| / h (rounding of f). For a kernel of width l, relative to
+/// the slope scale |f| / l, that is (h / l)^2 / 6 + eps l / h: below 2e-8 for every width from
+/// L / 1000 to 10 L, whereas 1e-6 L would lose 2e-7 to truncation at L / 1000 and 1e-5 L
+/// would lose 2e-5. The divisor is the difference of the rounded arguments, so rounding s + h
+/// costs nothing.
+///
+/// Next to a kink point kappa (|s - kappa| < h; the points of AnyKernel::kink_points) the
+/// central difference would straddle the kink, so the stencil is one-sided and second order,
+/// +-(-3 f(s) + 4 f(s +- h) - f(s +- 2h)) / 2h (error h^2 |f'''| / 3) on the side away from the
+/// kink: the right-hand derivative for s >= kappa (at the kink itself too), the left-hand one for
+/// s < kappa. On an interval the ends are treated as kinks, so points outside [0, L] are never
+/// used (inward at the ends; at s = L the left-hand derivative). Assumes kink points at least
+/// 3h apart.
+class DerivativeStencil {
+ public:
+  /// Step relative to the domain length (see above).
+  static constexpr double relative_step = 1e-7;
+
+  struct Stencil {
+    int size = 0;
+    std::array<double, 3> point{};
+    std::array<double, 3> weight{};
+  };
+
+  /// `kinks`: points in [0, L) where the differentiated functions are not smooth.
+  DerivativeStencil(const Domain& domain, std::vector<double> kinks)
+      : domain_(domain), step_(relative_step * domain.length), kinks_(std::move(kinks)) {
+    std::sort(kinks_.begin(), kinks_.end());
+  }
+
+  double step() const noexcept { return step_; }
+
+  /// The points and weights at s.
+  Stencil at(double s) const noexcept {
+    const double h = step_;
+    int side = 0;  // 0: central, +1: forward (right-hand), -1: backward (left-hand)
+    if (!domain_.periodic && s < h) {
+      side = +1;
+    } else if (!domain_.periodic && domain_.length - s < h) {
+      side = -1;
+    } else if (const double offset = offset_from_nearest_kink(s); std::abs(offset) < h) {
+      side = offset >= 0 ? +1 : -1;
+    }
+    Stencil out;
+    if (side == 0) {
+      const double ahead = s + h, behind = s - h;
+      const double inverse = 1.0 / (ahead - behind);
+      out.size = 2;
+      out.point = {ahead, behind, 0.0};
+      out.weight = {inverse, -inverse, 0.0};
+      return out;
+    }
+    const double near = s + side * h, far = s + side * 2.0 * h;
+    const double inverse = side / (2.0 * (near - s) * side);  // +-1 / 2h, h as rounded
+    out.size = 3;
+    out.point = {s, near, far};
+    out.weight = {-3.0 * inverse, 4.0 * inverse, -inverse};
+    return out;
+  }
+
+  /// sum_j weight_j f(point_j) at s.
+  template <class F>
+  double apply(F&& f, double s) const {
+    const Stencil stencil = at(s);
+    double sum = 0.0;
+    for (int j = 0; j < stencil.size; ++j) sum += stencil.weight[j] * f(stencil.point[j]);
+    return sum;
+  }
+
+ private:
+  /// s - kappa for the nearest kink point kappa (the periodic difference on a periodic domain);
+  /// infinity when there is none.
+  double offset_from_nearest_kink(double s) const noexcept {
+    if (kinks_.empty()) return std::numeric_limits<double>::infinity();
+    const double x = domain_.wrap(s);
+    const auto next = std::lower_bound(kinks_.begin(), kinks_.end(), x);
+    double best = std::numeric_limits<double>::infinity();
+    auto consider = [&](double kappa) {
+      const double offset = domain_.difference(x, kappa);
+      if (std::abs(offset) < std::abs(best)) best = offset;
+    };
+    if (next != kinks_.end()) consider(*next);
+    if (next != kinks_.begin()) consider(*(next - 1));
+    if (domain_.periodic) {
+      consider(kinks_.front());
+      consider(kinks_.back());
+    }
+    return best;
+  }
+
+  Domain domain_;
+  double step_;
+  std::vector<double> kinks_;
+};
+
 /// K_mi = k(points[m], centres[i]).
 template <KernelFunction K>
 Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
@@ -123,12 +230,18 @@ Eigen::MatrixXd assemble_gram(const K& kernel, const Domain& domain,
   return gram;
 }
 
-/// KernelBasis of a kernel without a feature map: n inlined evaluations per point.
+/// KernelBasis of a kernel without a feature map: n inlined evaluations per point. Derivatives:
+/// K::derivative when K is a DifferentiableKernel, otherwise `stencil` (n evaluations per
+/// stencil point). `kernel` and `stencil` must outlive the basis.
 template <KernelFunction K>
 class DirectBasis final : public KernelBasis {
  public:
-  DirectBasis(const K& kernel, std::span<const double> centres)
-      : kernel_(kernel), centres_(centres.begin(), centres.end()), phi_(centres.size()) {}
+  DirectBasis(const K& kernel, std::span<const double> centres, const DerivativeStencil& stencil)
+      : kernel_(kernel),
+        stencil_(stencil),
+        centres_(centres.begin(), centres.end()),
+        phi_(centres.size()),
+        dphi_(centres.size()) {}
   std::size_t size() const noexcept override { return centres_.size(); }
   void evaluate(double s, double* phi) const override {
     for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
@@ -150,44 +263,122 @@ class DirectBasis final : public KernelBasis {
     Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
         map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), static_cast<Eigen::Index>(phi_.size()));
   }
+  void evaluate_derivative(double s, double* dphi) const override {
+    if constexpr (DifferentiableKernel<K>) {
+      for (std::size_t i = 0; i < centres_.size(); ++i)
+        dphi[i] = kernel_.derivative(centres_[i], s);
+    } else {
+      // The same sums, in the same order, as AnyKernel::derivative of each section.
+      const auto stencil = stencil_.at(s);
+      std::fill(dphi, dphi + centres_.size(), 0.0);
+      for (int j = 0; j < stencil.size; ++j) {
+        evaluate(stencil.point[j], phi_.data());
+        for (std::size_t i = 0; i < centres_.size(); ++i) dphi[i] += stencil.weight[j] * phi_[i];
+      }
+    }
+  }
+  void evaluate_mapped_derivative(double s, double* out) const override {
+    if (map_.size() == 0) {
+      evaluate_derivative(s, out);
+      for (std::size_t i = 0; i < centres_.size(); ++i) out[i] *= scale_;
+      return;
+    }
+    evaluate_derivative(s, dphi_.data());
+    Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
+        map_ *
+        Eigen::Map<const Eigen::VectorXd>(dphi_.data(), static_cast<Eigen::Index>(dphi_.size()));
+  }
 
  private:
   const K& kernel_;
+  const DerivativeStencil& stencil_;
   std::vector<double> centres_;
-  mutable std::vector<double> phi_;
+  mutable std::vector<double> phi_, dphi_;
   Eigen::MatrixXd map_;  // empty when the map is scale_ times the identity
   double scale_ = 0.0;
 };
 
 /// KernelBasis through a sparse feature map: phi(s) = Phi_c f(s), with Phi_c (n x F) the
-/// centres' features and f(s) the (few) features active at s.
+/// centres' features and f(s) the (few) features active at s. Derivatives: Phi_c f'(s) with
+/// K::feature_derivatives (DifferentiableFeatureMapKernel), else K::derivative per centre
+/// (DifferentiableKernel), else `stencil` applied to Phi_c f(.). `kernel` and `stencil` must
+/// outlive the basis.
 template <FeatureMapKernel K>
 class FeatureBasis final : public KernelBasis {
  public:
-  FeatureBasis(const K& kernel, std::span<const double> centres)
+  FeatureBasis(const K& kernel, std::span<const double> centres, const DerivativeStencil& stencil)
       : kernel_(kernel),
-        centre_features_(Eigen::MatrixXd(detail::feature_matrix(kernel, centres))) {
+        stencil_(stencil),
+        centre_features_(Eigen::MatrixXd(detail::feature_matrix(kernel, centres))),
+        scratch_(centre_features_.rows()) {
     kernel_.features(0.0, active_);  // grows the scratch buffer once
+    if constexpr (DifferentiableFeatureMapKernel<K>) kernel_.feature_derivatives(0.0, active_);
+    if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>)
+      centres_.assign(centres.begin(), centres.end());
   }
   std::size_t size() const noexcept override {
     return static_cast<std::size_t>(centre_features_.rows());
   }
   void evaluate(double s, double* phi) const override { apply(centre_features_, s, phi); }
-  void set_map(const Eigen::MatrixXd& map) override { mapped_features_ = map * centre_features_; }
+  void set_map(const Eigen::MatrixXd& map) override {
+    mapped_features_ = map * centre_features_;
+    if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) map_ = map;
+    if (scratch_.size() < mapped_features_.rows()) scratch_.resize(mapped_features_.rows());
+  }
   void evaluate_mapped(double s, double* out) const override { apply(mapped_features_, s, out); }
+  void evaluate_derivative(double s, double* dphi) const override {
+    if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) {
+      for (std::size_t i = 0; i < centres_.size(); ++i)
+        dphi[i] = kernel_.derivative(centres_[i], s);
+    } else {
+      apply_derivative(centre_features_, s, dphi);
+    }
+  }
+  void evaluate_mapped_derivative(double s, double* out) const override {
+    if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) {
+      const auto n = centre_features_.rows();
+      evaluate_derivative(s, scratch_.data());
+      Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() = map_ * scratch_.head(n);
+    } else {
+      apply_derivative(mapped_features_, s, out);
+    }
+  }
 
  private:
   void apply(const Eigen::MatrixXd& columns, double s, double* out) const {
     kernel_.features(s, active_);
+    accumulate(columns, out);
+  }
+  void accumulate(const Eigen::MatrixXd& columns, double* out) const {
     Eigen::Map<Eigen::VectorXd> result(out, columns.rows());
     result.setZero();
     for (std::size_t f = 0; f < active_.size(); ++f)
       result.noalias() += active_.value[f] * columns.col(active_.index[f]);
   }
+  // d/ds of `columns` f(s): the features' derivatives, or the stencil's sum of apply().
+  void apply_derivative(const Eigen::MatrixXd& columns, double s, double* out) const {
+    if constexpr (DifferentiableFeatureMapKernel<K>) {
+      kernel_.feature_derivatives(s, active_);
+      accumulate(columns, out);
+    } else {
+      const auto stencil = stencil_.at(s);
+      const auto rows = columns.rows();
+      Eigen::Map<Eigen::VectorXd> result(out, rows);
+      result.setZero();
+      for (int j = 0; j < stencil.size; ++j) {
+        apply(columns, stencil.point[j], scratch_.data());
+        result.noalias() += stencil.weight[j] * scratch_.head(rows);
+      }
+    }
+  }
   const K& kernel_;
+  const DerivativeStencil& stencil_;
   Eigen::MatrixXd centre_features_;
   Eigen::MatrixXd mapped_features_;
+  std::vector<double> centres_;  // only for K::derivative without feature derivatives
+  Eigen::MatrixXd map_;          // likewise
   mutable SparseFeatures active_;
+  mutable Eigen::VectorXd scratch_;
 };
 
 /// The AnyKernel adaptor of a concrete kernel type.
@@ -199,7 +390,12 @@ class KernelModel final : public AnyKernel {
         name_(K::info().name),
         parameters_(parameters),
         domain_(domain),
-        properties_(kernel_.properties()) {}
+        properties_(kernel_.properties()),
+        stencil_(domain, exact_derivative ? std::vector<double>{} : kink_points()) {}
+
+  /// True when K gives its derivatives in closed form.
+  static constexpr bool exact_derivative =
+      DifferentiableKernel<K> || DifferentiableFeatureMapKernel<K>;
 
   const K& kernel() const noexcept { return kernel_; }
 
@@ -209,6 +405,24 @@ class KernelModel final : public AnyKernel {
   const KernelProperties& properties() const noexcept override { return properties_; }
 
   double evaluate(double x, double y) const override { return kernel_(x, y); }
+  double derivative(double x, double y) const override {
+    if constexpr (DifferentiableKernel<K>) {
+      return kernel_.derivative(x, y);
+    } else if constexpr (DifferentiableFeatureMapKernel<K>) {
+      // sum_f phi_f(x) phi_f'(y); allocates (a call per value, for tests and contracts).
+      SparseFeatures at_x, slopes_at_y;
+      kernel_.features(x, at_x);
+      kernel_.feature_derivatives(y, slopes_at_y);
+      double sum = 0.0;
+      for (std::size_t a = 0; a < at_x.size(); ++a)
+        for (std::size_t b = 0; b < slopes_at_y.size(); ++b)
+          if (at_x.index[a] == slopes_at_y.index[b]) sum += at_x.value[a] * slopes_at_y.value[b];
+      return sum;
+    } else {
+      return stencil_.apply([&](double t) { return kernel_(x, t); }, y);
+    }
+  }
+  bool has_exact_derivative() const noexcept override { return exact_derivative; }
   Eigen::MatrixXd gram(std::span<const double> centres) const override {
     return assemble_gram(kernel_, domain_, centres);
   }
@@ -227,8 +441,10 @@ class KernelModel final : public AnyKernel {
     else return 0;
   }
   std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const override {
-    if constexpr (FeatureMapKernel<K>) return std::make_unique<FeatureBasis<K>>(kernel_, centres);
-    else return std::make_unique<DirectBasis<K>>(kernel_, centres);
+    if constexpr (FeatureMapKernel<K>)
+      return std::make_unique<FeatureBasis<K>>(kernel_, centres, stencil_);
+    else
+      return std::make_unique<DirectBasis<K>>(kernel_, centres, stencil_);
   }
   std::vector<double> kink_points() const override {
     std::vector<double> kinks;
@@ -245,6 +461,7 @@ class KernelModel final : public AnyKernel {
   ParameterSet parameters_;
   Domain domain_;
   KernelProperties properties_;
+  DerivativeStencil stencil_;  // used only without exact derivatives; holds kink_points() then
 };
 
 /// Registers kernel type K (its info() and a KernelModel<K> factory) into kernel_registry().

@@ -18,12 +18,21 @@
 //   Gram positive semidefinite                     lambda_min >= -64 n eps lambda_max at 40
 //                       scattered points and at random point sets of 10, 25 and 50 points
 //   feature-map rank    rank(G) <= feature_count() (finite feature maps only)
+//   derivative          derivative(c, s) (closed form or the fallback difference) agrees with a
+//                       Richardson-extrapolated central difference of k(c, .) (Ridders' method)
+//                       to 1e-6 max(max |dk/ds|, max k / L), at pairs (c, s) whose difference
+//                       stencil stays away from the section's possible kinks: kink_points(), s = c,
+//                       |s - c| = support radius, and an interval's ends
+//   basis derivative    a basis' evaluate_derivative equals derivative(c_i, s), and
+//                       evaluate_mapped_derivative equals T times it, to 1e-12 of the same scale
+//                       (plus the rounding a difference quotient amplifies, without closed forms)
 //   power function      P^2 >= 0, P^2 = 0 at the centres, P^2 non-increasing from 4 to 8 to 16
 //                       nested centres (skipped, with the reason, when round-off makes the
 //                       comparison meaningless)
 // Tolerances are relative to max k(x, x) and derived in the implementation's comments.
 
 #include <Eigen/Dense>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -52,6 +61,13 @@ struct ContractReport {
 /// Runs every check of the contract on `kernel` (on kernel.domain()). Never throws for a kernel
 /// that violates the contract; exceptions thrown by the kernel itself propagate.
 ContractReport check_kernel_contract(const AnyKernel& kernel);
+
+/// f'(s) by Richardson extrapolation of central differences (Ridders' method): the tableau of
+/// (f(s + h) - f(s - h)) / 2h for h = h0, h0 / 1.4, h0 / 1.4^2, ..., its entry with the smallest
+/// estimated error, tried from h0 = `largest_step` down to 1e-3 of it. f must be smooth on
+/// [s - largest_step, s + largest_step]. `error` receives the estimate.
+double richardson_derivative(const std::function<double(double)>& f, double s, double largest_step,
+                             double& error);
 
 /// `count` points in [0, L) from the golden-ratio sequence: spread out, off every uniform grid.
 std::vector<double> golden_ratio_points(std::size_t count, double length, double start = 0.1234);

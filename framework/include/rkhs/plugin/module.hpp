@@ -45,7 +45,7 @@
 #include "rkhs/core/registry.hpp"
 #include "rkhs/version.hpp"  // RKHS_STUDY_VERSION, generated from the CMake project version
 
-#define RKHS_PLUGIN_ABI_VERSION 3  // 3: KernelProperties::dimension
+#define RKHS_PLUGIN_ABI_VERSION 4  // 4: derivatives in KernelBasis, AnyKernel, TargetFunction
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

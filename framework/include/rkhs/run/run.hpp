@@ -1,8 +1,9 @@
 #pragma once
 // Running trials: each trial is one oneTBB task; a trial that throws, produces NaN or exceeds
-// its limits is recorded as failed with its reason, and the others go on. Results are stored by
-// trial index and every trial is computed sequentially inside its task, so they are
-// bit-identical for any thread count.
+// its limits is recorded as failed with its reason, and the others go on. Trials start largest
+// first (largest_first_order, rkhs/run/trial_cost.hpp), so that a long trial does not end a run
+// alone. Results are stored by trial index and every trial is computed sequentially inside its
+// task, so they are bit-identical for any thread count and in the order of the trials given.
 //
 // Stopping (SIGINT, SIGTERM): once RunOptions::stop_requested returns true no trial starts, and
 // trials in flight stop at their next cancellation point (rkhs/core/cancellation.hpp); both are
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/run/trial_cost.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
@@ -44,7 +46,8 @@ struct RunOptions {
   /// Called once, before any trial starts, with the number of trials about to run.
   std::function<void(std::size_t)> on_start = {};
   /// Called as each trial starts, from its worker thread, serialised by the same mutex as
-  /// on_trial_finished.
+  /// on_trial_finished: in largest_first_order, exactly, for any thread count (trials skipped
+  /// because of a stop request are not reported).
   std::function<void(const TrialSpec&)> on_trial_started = {};
   /// Once stop_requested has returned true, trials still running this many seconds later are
   /// abandoned: recorded as stopped while running, and run_trials returns without waiting for
@@ -65,12 +68,8 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
 /// process must end with std::_Exit (after flushing its output), not by returning from main.
 bool trials_abandoned() noexcept;
 
-/// The positions of `trials` ordered by estimated cost, largest first (ties keep grid order):
-/// the order in which trials are started, so that long trials do not end a run alone.
-std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
-                                             const std::vector<TrialSpec>& trials);
-
-/// Runs `trials` concurrently, largest first; results in the order of `trials`.
+/// Runs `trials` concurrently, started in largest_first_order(study, trials); results in the
+/// order of `trials`.
 std::vector<TrialResult> run_trials(const StudyDefinition& study,
                                     const std::vector<TrialSpec>& trials,
                                     const RunOptions& options);

@@ -24,6 +24,14 @@
 // operator() forms the same products on the stack, O((p + 1)(J + 1)), without allocation.
 // Arguments must be finite.
 //
+// Derivatives: N_p'(x) = N_{p-1}(x) - N_{p-1}(x - 1) (0 for p = 0), so
+//   d/dv phi_{j,k}(v) = 2^{j (1 - 2r) / 2} (2^j / h0) N_p'(2^j v / h0 - k);
+// feature_derivatives(v) gives them with the indices of features(v), derivative(u, v) =
+// d/dv k(u, v) = sum_{j,k} phi_{j,k}(u) phi_{j,k}'(v). At a knot (as located by the rounding
+// of 2^j v / h0), where the derivative of a degree-1 spline jumps, both give the right-hand
+// derivative (the piece of the cell to the right; degree 0 gives 0 everywhere); on an interval,
+// at v = L the left-hand one, and outside [0, L] the derivative at the clamped point.
+//
 // Properties: positive SEMIdefinite only (positive_definite = false). The level spaces are
 // nested, so k has rank n_J (periodic) or n_J + p (interval), fewer than feature_count():
 // a Gram matrix of more centres than that is singular (n_J = 256 with the defaults).
@@ -95,6 +103,33 @@ class MultiscaleBSpline {
     return sum;
   }
 
+  /// d/dv k(u, v), the dot product of u's features with v's feature derivatives.
+  double derivative(double u, double v) const noexcept {
+    const double x0 = level0(u), y0 = level0(v);
+    std::array<double, max_degree + 1> nx{}, dny{};
+    double sum = 0.0;
+    for (int j = 0; j <= levels_; ++j) {
+      const Cell cx = cell_at(x0, j), cy = cell_at(y0, j);
+      const std::int32_t cells = n0_ << j;
+      std::int32_t shift = cx.index - cy.index;
+      if (periodic_) {
+        if (shift < 0) shift += cells;
+        if (shift > degree_ && shift < cells - degree_) continue;
+      } else if (shift > degree_ || shift < -degree_) {
+        continue;
+      }
+      pieces(degree_, cx.t, nx.data());
+      piece_slopes(degree_, cy.t, dny.data());
+      for (int ix = 0; ix <= degree_; ++ix) {
+        int iy = ix - shift;
+        if (periodic_ && iy < 0) iy += cells;
+        if (iy < 0 || iy > degree_) continue;
+        sum += (weight_[j] * nx[ix]) * (slope_weight_[j] * dny[iy]);
+      }
+    }
+    return sum;
+  }
+
   /// Clears `out` and appends the (p + 1)(J + 1) features of u, level by level.
   void features(double u, SparseFeatures& out) const {
     out.clear();
@@ -108,6 +143,24 @@ class MultiscaleBSpline {
         const std::int32_t k = c.index - i;
         const std::int32_t slot = periodic_ ? (k < 0 ? k + cells : k) : k + degree_;
         out.push(offset_[j] + slot, weight_[j] * n[i]);
+      }
+    }
+  }
+
+  /// Clears `out` and appends d/du of the features of u, with the indices and in the order of
+  /// features(u).
+  void feature_derivatives(double u, SparseFeatures& out) const {
+    out.clear();
+    const double x0 = level0(u);
+    std::array<double, max_degree + 1> dn{};
+    for (int j = 0; j <= levels_; ++j) {
+      const Cell c = cell_at(x0, j);
+      const std::int32_t cells = n0_ << j;
+      piece_slopes(degree_, c.t, dn.data());
+      for (int i = degree_; i >= 0; --i) {
+        const std::int32_t k = c.index - i;
+        const std::int32_t slot = periodic_ ? (k < 0 ? k + cells : k) : k + degree_;
+        out.push(offset_[j] + slot, slope_weight_[j] * dn[i]);
       }
     }
   }
@@ -161,6 +214,19 @@ class MultiscaleBSpline {
     }
   }
 
+  /// out[i] = N_p'(t + i) = N_{p-1}(t + i) - N_{p-1}(t + i - 1) for i = 0..p and t in [0, 1]:
+  /// the derivatives of the pieces (all 0 for p = 0).
+  static void piece_slopes(int degree, double t, double* out) noexcept {
+    if (degree == 0) {
+      out[0] = 0.0;
+      return;
+    }
+    std::array<double, max_degree + 1> lower{};  // room for pieces() of any degree
+    pieces(degree - 1, t, lower.data());
+    for (int i = 0; i <= degree; ++i)
+      out[i] = (i < degree ? lower[i] : 0.0) - (i > 0 ? lower[i - 1] : 0.0);
+  }
+
   struct Cell {
     std::int32_t index;  ///< level-j cell holding the point: [index, index + 1) in knot units
     double t;            ///< position in the cell, [0, 1]
@@ -199,6 +265,7 @@ class MultiscaleBSpline {
   bool periodic_;
   std::array<double, max_level + 1> scale_{};         ///< 2^j
   std::array<double, max_level + 1> weight_{};        ///< 2^{j (1 - 2r) / 2}
+  std::array<double, max_level + 1> slope_weight_{};  ///< weight_[j] 2^j / h0 (d/du of features)
   std::array<std::int32_t, max_level + 2> offset_{};  ///< first feature index of level j
 };
 

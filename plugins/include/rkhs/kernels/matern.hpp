@@ -14,6 +14,12 @@
 // side of x form an arithmetic sequence a, a + L, a + 2L, ..., and
 //   sum_m (a + m L)^j exp(-c (a + m L)),  j = 0, 1, 2,
 // are derivatives of a geometric series in q = exp(-c L) (see periodic_side below).
+// derivative(x, y) = d/dy k(x, y) from the profiles' derivatives in a = sqrt(2 nu) d / l,
+//   nu = 0.5:  -exp(-a)
+//   nu = 1.5:  -a exp(-a)
+//   nu = 2.5:  -a (1 + a) / 3 exp(-a),
+// times sqrt(2 nu) / l; on a periodic domain the derivatives of the closed-form image sums
+// (periodic_side_slope). nu = 0.5 has a kink at y = x: there it is the right-hand derivative.
 // Properties: strictly positive definite, native space H^{nu + 1/2} (d = 1), global support,
 // stationary.
 // Fails: ParameterError naming "nu" for any other nu (also checked by the declaration).
@@ -46,10 +52,33 @@ class Matern {
     }
   }
 
+  /// d/dd k0(d) at distance d >= 0 (at 0 the right-hand derivative).
+  double profile_slope(double distance) const noexcept {
+    const double a = distance * rate_;
+    switch (order_) {
+      case 0:
+        return -rate_ * std::exp(-a);
+      case 1:
+        return -rate_ * a * std::exp(-a);
+      default:
+        return -rate_ * a * (1.0 + a) * (1.0 / 3.0) * std::exp(-a);
+    }
+  }
+
   double operator()(double x, double y) const noexcept {
     if (!domain_.periodic) return profile(std::abs(x - y));
     const double d = domain_.distance(x, y);  // in [0, L/2]
     return periodic_side(rate_ * d) + periodic_side(rate_ * (domain_.length - d));
+  }
+
+  /// d/dy k(x, y): the distance |x - y| grows with y when y >= x (right-hand at y = x).
+  double derivative(double x, double y) const noexcept {
+    const double difference = domain_.periodic ? domain_.difference(x, y) : x - y;
+    const double direction = difference > 0 ? -1.0 : 1.0;  // d|x - y| / dy
+    const double d = std::abs(difference);
+    if (!domain_.periodic) return direction * profile_slope(d);
+    return direction * rate_ *
+           (periodic_side_slope(rate_ * d) - periodic_side_slope(rate_ * (domain_.length - d)));
   }
 
   KernelProperties properties() const noexcept;
@@ -72,6 +101,18 @@ class Matern {
     const double e2 =
         s * (s * geometric_[0] + 2.0 * period_ * geometric_[1]) + period_ * period_ * geometric_[2];
     return e * (e0 + e1 + e2 * (1.0 / 3.0));
+  }
+
+  /// d/ds periodic_side(s): -E_0 (nu = 1/2), -E_1 (3/2), -(E_1 + E_2) / 3 (5/2), since
+  /// E_j' = j E_{j-1} - E_j term by term.
+  double periodic_side_slope(double s) const noexcept {
+    const double e = std::exp(-s);
+    if (order_ == 0) return -e * geometric_[0];
+    const double e1 = s * geometric_[0] + period_ * geometric_[1];
+    if (order_ == 1) return -e * e1;
+    const double e2 =
+        s * (s * geometric_[0] + 2.0 * period_ * geometric_[1]) + period_ * period_ * geometric_[2];
+    return -e * (e1 + e2) * (1.0 / 3.0);
   }
 
   double nu_;

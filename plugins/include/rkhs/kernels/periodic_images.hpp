@@ -39,6 +39,15 @@ int image_count(const Profile& profile, double length, double relative_tolerance
   return max_images;
 }
 
+/// sum_{m=-images}^{images} slope(d + m L), smallest terms first: d/dd of the image sum when
+/// `slope(r)` is d/dr of profile(|r|) (an odd function of the signed distance r).
+template <class Slope>
+inline double sum_of_image_slopes(const Slope& slope, double d, double length, int images) {
+  double sum = 0.0;
+  for (int m = images; m >= 1; --m) sum += slope(d + m * length) + slope(d - m * length);
+  return sum + slope(d);
+}
+
 /// sum_{m=-images}^{images} profile(|d + m L|), smallest terms first.
 template <class Profile>
 inline double sum_of_images(const Profile& profile, double d, double length, int images) {

@@ -12,6 +12,13 @@
 //   radius  > 0, metres, default 1: the support radius rho.
 // Interval domain: k = phi. Periodic domain: the finite sum of the images phi(|d + m L|/rho)
 // that can be nonzero (|m| <= ceil(rho/L + 1/2)); exact, no truncation.
+// derivative(x, y) = d/dy k(x, y) from phi'(r):
+//   k = 0:  -1
+//   k = 1:  -12 r (1 - r)^2
+//   k = 2:  -14 r (4 r + 1) (1 - r)^4
+//   k = 3:  -6 r (35 r^2 + 18 r + 3) (1 - r)^6,           0 for r > 1,
+// summed over the same images on a periodic domain. k = 0 has kinks at y = x and at distance
+// rho: there it is the right-hand derivative in y, like every other value.
 // Properties: strictly positive definite on R (hence on the circle), native space H^{k+1}
 // (= d/2 + k + 1/2), support radius rho (k(x, y) = 0 when the domain distance is >= rho),
 // stationary.
@@ -49,15 +56,48 @@ class Wendland {
     }
   }
 
+  /// phi_{1,k}'(r), the polynomial piece's derivative, for 0 <= r <= 1.
+  static double phi_slope(int smoothness, double r) noexcept {
+    const double s = 1.0 - r, s2 = s * s;
+    switch (smoothness) {
+      case 0:
+        return -1.0;
+      case 1:
+        return -12.0 * r * s2;
+      case 2:
+        return -14.0 * r * (4.0 * r + 1.0) * s2 * s2;
+      default:
+        return -6.0 * r * ((35.0 * r + 18.0) * r + 3.0) * s2 * s2 * s2;
+    }
+  }
+
   double profile(double distance) const noexcept {
     // A division, not a multiplication by 1/radius: distance >= radius must give r >= 1 exactly.
     return phi(smoothness_, distance / radius_);
+  }
+
+  /// The left-hand derivative of phi(|d| / rho) in the signed distance d, i.e. (d = x - y) the
+  /// right-hand derivative in y: at d = 0 and |d| = rho the side on which y grows.
+  double profile_slope(double d) const noexcept {
+    if (d > 0) {
+      const double r = d / radius_;
+      return r > 1.0 ? 0.0 : phi_slope(smoothness_, r) / radius_;
+    }
+    const double r = -d / radius_;
+    return r >= 1.0 ? 0.0 : -phi_slope(smoothness_, r) / radius_;
   }
 
   double operator()(double x, double y) const noexcept {
     if (!domain_.periodic) return profile(std::abs(x - y));
     return sum_of_images([this](double r) { return profile(r); }, domain_.difference(x, y),
                          domain_.length, images_);
+  }
+
+  /// d/dy k(x, y) (d = x - y, so d/dy = -d/dd).
+  double derivative(double x, double y) const noexcept {
+    if (!domain_.periodic) return -profile_slope(x - y);
+    return -sum_of_image_slopes([this](double r) { return profile_slope(r); },
+                                domain_.difference(x, y), domain_.length, images_);
   }
 
   KernelProperties properties() const noexcept;

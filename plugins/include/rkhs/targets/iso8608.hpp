@@ -40,6 +40,8 @@ struct Harmonics {
   std::vector<std::size_t> k;  ///< harmonic numbers (n_k = k / L), increasing
   std::vector<double> cosine, sine;
   double evaluate(double s, double length) const;
+  /// dz/ds = sum (2 pi k / L) (sin_k cos(2 pi k s / L) - cos_k sin(2 pi k s / L)).
+  double slope(double s, double length) const;
 };
 
 /// The harmonics of one realisation on a track of `length` metres. Deterministic for a given

@@ -1,0 +1,64 @@
+#pragma once
+// The estimated cost of a trial, and the order in which trials are started: largest first, so
+// that a long trial starts early instead of ending a run alone. The one estimate that both
+// schedulers use: the local oneTBB scheduler (run_trials, rkhs/run/run.hpp) and the MPI runner
+// (framework/mpi/, which hands trials out in largest_first_order).
+//
+// The estimate is relative, not seconds: it only has to rank the trials of one study (which all
+// have the same kind and the same [adaptive] settings). In units of floating-point operations,
+// up to constants that differ between machines:
+//
+//   every trial      n^3 + n^2 E             Gram factorisation, solves at the E evaluation points
+//   adaptive trials  + laps_integrated x steps_per_lap x step_cost(N),   N = 2d + n
+//
+// where d is the plant's state dimension (the system is z = [x, xhat, alpha]), step_cost is
+// N^3 + N^2 for an implicit integrator (one dense LU of the N x N Jacobian per step, trait
+// "implicit" = "yes...") and N^2 for an explicit one (right-hand sides with a dense learning
+// map), and laps_integrated depends on the engine: the horizon in laps (laps, or final_time
+// v / L) when the trial steps through time, about N laps with a lap map (one lap of the state
+// and its N sensitivities; the map is then iterated at a cost independent of the horizon).
+// Steps per lap are taken as the same for every integrator (they depend on tolerances and
+// stiffness, which the estimate does not model).
+
+#include <cstddef>
+#include <vector>
+
+#include "rkhs/study/study.hpp"
+
+namespace rkhs {
+
+/// What the estimate of an adaptive trial depends on.
+struct AdaptiveTrialShape {
+  std::size_t n = 0;                ///< centres (coefficients alpha)
+  std::size_t plant_dimension = 1;  ///< d
+  double laps = 0;                  ///< the horizon in laps: final time x speed / track length
+  bool implicit_integrator = true;  ///< one LU factorisation of the (2d + n) system per step
+  /// The engine: the lap map (one lap with its 2d + n sensitivities, then the lap's affine map
+  /// iterated), or stepping through every lap (false). Chosen in one place,
+  /// adaptive_trial_shape() (src/run/trial_cost.cpp): where a study's `[adaptive] engine` is read.
+  bool lap_map = false;
+};
+
+/// The estimate of an approximation trial with `n` centres and `evaluation_points` points.
+double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) noexcept;
+
+/// The estimate of an adaptive trial of `shape` with `evaluation_points` points.
+double adaptive_trial_cost(const AdaptiveTrialShape& shape, std::size_t evaluation_points) noexcept;
+
+/// The shape of adaptive trial `trial` of `study`: its plant's dimension (1 when the plant
+/// cannot be made: the trial then fails at once), its horizon, whether its integrator is
+/// implicit (an integrator that does not say is taken as implicit) and its engine (every trial
+/// steps through time today).
+AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const TrialSpec& trial);
+
+/// The estimated cost of `trial` of `study` (see the file comment): relative, not seconds;
+/// increasing in n and, for adaptive trials stepped through time, in the horizon. Never throws
+/// for a trial of study.trials().
+double estimated_trial_cost(const StudyDefinition& study, const TrialSpec& trial);
+
+/// The positions of `trials` ordered by estimated cost, largest first (ties keep grid order):
+/// the order in which both schedulers start trials.
+std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
+                                             const std::vector<TrialSpec>& trials);
+
+}  // namespace rkhs

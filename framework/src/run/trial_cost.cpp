@@ -1,0 +1,89 @@
+#include "rkhs/run/trial_cost.hpp"
+
+#include <algorithm>
+#include <exception>
+#include <numeric>
+#include <string_view>
+
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/plant.hpp"
+
+namespace rkhs {
+
+namespace {
+
+// Steps an integrator takes per lap (the same for every integrator: see the header).
+constexpr double steps_per_lap = 1e3;
+
+// The dimension of the trial's plant; 1 when it cannot be made (the trial fails at once then).
+std::size_t plant_dimension(const PluginChoice& plant) {
+  const auto* entry = plant_registry().find(plant.name);
+  if (!entry) return 1;
+  try {
+    const auto made = entry->factory(plant.parameters);
+    return made ? static_cast<std::size_t>(std::max<Eigen::Index>(made->A().rows(), 1)) : 1;
+  } catch (const std::exception&) {
+    return 1;
+  }
+}
+
+// Whether the integrator says it factorises a matrix per step (trait "implicit" = "yes, ...");
+// one that does not say is taken as implicit, the dearer guess.
+bool implicit_integrator(const PluginChoice& integrator) {
+  const auto* entry = integrator_registry().find(integrator.name);
+  if (!entry) return true;
+  for (const auto& [trait, value] : entry->info.traits)
+    if (trait == "implicit") return std::string_view(value).substr(0, 2) != "no";
+  return true;
+}
+
+// Laps of the coupled system the engine integrates: the horizon when it steps through time, one
+// lap of the state and of its 2d + n sensitivities with the lap map.
+double integrated_laps(const AdaptiveTrialShape& shape) noexcept {
+  if (shape.lap_map) return static_cast<double>(2 * shape.plant_dimension + shape.n);
+  return shape.laps;
+}
+
+}  // namespace
+
+double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) noexcept {
+  const auto m = static_cast<double>(n);
+  return m * m * m + m * m * static_cast<double>(evaluation_points);
+}
+
+double adaptive_trial_cost(const AdaptiveTrialShape& shape, std::size_t evaluation_points) noexcept {
+  const auto size = static_cast<double>(2 * shape.plant_dimension + shape.n);  // N = 2d + n
+  const double step = shape.implicit_integrator ? size * size * size + size * size : size * size;
+  return approximation_trial_cost(shape.n, evaluation_points) +
+         integrated_laps(shape) * steps_per_lap * step;
+}
+
+AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const TrialSpec& trial) {
+  AdaptiveTrialShape shape;
+  shape.n = trial.n;
+  shape.plant_dimension = plant_dimension(trial.plant);
+  shape.laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
+               study.domain.length;
+  shape.implicit_integrator = implicit_integrator(trial.integrator);
+  shape.lap_map = false;  // study.adaptive.engine == lap_map, once [adaptive] has an engine
+  return shape;
+}
+
+double estimated_trial_cost(const StudyDefinition& study, const TrialSpec& trial) {
+  if (study.kind != StudyKind::adaptive)
+    return approximation_trial_cost(trial.n, study.evaluation_points);
+  return adaptive_trial_cost(adaptive_trial_shape(study, trial), study.evaluation_points);
+}
+
+std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
+                                             const std::vector<TrialSpec>& trials) {
+  std::vector<double> cost(trials.size());
+  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = estimated_trial_cost(study, trials[i]);
+  std::vector<std::size_t> order(trials.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
+  return order;
+}
+
+}  // namespace rkhs
