@@ -1,6 +1,6 @@
 // The averaged (v -> 0) limit of the adaptive estimator, P_L2 f: the Gauss-Legendre rule, the
 // composite quadrature of Mbar and bbar (checked against independent quadratures and closed
-// forms), and the projection's defining properties.
+// forms), the projection's defining properties, and its metrics in adaptive trials.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
@@ -9,6 +9,7 @@
 
 #include "plugins/kernels/kernel_test_support.hpp"
 #include "rkhs/adaptive/averaged_limit.hpp"
+#include "study_support.hpp"
 
 using namespace rkhs;
 using test::Given;
@@ -277,4 +278,66 @@ TEST_CASE("the averaged limit refuses what it cannot integrate and says when it 
   const auto declared = averaged_limit(*kernel, centres, kinked, kink, solver, budget);
   CHECK(declared.quadrature_converged);
   CHECK(relative_difference(stopped.coefficients, declared.coefficients) < 1e-6);
+}
+
+TEST_CASE("adaptive trials measure the L2 projection and the estimate's gap to it",
+          "[averaged_limit][adaptive]") {
+  // A scalar plant (time constant 1 s) on a slow lap (2513 s) with a gain that learns a few
+  // percent per lap: the averaging regime. After 20 laps fhat(T) is close to P_L2 f, the
+  // averaged limit, and far from Pi_n f (measured: gap to P_L2 f 0.059, to Pi_n f 1.31).
+  const std::string study = R"(
+[study]
+name = "averaged"
+kind = "adaptive"
+evaluation_points = 1024
+metrics = ["l2_error", "interpolant_l2_error", "gap_to_projection", "l2_projection_l2_error",
+           "l2_projection_sup_error", "gap_to_l2_projection"]
+[domain]
+radius = 4.0
+[grid]
+n = [8]
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+[[target]]
+name = "sine"
+amplitude = 2.0
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "rkhs"
+gamma = 300
+[[law]]
+name = "gradient"
+gamma = 300
+[[integrator]]
+name = "rodas4"
+rtol = 1e-7
+atol = 1e-9
+[adaptive]
+speed = 0.01
+laps = 20
+)";
+  const auto out = test::run_study_text(study, "averaged.toml");
+  REQUIRE(out.trials.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    INFO(out.trials[i].law.name);
+    const double projection_error = out.metric(i, "l2_projection_l2_error");
+    CHECK(projection_error > 0.1);  // n = 8 Gaussians resolve the sine only roughly
+    // The best approximation in L2 is no worse than the interpolant, nor than fhat(T).
+    CHECK(projection_error <= out.metric(i, "interpolant_l2_error"));
+    CHECK(projection_error <= out.metric(i, "l2_error"));
+    CHECK(out.metric(i, "l2_projection_sup_error") >= projection_error / std::sqrt(track.length));
+    CHECK(out.metric(i, "gap_to_l2_projection") < 0.1 * out.metric(i, "gap_to_projection"));
+  }
+  // A road in H_n (Pi_n f) is its own L2 projection.
+  const auto projected =
+      test::run_study_text(study + "road = \"projection\"\n", "averaged_projection.toml");
+  for (std::size_t i = 0; i < 2; ++i) {
+    INFO(projected.trials[i].law.name);
+    CHECK(projected.metric(i, "l2_projection_l2_error") < 1e-10);
+    CHECK(projected.metric(i, "l2_projection_sup_error") < 1e-10);
+  }
 }
