@@ -70,15 +70,33 @@ TEST_CASE("the Jacobian of the coupled system matches finite differences", "[ada
 
 TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]") {
   // The output order (trials.csv columns, docs/metrics.md): it must not change.
-  const std::vector<std::string> expected{
-      "fill_distance",         "separation_distance", "gram_condition_number",
-      "power_function_sup",    "interpolant_l2_error", "interpolant_sup_error",
-      "l2_error",              "sup_error",           "gap_to_projection",
-      "coefficient_error",     "final_state_error",   "max_state_error",
-      "lyapunov_max_increase", "lyapunov_ratio",      "steps",
-      "rejected_steps",        "segments",            "rhs_evaluations",
-      "jacobian_evaluations",  "learning_spectral_radius", "slowest_time_constant_laps",
-      "laps_to_limit",         "unexcited_directions", "lap_map_residual"};
+  const std::vector<std::string> expected{"fill_distance",
+                                          "separation_distance",
+                                          "gram_condition_number",
+                                          "power_function_sup",
+                                          "interpolant_l2_error",
+                                          "interpolant_sup_error",
+                                          "l2_error",
+                                          "sup_error",
+                                          "gap_to_projection",
+                                          "l2_projection_l2_error",
+                                          "l2_projection_sup_error",
+                                          "gap_to_l2_projection",
+                                          "coefficient_error",
+                                          "final_state_error",
+                                          "max_state_error",
+                                          "lyapunov_max_increase",
+                                          "lyapunov_ratio",
+                                          "steps",
+                                          "rejected_steps",
+                                          "segments",
+                                          "rhs_evaluations",
+                                          "jacobian_evaluations",
+                                          "learning_spectral_radius",
+                                          "slowest_time_constant_laps",
+                                          "laps_to_limit",
+                                          "unexcited_directions",
+                                          "lap_map_residual"};
   CHECK(adaptive_metric_names() == expected);
   std::vector<std::string> may_be_nan;
   for (const auto& row : MetricTable<AdaptiveMetric>::rows)

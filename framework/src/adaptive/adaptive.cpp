@@ -10,6 +10,7 @@
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/adaptive/averaged_limit.hpp"
 #include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
@@ -356,6 +357,15 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
         (alpha - alpha_star).norm() / std::max(alpha_star.norm(), 1e-300);
     metrics[M::lyapunov_max_increase] = v0 > 0 ? max_increase / v0 : max_increase;
     metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : nan;
+  }
+  {  // P_L2 f, the averaged (v -> 0) limit of either law, on the same grid.
+    const auto limit = averaged_limit(kernel, centres, road, kinks, solver_options);
+    const Eigen::VectorXd l2_projection = cross * limit.coefficients;
+    const Eigen::VectorXd l2_projection_residual = f - l2_projection;
+    metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
+    metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
+    metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
+    if (!limit.quadrature_converged) out.flags.push_back("l2_projection_unconverged");
   }
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);

@@ -286,7 +286,8 @@ bool measured_on_grid(std::string_view metric) {
   static constexpr std::string_view grid_metrics[] = {
       "power_function_sup",   "power_function_floor",  "l2_error",          "sup_error",
       "error_floor",          "interpolant_l2_error",  "interpolant_sup_error",
-      "gap_to_projection"};
+      "gap_to_projection",    "l2_projection_l2_error", "l2_projection_sup_error",
+      "gap_to_l2_projection"};
   return std::find(std::begin(grid_metrics), std::end(grid_metrics), metric) !=
          std::end(grid_metrics);
 }

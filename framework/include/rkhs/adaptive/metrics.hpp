@@ -1,7 +1,9 @@
 #pragma once
 // The metric table of adaptive trials (see rkhs/approx/metrics.hpp for what a table holds).
 // The first four are the approximation trial's metrics of the same name; interpolant_* are its
-// l2_error and sup_error (of Pi_n f); the rest measure the learned estimate and the integration.
+// l2_error and sup_error (of Pi_n f); l2_projection_* measure P_L2 f, the L2(Omega)-orthogonal
+// projection (the averaged limit, rkhs/adaptive/averaged_limit.hpp); the rest measure the learned
+// estimate and the integration.
 
 #include "rkhs/approx/metrics.hpp"
 
@@ -17,6 +19,9 @@ enum class AdaptiveMetric : std::size_t {
   l2_error,
   sup_error,
   gap_to_projection,
+  l2_projection_l2_error,
+  l2_projection_sup_error,
+  gap_to_l2_projection,
   coefficient_error,
   final_state_error,
   max_state_error,
@@ -37,7 +42,7 @@ enum class AdaptiveMetric : std::size_t {
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 24> rows{{
+  static constexpr std::array<MetricRow<M>, 27> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -53,6 +58,13 @@ struct MetricTable<AdaptiveMetric> {
       {M::sup_error, "sup_error", "[f]", "max_m |f(s_m) - fhat(T)(s_m)|", false, ""},
       {M::gap_to_projection, "gap_to_projection", "[f] sqrt(m)",
        "||fhat(T) - Pi_n f|| in L2(Omega)", false, ""},
+      {M::l2_projection_l2_error, "l2_projection_l2_error", "[f] sqrt(m)",
+       "||f - P_L2 f|| in L2(Omega), P_L2 f the v -> 0 limit of fhat (adaptive/averaged_limit.hpp)",
+       false, "l2_projection_unconverged"},
+      {M::l2_projection_sup_error, "l2_projection_sup_error", "[f]", "max_m |f(s_m) - P_L2 f(s_m)|",
+       false, "l2_projection_unconverged"},
+      {M::gap_to_l2_projection, "gap_to_l2_projection", "[f] sqrt(m)",
+       "||fhat(T) - P_L2 f|| in L2(Omega)", false, "l2_projection_unconverged"},
       {M::coefficient_error, "coefficient_error", "1",
        "|alpha(T) - alpha*| / |alpha*|; NaN unless the road is Pi_n f", true, ""},
       {M::final_state_error, "final_state_error", "[x]", "|x(T) - xhat(T)|", false, ""},
