@@ -33,9 +33,12 @@ double estimated_cost(const StudyDefinition& study, const TrialSpec& trial) {
   const auto n = static_cast<double>(trial.n);
   const double static_cost = n * n * n + n * n * static_cast<double>(study.evaluation_points);
   if (study.kind != StudyKind::adaptive) return static_cost;
-  // One dense LU of the (2d + n) system per step, steps growing with the horizon in laps.
-  const double laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
-                      study.domain.length;
+  // One dense LU of the (2d + n) system per step, steps growing with the horizon in laps; the
+  // periodic limit (lap map) costs about a few laps.
+  const auto settings = trial_adaptive_settings(study, trial);
+  const double laps = settings.limit() ? 10.0
+                                       : settings.final_time_or_laps(study.domain.length) *
+                                             settings.speed / study.domain.length;
   return static_cost + laps * (n + 8) * (n + 8) * (n + 8) * 1e3;
 }
 
@@ -101,8 +104,10 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
       const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
       const auto integrator =
           integrator_registry().find(trial.integrator.name)->factory(trial.integrator.parameters);
+      // The study's settings with this trial's lap count (a laps axis).
       auto measured = measure_adaptive(*kernel, *target, centres, *plant, *law, *integrator,
-                                       study.adaptive, study.evaluation_points, study.solver);
+                                       trial_adaptive_settings(study, trial),
+                                       study.evaluation_points, study.solver);
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.flags = std::move(measured.flags);
