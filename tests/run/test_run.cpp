@@ -406,3 +406,54 @@ TEST_CASE("limits.trial_seconds stops a trial as it runs, and it fails with the 
   // It was stopped near its limit, not left to end (it takes tens of seconds unlimited).
   CHECK(result.seconds < 10);
 }
+
+TEST_CASE("a trial of a laps axis runs with its own lap count, as a study with that one count",
+          "[run][laps]") {
+  const auto study_with = [](const std::string& laps, const std::string& snapshots) {
+    return parse_study(R"([study]
+name = "laps_run"
+kind = "adaptive"
+evaluation_points = 64
+[domain]
+radius = 1.0
+[grid]
+n = [4]
+[[kernel]]
+name = "gaussian"
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "gradient"
+[adaptive]
+speed = 0.5
+samples_per_lap = 4
+snapshot_points = 8
+)" + laps + "\nsnapshot_laps = " + snapshots + "\n",
+                       "laps_run.toml");
+  };
+  const auto axis = study_with("laps = [1, 2]", "[1, 2]");
+  const auto trials = axis.trials();
+  REQUIRE(trials.size() == 2);
+  const double lap_time = axis.domain.length / axis.adaptive.speed;
+  for (std::size_t i = 0; i < 2; ++i) {
+    const double laps = static_cast<double>(i + 1);
+    const auto result = run_trial(axis, trials[i]);
+    INFO(trials[i].key << ": " << result.reason);
+    REQUIRE(result.ok);
+    REQUIRE_FALSE(result.samples.empty());
+    CHECK(result.samples.back().t == Approx(laps * lap_time));
+    CHECK(result.samples.size() == static_cast<std::size_t>(4 * laps) + 1);
+    // The snapshots it reaches: lap 1 for the one-lap trial, laps 1 and 2 for the other.
+    REQUIRE(result.snapshots.size() == i + 1);
+    for (const auto& snapshot : result.snapshots) CHECK(snapshot.estimate.size() == 8);
+    // The same as the trial of a study with that one lap count, bit for bit.
+    const auto single_study =
+        study_with("laps = " + std::to_string(i + 1), i == 0 ? "[1]" : "[1, 2]");
+    const auto single = run_trial(single_study, single_study.trials().front());
+    REQUIRE(single.ok);
+    CHECK(std::memcmp(single.metrics.data(), result.metrics.data(),
+                      result.metrics.size() * sizeof(double)) == 0);
+  }
+}

@@ -137,8 +137,13 @@ TEST_CASE("every study setting that can change a result changes the trial identi
   });
   // Every exclusion names a field of the study definition (none is stale).
   CHECK(excluded_seen.size() == excluded.size());
-  // kind, domain (2), evaluation points, solver (2), limits (2), adaptive (8) at least.
-  CHECK(included_leaves >= 16);
+  // kind, domain (2), evaluation points, solver (2), limits (2), adaptive (11: with engine,
+  // lap_map_rtol and lap_map_atol) at least.
+  CHECK(included_leaves >= 19);
+  // The engine is written by its name.
+  CHECK_THAT(base_text, Catch::Contains("automatic"));
+  changed.adaptive.engine = AdaptiveEngine::time_stepping;
+  CHECK_THAT(study_settings_text(changed), Catch::Contains("time_stepping"));
 }
 
 TEST_CASE("the trial identity is the same for the same study and differs between trials",
@@ -149,4 +154,24 @@ TEST_CASE("the trial identity is the same for the same study and differs between
   CHECK(ha == trial_hashes(b, b.trials()));  // the source file is not part of it
   REQUIRE(ha.size() == 2);
   CHECK(ha[0] != ha[1]);  // n is in the key
+}
+
+TEST_CASE("a laps axis: each lap count is its own trial identity, and adding one keeps the others",
+          "[store][identity][laps]") {
+  auto with_laps = [](const std::string& laps) {
+    std::string text = adaptive_study;
+    text.replace(text.find("laps = 1\nsnapshot_laps = [1]"), 28, laps);
+    return parse_study(text, "identity.toml");
+  };
+  const auto two = with_laps("laps = [1, 2]");
+  const auto three = with_laps("laps = [1, 2, \"limit\"]");
+  const auto h2 = trial_hashes(two, two.trials());
+  const auto h3 = trial_hashes(three, three.trials());
+  REQUIRE(h2.size() == 4);  // laps 1, 2 x n 4, 6
+  REQUIRE(h3.size() == 6);
+  CHECK(std::set<std::string>(h2.begin(), h2.end()).size() == 4);
+  // The trials both studies have keep their identity: their stored results are reused.
+  CHECK(std::vector<std::string>(h3.begin(), h3.begin() + 4) == h2);
+  // One lap count is a setting, not an axis: a different identity from the axis's trial.
+  CHECK(trial_hashes(with_laps("laps = 2"), with_laps("laps = 2").trials()).front() != h2[2]);
 }

@@ -2,9 +2,13 @@
 // file:line:column, the key, what was found and what is allowed.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <set>
 
 #include "rkhs/study/study.hpp"
+#include "rkhs/study/trial_grid.hpp"
 
 using rkhs::parse_study;
 using rkhs::StudyError;
@@ -262,4 +266,242 @@ TEST_CASE("an evaluation grid no finer than the centres is refused, a coarse one
              Catch::StartsWith("s.toml:3:21: study.evaluation_points: warning: 200 evaluation "
                                "points give fewer than 4 per centre spacing for n > 50"));
   CHECK(parse_study(study_with("evaluation_points = 256\n", ""), "s.toml").warnings.empty());
+}
+
+namespace {
+
+// An adaptive study whose [adaptive] table ends with `adaptive` (laps, engine, ...) and which
+// may add [[expect]] tables after it.
+std::string adaptive_text(const std::string& adaptive, const std::string& after = "") {
+  return R"([study]
+name = "laps"
+kind = "adaptive"
+evaluation_points = 64
+[domain]
+radius = 1.0
+[grid]
+n = [4, 6]
+[[kernel]]
+name = "gaussian"
+[[centres]]
+name = "random"
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "gradient"
+[adaptive]
+speed = 0.5
+)" + adaptive + after;
+}
+
+// The line of adaptive_text's first added line (the line after "speed = 0.5").
+constexpr int adaptive_line = 21;
+
+}  // namespace
+
+TEST_CASE("[adaptive] laps: one value is a setting, a list is an axis of the grid nested outside n",
+          "[study][laps]") {
+  SECTION("one number: no axis, keys as before") {
+    const auto study = parse_study(adaptive_text("laps = 3\n"), "s.toml");
+    CHECK(study.adaptive.laps == 3);
+    CHECK(study.laps_values.empty());
+    const auto trials = study.trials();
+    REQUIRE(trials.size() == 2);
+    for (const auto& trial : trials) {
+      CHECK_FALSE(trial.laps.has_value());
+      CHECK_THAT(trial.key, !Catch::Contains("laps"));
+    }
+    CHECK(trials[0].key == trials[0].group_key + " | n=4");
+    CHECK(trials[0].group_key.ends_with(" | integrator=" + trials[0].integrator.label()));
+    const auto columns = rkhs::axis_columns(trials);
+    CHECK(std::find(columns.begin(), columns.end(), "laps") == columns.end());
+    CHECK(rkhs::trial_adaptive_settings(study, trials[0]).laps == 3);
+    std::vector<std::string> names;
+    for (const auto& axis : study.grid_axes()) names.push_back(axis.singular);
+    CHECK(std::find(names.begin(), names.end(), std::string("value of laps")) == names.end());
+  }
+  SECTION("\"limit\" alone: +infinity, still no axis") {
+    const auto study = parse_study(adaptive_text("laps = \"limit\"\n"), "s.toml");
+    CHECK(std::isinf(study.adaptive.laps));
+    CHECK(study.adaptive.limit());
+    CHECK(study.laps_values.empty());
+    CHECK_THAT(study.trials().front().key, !Catch::Contains("laps"));
+    CHECK(rkhs::trial_adaptive_settings(study, study.trials().front()).limit());
+  }
+  SECTION("a list: sorted, \"limit\" last, one group per lap count, n fastest") {
+    const auto study =
+        parse_study(adaptive_text("laps = [1000, 10, \"limit\", 1e4, 100, 2.5]\n"), "s.toml");
+    const double inf = std::numeric_limits<double>::infinity();
+    CHECK(study.laps_values == std::vector<double>{2.5, 10, 100, 1000, 10000, inf});
+    CHECK(std::isnan(study.adaptive.laps));
+    const auto trials = study.trials();
+    REQUIRE(trials.size() == 6 * 2);
+    const std::vector<std::string> laps_texts{"2.5", "10", "100", "1000", "10000", "limit"};
+    for (std::size_t i = 0; i < trials.size(); ++i) {
+      const auto& trial = trials[i];
+      INFO(trial.key);
+      CHECK(trial.index == i);
+      CHECK(trial.n == (i % 2 == 0 ? 4u : 6u));  // n varies fastest
+      REQUIRE(trial.laps.has_value());
+      CHECK(*trial.laps == study.laps_values[i / 2]);
+      CHECK(trial.group_key.ends_with(" | laps=" + laps_texts[i / 2]));
+      CHECK(trial.key == trial.group_key + (i % 2 == 0 ? " | n=4" : " | n=6"));
+      // The same random centres for every lap count of a series.
+      CHECK(trial.seed == trials[i % 2].seed);
+      // run_trial's settings: the trial's lap count.
+      const auto settings = rkhs::trial_adaptive_settings(study, trial);
+      CHECK(settings.laps == *trial.laps);
+    }
+    CHECK(trials[0].seed != trials[1].seed);
+    CHECK(trials.back().key.ends_with("| laps=limit | n=6"));
+
+    const auto columns = rkhs::axis_columns(trials);
+    CHECK(columns.back() == "laps");
+    CHECK(rkhs::axis_values({"laps"}, trials[10]) == std::vector<std::string>{"limit"});
+    CHECK(rkhs::axis_values({"laps"}, trials[8]) == std::vector<std::string>{"10000"});
+    CHECK(rkhs::axis_values({"laps"}, trials[0]) == std::vector<std::string>{"2.5"});
+
+    std::size_t product = 1;
+    std::vector<std::string> names;
+    for (const auto& axis : study.grid_axes()) {
+      product *= axis.count;
+      names.push_back(axis.plural);
+    }
+    CHECK(names == std::vector<std::string>{"kernels", "targets", "centre placements", "plants",
+                                            "learning laws", "integrators", "values of laps",
+                                            "values of n"});
+    CHECK(product == trials.size());
+  }
+  SECTION("lap counts print as whole numbers without an exponent") {
+    CHECK(rkhs::laps_text(10) == "10");
+    CHECK(rkhs::laps_text(1e6) == "1000000");
+    CHECK(rkhs::laps_text(0.5) == "0.5");
+    CHECK(rkhs::laps_text(std::numeric_limits<double>::infinity()) == "limit");
+  }
+  SECTION("a trial records the snapshot laps it reaches; \"limit\" records them all") {
+    const auto study = parse_study(
+        adaptive_text("laps = [2, 5, \"limit\"]\nsnapshot_laps = [1, 2, 5]\n"), "s.toml");
+    const auto trials = study.trials();
+    CHECK(rkhs::trial_adaptive_settings(study, trials[0]).snapshot_laps == std::vector<double>{1, 2});
+    CHECK(rkhs::trial_adaptive_settings(study, trials[2]).snapshot_laps ==
+          std::vector<double>{1, 2, 5});
+    CHECK(rkhs::trial_adaptive_settings(study, trials[4]).snapshot_laps ==
+          std::vector<double>{1, 2, 5});
+  }
+}
+
+TEST_CASE("[adaptive] engine and the lap map's tolerances", "[study][laps]") {
+  const auto defaults = parse_study(adaptive_text("laps = 2\n"), "s.toml");
+  CHECK(defaults.adaptive.engine == rkhs::AdaptiveEngine::automatic);
+  CHECK(defaults.adaptive.lap_map_rtol == 1e-10);
+  CHECK(defaults.adaptive.lap_map_atol == 1e-12);
+  const auto chosen = parse_study(
+      adaptive_text("laps = 2\nengine = \"lap_map\"\nlap_map_rtol = 1e-8\nlap_map_atol = 1e-9\n"),
+      "s.toml");
+  CHECK(chosen.adaptive.engine == rkhs::AdaptiveEngine::lap_map);
+  CHECK(chosen.adaptive.lap_map_rtol == 1e-8);
+  CHECK(chosen.adaptive.lap_map_atol == 1e-9);
+  const auto stepping =
+      parse_study(adaptive_text("laps = 2.5\nengine = \"time_stepping\"\n"), "s.toml");
+  CHECK(stepping.adaptive.engine == rkhs::AdaptiveEngine::time_stepping);
+  CHECK(stepping.adaptive.laps == 2.5);
+  for (const auto engine : {rkhs::AdaptiveEngine::automatic, rkhs::AdaptiveEngine::lap_map,
+                            rkhs::AdaptiveEngine::time_stepping})
+    CHECK(rkhs::adaptive_engine_from_name(rkhs::adaptive_engine_name(engine)) == engine);
+  CHECK_FALSE(rkhs::adaptive_engine_from_name("lapmap"));
+}
+
+TEST_CASE("[adaptive] laps and engine errors name file, line, column, key, found and allowed",
+          "[study][laps]") {
+  const auto at = [](int line, int column) {
+    return "s.toml:" + std::to_string(adaptive_line + line) + ":" + std::to_string(column) + ": ";
+  };
+  CHECK(error_of(adaptive_text("engine = \"lapmap\"\n")) ==
+        at(0, 10) + "adaptive.engine: unknown engine \"lapmap\" (known: automatic, lap_map, "
+                    "time_stepping; did you mean 'lap_map'?)");
+  CHECK(error_of(adaptive_text("engine = 2\n")) ==
+        at(0, 10) + "adaptive.engine: expected a string, found an integer (2)");
+  CHECK(error_of(adaptive_text("lap_map_rtol = 0\n")) ==
+        at(0, 16) + "adaptive.lap_map_rtol: must be a finite number > 0, found 0");
+  CHECK(error_of(adaptive_text("lap_map_atol = -1.5\n")) ==
+        at(0, 16) + "adaptive.lap_map_atol: must be a finite number > 0, found -1.5");
+  CHECK(error_of(adaptive_text("laps = \"forever\"\n")) ==
+        at(0, 8) + "adaptive.laps: found \"forever\", expected a lap count > 0, \"limit\" (the "
+                   "periodic steady state) or an array of them");
+  CHECK(error_of(adaptive_text("laps = 0\n")) ==
+        at(0, 8) + "adaptive.laps: must be a finite number > 0 or \"limit\", found 0");
+  CHECK(error_of(adaptive_text("laps = true\n")) ==
+        at(0, 8) + "adaptive.laps: found a boolean (true), expected a lap count > 0, \"limit\" "
+                   "(the periodic steady state) or an array of them");
+  CHECK(error_of(adaptive_text("laps = [10, -1]\n")) ==
+        at(0, 13) + "adaptive.laps: must be a finite number > 0 or \"limit\", found -1");
+  CHECK(error_of(adaptive_text("laps = [10, \"lim\"]\n")) ==
+        at(0, 13) + "adaptive.laps: found \"lim\", expected a lap count > 0 or \"limit\" (the "
+                    "periodic steady state)");
+  CHECK(error_of(adaptive_text("laps = []\n")) == at(0, 8) + "adaptive.laps: empty list of lap counts");
+  CHECK(error_of(adaptive_text("laps = [10, 100, 10.0]\n")) ==
+        at(0, 18) + "adaptive.laps: 10 is listed twice; lap counts must be distinct");
+  CHECK(error_of(adaptive_text("laps = [10, \"limit\"]\nfinal_time = 5.0\n")) ==
+        at(0, 13) + "adaptive.laps: found \"limit\" together with final_time = 5.0: the periodic "
+                    "limit has no final time; give laps = \"limit\" without final_time, or a "
+                    "final time without laps");
+  CHECK_THAT(error_of(adaptive_text("laps = 10\nfinal_time = 5.0\n")),
+             Catch::Contains("adaptive: give 'laps' or 'final_time', not both"));
+  CHECK(error_of(adaptive_text("engine = \"time_stepping\"\nlaps = [10, \"limit\"]\n")) ==
+        at(1, 13) + "adaptive.laps: found \"limit\" with engine = \"time_stepping\", which cannot "
+                    "step through infinitely many laps; \"limit\" needs engine = \"automatic\" or "
+                    "\"lap_map\"");
+  CHECK(error_of(adaptive_text("engine = \"time_stepping\"\nlaps = \"limit\"\n")) ==
+        at(1, 8) + "adaptive.laps: found \"limit\" with engine = \"time_stepping\", which cannot "
+                   "step through infinitely many laps; \"limit\" needs engine = \"automatic\" or "
+                   "\"lap_map\"");
+  CHECK(error_of(adaptive_text("engine = \"lap_map\"\nlaps = [10, 2.5]\n")) ==
+        at(1, 13) + "adaptive.laps: found 2.5 with engine = \"lap_map\", which advances whole "
+                    "laps; give a whole number of laps, or engine = \"automatic\" or "
+                    "\"time_stepping\"");
+  CHECK(error_of(adaptive_text("laps = 10\nsnapshot_laps = [1, 20]\n")) ==
+        at(1, 21) + "adaptive.snapshot_laps: found 20, after the end of the run (laps = 10); "
+                    "snapshot laps must be <= 10");
+  CHECK(error_of(adaptive_text("laps = [10, 100, \"limit\"]\nsnapshot_laps = [1, 200]\n")) ==
+        at(1, 21) + "adaptive.snapshot_laps: found 200, after the end of the run (laps = 100, "
+                    "the largest finite lap count); snapshot laps must be <= 100");
+  // Speed 0.5 m/s on a track of 2 pi m: final_time = 4 pi s is one lap.
+  CHECK_THAT(error_of(adaptive_text("final_time = 12.566370614359172\nsnapshot_laps = [1, 2]\n")),
+             Catch::StartsWith(at(1, 21) + "adaptive.snapshot_laps: found 2, after the end of the "
+                                           "run (final_time = 12.566370614359172 s, "));
+  // Without a finite lap count every snapshot lap is reachable.
+  CHECK_NOTHROW(parse_study(adaptive_text("laps = \"limit\"\nsnapshot_laps = [1, 1000]\n"), "s.toml"));
+  CHECK_NOTHROW(parse_study(adaptive_text("laps = 10\nsnapshot_laps = [1, 10]\n"), "s.toml"));
+}
+
+TEST_CASE("[[expect]] selects groups of a laps axis by laps, as any axis column",
+          "[study][laps][expect]") {
+  const std::string laps = "laps = [10, 10000, \"limit\"]\n";
+  const auto selected = [&](const std::string& selector) {
+    const auto study = parse_study(
+        adaptive_text(laps, "[[expect]]\nmetric = \"l2_error\"\nrate = { max = 0 }\n" + selector),
+        "s.toml");
+    REQUIRE(study.expectations.size() == 1);
+    std::vector<std::string> groups;
+    for (const auto& trial : study.trials())
+      if (trial.n == 4 && study.expectations[0].selects(trial))
+        groups.push_back(rkhs::axis_values({"laps"}, trial).front());
+    return groups;
+  };
+  CHECK(selected("") == std::vector<std::string>{"10", "10000", "limit"});
+  CHECK(selected("laps = \"limit\"\n") == std::vector<std::string>{"limit"});
+  CHECK(selected("laps = 10000\n") == std::vector<std::string>{"10000"});
+  CHECK(selected("laps = 1e4\n") == std::vector<std::string>{"10000"});
+  CHECK(selected("laps = [10, \"limit\"]\n") == std::vector<std::string>{"10", "limit"});
+  // A lap count the study does not have is a typo: refused with the values there are.
+  CHECK_THAT(error_of(adaptive_text(laps, "[[expect]]\nmetric = \"l2_error\"\nrate = { max = 0 }\n"
+                                          "laps = 100\n")),
+             Catch::Contains("expect: laps=100 selects no group of this study (values in the "
+                             "study: laps: 10, 10000, limit)"));
+  // Without the axis there is no laps column to select by.
+  CHECK_THAT(error_of(adaptive_text("laps = 10\n", "[[expect]]\nmetric = \"l2_error\"\n"
+                                                   "rate = { max = 0 }\nlaps = 10\n")),
+             Catch::Contains("expect.laps: unknown key"));
 }

@@ -78,10 +78,9 @@ std::vector<Breakpoint> breakpoints(const AdaptiveSettings& settings, const Doma
 
 bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps < 9.2e18; }
 
-// The engine a trial runs with (AdaptiveEngine): the lap map needs whole laps from t = 0 (no
-// final_time) and whole snapshot laps; `automatic` takes it for the limit and when the laps
-// outnumber the columns it integrates (dimension + 1), time stepping otherwise.
-AdaptiveEngine choose_engine(const AdaptiveSettings& settings, Eigen::Index dimension) {
+}  // namespace
+
+AdaptiveEngine adaptive_engine_for(const AdaptiveSettings& settings, Eigen::Index dimension) {
   const bool applies = settings.final_time <= 0 &&
                        (settings.limit() || whole(settings.laps)) &&
                        std::all_of(settings.snapshot_laps.begin(), settings.snapshot_laps.end(),
@@ -107,6 +106,8 @@ AdaptiveEngine choose_engine(const AdaptiveSettings& settings, Eigen::Index dime
              ? AdaptiveEngine::lap_map
              : AdaptiveEngine::time_stepping;
 }
+
+namespace {
 
 // The smallest N >= 0 with distance(N) <= fraction distance(0), found by doubling and then
 // bisection (it assumes distance(N) stays below the fraction once it is there, as it does
@@ -221,7 +222,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     for (double kink : target.kink_points()) kinks.push_back(kink);
   const Eigen::Index m = system.dimension();
   const double lap_time = domain.length / settings.speed;
-  const AdaptiveEngine engine = choose_engine(settings, m);
+  const AdaptiveEngine engine = adaptive_engine_for(settings, m);
   out.engine = engine == AdaptiveEngine::lap_map ? "lap_map" : "time_stepping";
 
   // V = 1/2 e^T P e + 1/2 Gamma (alpha* - alpha)^T W (alpha* - alpha), W = G (rkhs law) or I.

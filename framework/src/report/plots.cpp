@@ -38,11 +38,13 @@ bool usable_on_log_axis(double v) {
   return std::isfinite(v) && v > 0;
 }
 
-// Short legend text for a group: the plugin labels without the defaults' noise.
+// Short legend text for a group: the plugin labels without the defaults' noise, and the lap
+// count of a laps axis.
 std::string legend(const TrialSpec& trial) {
   std::string out = trial.kernel.label();
   for (const auto* choice : {&trial.law, &trial.integrator})
     if (!choice->name.empty()) out += ", " + choice->name;
+  if (trial.laps) out += ", laps=" + laps_text(*trial.laps);  // a laps axis: one curve per count
   return out;
 }
 

@@ -90,8 +90,10 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
       const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
       const auto integrator =
           integrator_registry().find(trial.integrator.name)->factory(trial.integrator.parameters);
+      // The study's settings with this trial's lap count (a laps axis).
       auto measured = measure_adaptive(*kernel, *target, centres, *plant, *law, *integrator,
-                                       study.adaptive, study.evaluation_points, study.solver);
+                                       trial_adaptive_settings(study, trial),
+                                       study.evaluation_points, study.solver);
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.engine = std::move(measured.engine);

@@ -7,6 +7,7 @@
 
 #include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/study/study.hpp"
 
 namespace rkhs {
 
@@ -37,6 +38,14 @@ bool implicit_integrator(const PluginChoice& integrator) {
   return true;
 }
 
+// Whether the integrator solves its stages with the structure of the Jacobian (parameter
+// linear_solver = "structured"): O(N) per stage instead of O(N^3).
+bool structured_solves(const PluginChoice& integrator) {
+  for (const auto& [name, value] : integrator.parameters.values())
+    if (name == "linear_solver") return std::get<std::string>(value) == "structured";
+  return false;
+}
+
 // Laps of the coupled system the engine integrates: the horizon when it steps through time, one
 // lap of the state and of its 2d + n sensitivities with the lap map.
 double integrated_laps(const AdaptiveTrialShape& shape) noexcept {
@@ -53,7 +62,11 @@ double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) no
 
 double adaptive_trial_cost(const AdaptiveTrialShape& shape, std::size_t evaluation_points) noexcept {
   const auto size = static_cast<double>(2 * shape.plant_dimension + shape.n);  // N = 2d + n
-  const double step = shape.implicit_integrator ? size * size * size + size * size : size * size;
+  // A right-hand side costs O(N^2) at most (psi = M phi with a dense M); a dense implicit step
+  // adds an O(N^3) factorisation, a structured one O(N).
+  const double step = shape.implicit_integrator && !shape.structured_solves
+                          ? size * size * size + size * size
+                          : size * size;
   return approximation_trial_cost(shape.n, evaluation_points) +
          integrated_laps(shape) * steps_per_lap * step;
 }
@@ -62,10 +75,19 @@ AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const Tria
   AdaptiveTrialShape shape;
   shape.n = trial.n;
   shape.plant_dimension = plant_dimension(trial.plant);
-  shape.laps = study.adaptive.final_time_or_laps(study.domain.length) * study.adaptive.speed /
-               study.domain.length;
+  const auto settings = trial_adaptive_settings(study, trial);
   shape.implicit_integrator = implicit_integrator(trial.integrator);
-  shape.lap_map = false;  // study.adaptive.engine == lap_map, once [adaptive] has an engine
+  shape.structured_solves = structured_solves(trial.integrator);
+  try {
+    shape.lap_map = adaptive_engine_for(settings, static_cast<Eigen::Index>(
+                                                      2 * shape.plant_dimension + shape.n)) ==
+                    AdaptiveEngine::lap_map;
+  } catch (const std::exception&) {
+    shape.lap_map = false;  // the trial fails at once
+  }
+  shape.laps = settings.limit() ? 0.0
+                                : settings.final_time_or_laps(study.domain.length) *
+                                      settings.speed / study.domain.length;
   return shape;
 }
 

@@ -40,6 +40,9 @@ bool write_value(const T& value, std::string& out) {
   } else if constexpr (std::is_integral_v<T>) {
     out += std::to_string(value);
     return true;
+  } else if constexpr (std::is_same_v<T, AdaptiveEngine>) {
+    out += adaptive_engine_name(value);
+    return true;
   } else if constexpr (std::is_enum_v<T>) {
     out += std::to_string(static_cast<long long>(value));
     return true;
@@ -77,6 +80,7 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
       {&study.description, "description", "a label"},
       {&study.source, "source", "where the file was read from, not what it says"},
       {&study.n_values, "n_values", "each trial's n is in its key"},
+      {&study.laps_values, "laps_values", "each trial's lap count is in its key"},
       {&study.kernels, "kernels", "each trial's kernel and its parameters are in its key"},
       {&study.targets, "targets", "each trial's target is in its key"},
       {&study.centres, "centres", "each trial's centre placement is in its key"},

@@ -1,17 +1,39 @@
 #include "rkhs/study/expectation.hpp"
 
 #include <algorithm>
+#include <charconv>
+#include <cstdint>
+#include <variant>
 
 #include "rkhs/study/trial_grid.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
 
+namespace {
+
+// Whether a selector's value accepts a column's value: the same text, or the same number
+// (laps = 1e6 selects the column's "1000000").
+bool accepts(const ParameterValue& accepted, const std::string& value) {
+  if (format_value(accepted) == value) return true;
+  double wanted = 0;
+  if (const auto* real = std::get_if<double>(&accepted)) wanted = *real;
+  else if (const auto* integer = std::get_if<std::int64_t>(&accepted))
+    wanted = static_cast<double>(*integer);
+  else
+    return false;
+  double found = 0;
+  const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), found);
+  return error == std::errc() && end == value.data() + value.size() && found == wanted;
+}
+
+}  // namespace
+
 bool Expectation::selects(const TrialSpec& trial) const {
   return std::all_of(selectors.begin(), selectors.end(), [&](const AxisSelector& selector) {
     const auto value = axis_values({selector.column}, trial).front();
     return std::any_of(selector.values.begin(), selector.values.end(),
-                       [&](const ParameterValue& accepted) { return format_value(accepted) == value; });
+                       [&](const ParameterValue& accepted) { return accepts(accepted, value); });
   });
 }
 

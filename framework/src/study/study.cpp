@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "rkhs/adaptive/adaptive.hpp"
@@ -25,6 +26,22 @@ std::string_view study_kind_name(StudyKind kind) noexcept {
 std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept {
   for (const auto kind : study_kinds)
     if (study_kind_name(kind) == name) return kind;
+  return std::nullopt;
+}
+
+std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept {
+  switch (engine) {
+    case AdaptiveEngine::lap_map: return "lap_map";
+    case AdaptiveEngine::time_stepping: return "time_stepping";
+    case AdaptiveEngine::automatic: return "automatic";
+  }
+  return "unknown";
+}
+
+std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept {
+  for (const auto engine :
+       {AdaptiveEngine::automatic, AdaptiveEngine::lap_map, AdaptiveEngine::time_stepping})
+    if (adaptive_engine_name(engine) == name) return engine;
   return std::nullopt;
 }
 
@@ -50,16 +67,20 @@ std::vector<StudyDefinition::GridAxis> StudyDefinition::grid_axes() const {
                            GridAxis{"learning law", "learning laws", laws.size()},
                            GridAxis{"integrator", "integrators", integrators.size()}})
     if (axis.count) axes.push_back(axis);
+  if (!laps_values.empty()) axes.push_back({"value of laps", "values of laps", laps_values.size()});
   axes.push_back({"value of n", "values of n", n_values.size()});
   return axes;
 }
 
 std::vector<TrialSpec> StudyDefinition::trials() const {
-  // Axes a study kind does not have contribute one empty choice (and nothing to the keys).
+  // Axes a study kind does not have contribute one empty choice (and nothing to the keys);
+  // a study without a laps axis has one lap count, std::nullopt.
   const std::vector<PluginChoice> none{PluginChoice{}};
   auto or_none = [&](const std::vector<PluginChoice>& axis) -> const std::vector<PluginChoice>& {
     return axis.empty() ? none : axis;
   };
+  std::vector<std::optional<double>> lap_counts(laps_values.begin(), laps_values.end());
+  if (lap_counts.empty()) lap_counts.emplace_back();
   std::vector<TrialSpec> out;
   for (const auto& kernel : kernels)
     for (const auto& target : targets)
@@ -67,28 +88,48 @@ std::vector<TrialSpec> StudyDefinition::trials() const {
         for (const auto& plant : or_none(plants))
           for (const auto& law : or_none(laws))
             for (const auto& integrator : or_none(integrators))
-              for (std::size_t n : n_values) {
-                TrialSpec trial;
-                trial.index = out.size();
-                trial.kernel = kernel;
-                trial.target = target;
-                trial.centres = placement;
-                trial.plant = plant;
-                trial.law = law;
-                trial.integrator = integrator;
-                trial.n = n;
-                trial.group_key = fmt::format("kernel={} | target={} | centres={}", kernel.label(),
-                                              target.label(), placement.label());
-                using Named = std::pair<const char*, const PluginChoice*>;
-                for (const auto& [axis, choice] :
-                     {Named{"plant", &plant}, Named{"law", &law}, Named{"integrator", &integrator}})
-                  if (!choice->name.empty())
-                    trial.group_key += fmt::format(" | {}={}", axis, choice->label());
-                trial.key = fmt::format("{} | n={}", trial.group_key, n);
-                trial.seed = hash64(trial.key);
-                out.push_back(std::move(trial));
-              }
+              for (const auto& laps : lap_counts)
+                for (std::size_t n : n_values) {
+                  TrialSpec trial;
+                  trial.index = out.size();
+                  trial.kernel = kernel;
+                  trial.target = target;
+                  trial.centres = placement;
+                  trial.plant = plant;
+                  trial.law = law;
+                  trial.integrator = integrator;
+                  trial.n = n;
+                  trial.laps = laps;
+                  trial.group_key = fmt::format("kernel={} | target={} | centres={}",
+                                                kernel.label(), target.label(), placement.label());
+                  using Named = std::pair<const char*, const PluginChoice*>;
+                  for (const auto& [axis, choice] : {Named{"plant", &plant}, Named{"law", &law},
+                                                     Named{"integrator", &integrator}})
+                    if (!choice->name.empty())
+                      trial.group_key += fmt::format(" | {}={}", axis, choice->label());
+                  // The seed leaves laps out: every lap count of a series sees the same random
+                  // centres, so its trials differ in nothing but how long they learn.
+                  trial.seed = hash64(fmt::format("{} | n={}", trial.group_key, n));
+                  if (laps) trial.group_key += fmt::format(" | laps={}", laps_text(*laps));
+                  trial.key = fmt::format("{} | n={}", trial.group_key, n);
+                  out.push_back(std::move(trial));
+                }
   return out;
+}
+
+std::string laps_text(double laps) {
+  if (std::isinf(laps) && laps > 0) return "limit";
+  if (laps == std::floor(laps) && std::abs(laps) < 1e15)
+    return fmt::format("{}", static_cast<long long>(laps));
+  return format_real(laps);
+}
+
+AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial) {
+  AdaptiveSettings settings = study.adaptive;
+  if (!trial.laps) return settings;
+  settings.laps = *trial.laps;
+  std::erase_if(settings.snapshot_laps, [&](double lap) { return lap > settings.laps; });
+  return settings;
 }
 
 }  // namespace rkhs

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -198,19 +199,105 @@ std::vector<PluginChoice> parse_plugins(const Reporter& report, const toml::tabl
   return out;
 }
 
-AdaptiveSettings parse_adaptive(const Reporter& report, const toml::table& root) {
+// One lap count of [adaptive] laps: a finite number > 0, or "limit" (+infinity).
+double parse_lap_count(const Reporter& report, const toml::node& node, bool in_list) {
+  const auto allowed = in_list
+                           ? "a lap count > 0 or \"limit\" (the periodic steady state)"
+                           : "a lap count > 0, \"limit\" (the periodic steady state) or an "
+                             "array of them";
+  if (const auto* text = node.as_string()) {
+    if (text->get() != "limit")
+      report.fail(node.source(), "adaptive.laps",
+                  fmt::format("found \"{}\", expected {}", text->get(), allowed));
+    return std::numeric_limits<double>::infinity();
+  }
+  if (!node.is_number())
+    report.fail(node.source(), "adaptive.laps",
+                fmt::format("found {} ({}), expected {}", describe(node), show(node), allowed));
+  const double laps = node.value<double>().value();
+  if (!(laps > 0) || !std::isfinite(laps))
+    report.fail(node.source(), "adaptive.laps",
+                fmt::format("must be a finite number > 0 or \"limit\", found {}", show(node)));
+  return laps;
+}
+
+struct AdaptiveSection {
   AdaptiveSettings settings;
+  std::vector<double> laps_values;  // the laps axis; empty for one value
+};
+
+// `track_length` is the domain's length (a final time in laps, for snapshot_laps).
+AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
+                               double track_length) {
+  AdaptiveSection section;
+  AdaptiveSettings& settings = section.settings;
   const auto* table = optional_table(report, root, "adaptive");
   if (!table)
     report.fail({}, "adaptive", "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
   check_keys(report, *table, "adaptive.",
              {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
-              "samples_per_lap"});
+              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol"});
   settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
-  if (table->contains("laps") && table->contains("final_time"))
+
+  const std::vector<std::string> engines{"automatic", "lap_map", "time_stepping"};
+  const auto engine = get_string(report, *table, "engine", "adaptive.", std::string("automatic"));
+  if (const auto found = adaptive_engine_from_name(engine))
+    settings.engine = *found;
+  else
+    report.fail(table->get("engine")->source(), "adaptive.engine",
+                fmt::format("unknown engine \"{}\" {}", engine, with_suggestion(engine, engines)));
+  settings.lap_map_rtol = get_number(report, *table, "lap_map_rtol", "adaptive.", settings.lap_map_rtol, 0);
+  settings.lap_map_atol = get_number(report, *table, "lap_map_atol", "adaptive.", settings.lap_map_atol, 0);
+
+  // laps = 10 | "limit" | [10, 100, "limit"] (a list is an axis of the grid).
+  const auto* laps_node = table->get("laps");
+  std::vector<std::pair<double, const toml::node*>> lap_counts;
+  if (!laps_node) {
+    lap_counts.emplace_back(settings.laps, nullptr);
+  } else if (const auto* array = laps_node->as_array()) {
+    if (array->empty()) report.fail(laps_node->source(), "adaptive.laps", "empty list of lap counts");
+    for (const auto& item : *array) lap_counts.emplace_back(parse_lap_count(report, item, true), &item);
+    std::stable_sort(lap_counts.begin(), lap_counts.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::size_t i = 1; i < lap_counts.size(); ++i)
+      if (lap_counts[i].first == lap_counts[i - 1].first)
+        report.fail(lap_counts[i].second->source(), "adaptive.laps",
+                    fmt::format("{} is listed twice; lap counts must be distinct",
+                                laps_text(lap_counts[i].first)));
+  } else {
+    lap_counts.emplace_back(parse_lap_count(report, *laps_node, false), laps_node);
+  }
+  if (laps_node && table->contains("final_time")) {
+    const auto limit = std::find_if(lap_counts.begin(), lap_counts.end(),
+                                    [](const auto& c) { return std::isinf(c.first); });
+    if (limit != lap_counts.end())
+      report.fail(limit->second->source(), "adaptive.laps",
+                  fmt::format("found \"limit\" together with final_time = {}: the periodic "
+                              "limit has no final time; give laps = \"limit\" without "
+                              "final_time, or a final time without laps",
+                              show(*table->get("final_time"))));
     report.fail(table->source(), "adaptive", "give 'laps' or 'final_time', not both");
-  settings.laps = get_number(report, *table, "laps", "adaptive.", 10, 0);
+  }
+  for (const auto& [laps, node] : lap_counts) {
+    if (std::isinf(laps) && settings.engine == AdaptiveEngine::time_stepping)
+      report.fail(node->source(), "adaptive.laps",
+                  "found \"limit\" with engine = \"time_stepping\", which cannot step through "
+                  "infinitely many laps; \"limit\" needs engine = \"automatic\" or \"lap_map\"");
+    if (std::isfinite(laps) && laps != std::floor(laps) && settings.engine == AdaptiveEngine::lap_map)
+      report.fail(node->source(), "adaptive.laps",
+                  fmt::format("found {} with engine = \"lap_map\", which advances whole laps; "
+                              "give a whole number of laps, or engine = \"automatic\" or "
+                              "\"time_stepping\"",
+                              show(*node)));
+  }
+  if (laps_node && laps_node->is_array()) {
+    settings.laps = std::numeric_limits<double>::quiet_NaN();  // each trial's: TrialSpec::laps
+    for (const auto& [laps, node] : lap_counts) section.laps_values.push_back(laps);
+  } else {
+    settings.laps = lap_counts.front().first;
+  }
   settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, -1e-300);
+
   settings.q = get_string(report, *table, "q", "adaptive.", std::string("identity"));
   try {
     parse_matrix(settings.q, 1);
@@ -223,6 +310,24 @@ AdaptiveSettings parse_adaptive(const Reporter& report, const toml::table& root)
                 fmt::format("found \"{}\", expected \"target\" (f) or \"projection\" (Pi_n f, "
                             "a road in H_n)", road));
   settings.projected_road = road == "projection";
+
+  // A snapshot must be within the longest finite run: the laps (the largest finite value of a
+  // laps axis) or final_time. A "limit" trial records every snapshot lap; a shorter trial of a
+  // laps axis the ones it reaches (trial_adaptive_settings).
+  std::optional<double> last_lap;
+  std::string last_lap_text;
+  if (settings.final_time > 0) {
+    last_lap = settings.final_time * settings.speed / track_length;
+    last_lap_text = fmt::format("final_time = {} s, {} laps", format_real(settings.final_time),
+                                format_real(*last_lap));
+  } else {
+    for (const auto& [laps, node] : lap_counts)
+      if (std::isfinite(laps)) {
+        last_lap = laps;
+        last_lap_text = fmt::format("laps = {}{}", laps_text(laps),
+                                    lap_counts.size() > 1 ? ", the largest finite lap count" : "");
+      }
+  }
   if (const auto* laps = table->get("snapshot_laps")) {
     const auto* array = laps->as_array();
     if (!array)
@@ -232,7 +337,12 @@ AdaptiveSettings parse_adaptive(const Reporter& report, const toml::table& root)
       if (!item.is_number() || item.value<double>().value() < 0)
         report.fail(item.source(), "adaptive.snapshot_laps",
                     fmt::format("expected a lap number >= 0, found {}", show(item)));
-      settings.snapshot_laps.push_back(item.value<double>().value());
+      const double lap = item.value<double>().value();
+      if (last_lap && lap > *last_lap * (1 + 1e-12))
+        report.fail(item.source(), "adaptive.snapshot_laps",
+                    fmt::format("found {}, after the end of the run ({}); snapshot laps must be "
+                                "<= {}", show(item), last_lap_text, format_real(*last_lap)));
+      settings.snapshot_laps.push_back(lap);
     }
   }
   auto count = [&](std::string_view key, std::size_t fallback) {
@@ -244,7 +354,7 @@ AdaptiveSettings parse_adaptive(const Reporter& report, const toml::table& root)
   };
   settings.snapshot_points = count("snapshot_points", 0);
   settings.samples_per_lap = count("samples_per_lap", settings.samples_per_lap);
-  return settings;
+  return section;
 }
 
 // `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
@@ -426,7 +536,9 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     study.laws = parse_plugins(report, root, "law", law_registry(), std::string("rkhs"));
     study.integrators =
         parse_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4"));
-    study.adaptive = parse_adaptive(report, root);
+    auto adaptive = parse_adaptive(report, root, study.domain.length);
+    study.adaptive = std::move(adaptive.settings);
+    study.laps_values = std::move(adaptive.laps_values);
     if (study.adaptive.snapshot_points == 0) study.adaptive.snapshot_points = study.evaluation_points;
   }
 

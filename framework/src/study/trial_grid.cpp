@@ -35,6 +35,7 @@ std::vector<std::string> axis_columns(const std::vector<TrialSpec>& trials) {
               columns.push_back(column);
     out.insert(out.end(), columns.begin(), columns.end());
   }
+  if (trials.front().laps) out.push_back("laps");  // nested just outside n
   return out;
 }
 
@@ -45,6 +46,7 @@ std::vector<std::string> axis_values(const std::vector<std::string>& columns, co
     for (const auto& [name, value] : choice->parameters.values())
       values[parameter_column(axis, name)] = format_value(value);
   }
+  if (trial.laps) values["laps"] = laps_text(*trial.laps);
   std::vector<std::string> out;
   for (const auto& column : columns) out.push_back(values.contains(column) ? values[column] : "");
   return out;

@@ -168,6 +168,14 @@ struct AdaptiveSettings {
   }
 };
 
+/// The engine measure_adaptive runs a trial with, for a coupled system of `dimension` states:
+/// the lap map needs whole laps from t = 0 (no final_time) and whole snapshot laps; `automatic`
+/// takes it for laps = "limit" and when the laps outnumber the columns it integrates
+/// (dimension + 1), time stepping otherwise. Throws std::invalid_argument when the engine asked
+/// for cannot run these settings (the limit without the lap map, the lap map with fractional
+/// laps or a final time).
+AdaptiveEngine adaptive_engine_for(const AdaptiveSettings& settings, Eigen::Index dimension);
+
 /// Names of the metrics of an adaptive trial, in output order (docs/metrics.md): the names
 /// of MetricTable<AdaptiveMetric> (rkhs/adaptive/metrics.hpp).
 const std::vector<std::string>& adaptive_metric_names();

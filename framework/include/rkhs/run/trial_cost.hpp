@@ -12,11 +12,13 @@
 //   adaptive trials  + laps_integrated x steps_per_lap x step_cost(N),   N = 2d + n
 //
 // where d is the plant's state dimension (the system is z = [x, xhat, alpha]), step_cost is
-// N^3 + N^2 for an implicit integrator (one dense LU of the N x N Jacobian per step, trait
-// "implicit" = "yes...") and N^2 for an explicit one (right-hand sides with a dense learning
-// map), and laps_integrated depends on the engine: the horizon in laps (laps, or final_time
-// v / L) when the trial steps through time, about N laps with a lap map (one lap of the state
-// and its N sensitivities; the map is then iterated at a cost independent of the horizon).
+// N^3 + N^2 for an implicit integrator with dense stage solves (one LU of the N x N Jacobian
+// per step, trait "implicit" = "yes..."), and N^2 for an explicit one or one with structured
+// stage solves (parameter linear_solver = "structured": right-hand sides with a dense learning
+// map dominate), and laps_integrated depends on the engine (adaptive_engine_for): the horizon
+// in laps (laps, or final_time v / L) when the trial steps through time, about N laps with a
+// lap map (one lap of the state and its N sensitivities; the map is then iterated at a cost
+// independent of the horizon).
 // Steps per lap are taken as the same for every integrator (they depend on tolerances and
 // stiffness, which the estimate does not model).
 
@@ -33,9 +35,10 @@ struct AdaptiveTrialShape {
   std::size_t plant_dimension = 1;  ///< d
   double laps = 0;                  ///< the horizon in laps: final time x speed / track length
   bool implicit_integrator = true;  ///< one LU factorisation of the (2d + n) system per step
+  bool structured_solves = false;   ///< ... unless its stage solves use the structure (O(N))
   /// The engine: the lap map (one lap with its 2d + n sensitivities, then the lap's affine map
-  /// iterated), or stepping through every lap (false). Chosen in one place,
-  /// adaptive_trial_shape() (src/run/trial_cost.cpp): where a study's `[adaptive] engine` is read.
+  /// iterated), or stepping through every lap (false); the choice of measure_adaptive
+  /// (adaptive_engine_for).
   bool lap_map = false;
 };
 
@@ -47,8 +50,8 @@ double adaptive_trial_cost(const AdaptiveTrialShape& shape, std::size_t evaluati
 
 /// The shape of adaptive trial `trial` of `study`: its plant's dimension (1 when the plant
 /// cannot be made: the trial then fails at once), its horizon, whether its integrator is
-/// implicit (an integrator that does not say is taken as implicit) and its engine (every trial
-/// steps through time today).
+/// implicit (an integrator that does not say is taken as implicit), whether its stage solves
+/// are structured, and its engine.
 AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const TrialSpec& trial);
 
 /// The estimated cost of `trial` of `study` (see the file comment): relative, not seconds;

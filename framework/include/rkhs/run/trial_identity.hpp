@@ -1,7 +1,8 @@
 #pragma once
 // The identity of a trial: what the result store keys its results by (docs/results.md). A stored
 // result is reused only when everything that can change it is the same: the build (version and
-// commit), the trial's key (every plugin choice with its parameters, and n), the data files it
+// commit), the trial's key (every plugin choice with its parameters, n, and its lap count when
+// the study has a laps axis), the data files it
 // reads (their SHA-256), and the study settings.
 //
 // The study settings are derived, not listed by hand: every field of StudyDefinition is read

@@ -46,9 +46,15 @@ struct TrialSpec {
   PluginChoice law;         ///< adaptive trials only
   PluginChoice integrator;  ///< adaptive trials only
   std::size_t n = 0;
+  /// The trial's lap count when the study has a laps axis ([adaptive] laps = [10, 100,
+  /// "limit"]): a positive number, +infinity for "limit". std::nullopt when laps is one value
+  /// (StudyDefinition::adaptive.laps applies, and nothing about laps is in the keys).
+  std::optional<double> laps;
   std::string group_key;  ///< every axis but n: trials of a group form one convergence series
   std::string key;        ///< every axis: identifies the trial
-  std::uint64_t seed = 0; ///< hash of key: the seed of any randomness in the trial
+  /// Hash of key (without its laps part: every lap count of a series has the same random
+  /// centres): the seed of any randomness in the trial.
+  std::uint64_t seed = 0;
 };
 
 /// What rates are fitted against: ln n (default) or ln h with h the fill distance.
@@ -71,6 +77,13 @@ std::string_view study_kind_name(StudyKind kind) noexcept;
 /// The kind `name` stands for; std::nullopt for an unknown name.
 std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept;
 
+/// "automatic", "lap_map", "time_stepping": the names of [adaptive] engine (and of the trial
+/// identity's text).
+std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept;
+
+/// The engine `name` stands for; std::nullopt for an unknown name.
+std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept;
+
 struct StudyDefinition {
   std::string name;
   std::string description;
@@ -86,13 +99,18 @@ struct StudyDefinition {
   SolverOptions solver;
   StudyLimits limits;
   AdaptiveSettings adaptive;  ///< StudyKind::adaptive only
+  /// [adaptive] laps given as a list: the values of the laps axis, in the file's order
+  /// (+infinity for "limit"), nested just outside n. Empty when laps is one value, which is
+  /// then adaptive.laps; with the axis, adaptive.laps is NaN and each trial's lap count is
+  /// TrialSpec::laps (run_trial gives measure_adaptive the settings with it).
+  std::vector<double> laps_values;
   std::vector<Expectation> expectations;  ///< [[expect]] tables (rkhs/study/expectation.hpp)
   /// What the file asks for that is valid but doubtful, as "file:line:column: key: why" (e.g. an
   /// evaluation grid too coarse for the largest n); `validate`, `run` and `check` print them.
   std::vector<std::string> warnings;
 
-  /// The Cartesian product kernels x targets x centres [x plants x laws x integrators] x n,
-  /// n varying fastest.
+  /// The Cartesian product kernels x targets x centres [x plants x laws x integrators]
+  /// [x laps] x n, n varying fastest.
   std::vector<TrialSpec> trials() const;
 
   /// One axis of the trial grid: what it is called (singular and plural) and how many values
@@ -110,6 +128,14 @@ struct StudyDefinition {
   const std::vector<std::string>& all_metrics() const;
   std::size_t metric_index(std::string_view metric) const;
 };
+
+/// A lap count as the laps column, the keys and messages print it: "limit" for +infinity, a
+/// whole number without an exponent ("1000000"), any other number as format_real does ("2.5").
+std::string laps_text(double laps);
+
+/// The adaptive settings `trial` runs with: study.adaptive with the trial's lap count when the
+/// study has a laps axis, keeping only the snapshot laps the trial reaches.
+AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial);
 
 /// Every metric a trial of `kind` measures, in output order.
 const std::vector<std::string>& metric_names(StudyKind kind);

@@ -12,7 +12,8 @@ namespace rkhs {
 
 /// The axis columns of trials.csv and rates.csv: kernel, each kernel parameter by its own name,
 /// target, target_<parameter>, centres, centres_<parameter>, plant, law, integrator (each with
-/// its parameters), in order of first appearance. Axes a study does not have are left out.
+/// its parameters), in order of first appearance, then laps when the study has a laps axis
+/// (values "10", "1000000", "limit": laps_text). Axes a study does not have are left out.
 std::vector<std::string> axis_columns(const std::vector<TrialSpec>& trials);
 
 /// The values of those columns for one trial ("" where a column does not apply).
