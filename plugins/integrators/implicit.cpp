@@ -64,7 +64,7 @@ class Radau5 final : public AdaptiveStepIntegrator {
       const std::function<void(std::size_t, const double*)>& observe) const override {
     TrajectoryProblem problem(system, solver_);
     RadauIIA5<TrajectoryProblem> stepper(problem, atol_, rtol_);
-    return drive_steps(stepper, system, z, breakpoints, observe,
+    return drive_steps(stepper, z, breakpoints, observe,
                        {max_steps_, initial_step_, restart_, {}});
   }
 
@@ -183,7 +183,7 @@ class Rodas4 final : public AdaptiveStepIntegrator {
       AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
     Rodas4Stepper stepper(system, solver_, atol_, rtol_);
-    return drive_steps(stepper, system, z, breakpoints, observe,
+    return drive_steps(stepper, z, breakpoints, observe,
                        {max_steps_, initial_step_, false, {}});
   }
 

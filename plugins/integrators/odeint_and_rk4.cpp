@@ -60,13 +60,12 @@ class ControlledPolicy {
 };
 
 template <class Controlled, class System>
-IntegrationStats drive_controlled(Controlled& stepper, System system, AdaptiveSystem& adaptive,
-                                  Eigen::VectorXd& z, std::span<const double> breakpoints,
+IntegrationStats drive_controlled(Controlled& stepper, System system, Eigen::VectorXd& z, std::span<const double> breakpoints,
                                   const std::function<void(std::size_t, const double*)>& observe,
                                   std::int64_t max_steps, double initial_step,
                                   bool reset_segments) {
   ControlledPolicy<Controlled, System> policy(stepper, system, z.size());
-  return drive_steps(policy, adaptive, z, breakpoints, observe,
+  return drive_steps(policy, z, breakpoints, observe,
                      {max_steps, initial_step, reset_segments, {}});
 }
 
@@ -94,7 +93,7 @@ class Rosenbrock4 final : public AdaptiveStepIntegrator {
       const std::function<void(std::size_t, const double*)>& observe) const override {
     using Stepper = odeint::rosenbrock4<double, CorrectedRosenbrockCoefficients>;
     odeint::rosenbrock4_controller<Stepper> stepper(atol_, rtol_);
-    return drive_controlled(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), system, z,
+    return drive_controlled(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), z,
                           breakpoints, observe, max_steps_, initial_step_, false);
   }
 };
@@ -110,7 +109,7 @@ class ExplicitAdaptive final : public AdaptiveStepIntegrator {
       const std::function<void(std::size_t, const double*)>& observe) const override {
     auto stepper = odeint::make_controlled(atol_, rtol_, Stepper());
     // Reset per segment: a first-same-as-last derivative must not cross a kink.
-    return drive_controlled(stepper, Rhs{&system}, system, z, breakpoints, observe, max_steps_,
+    return drive_controlled(stepper, Rhs{&system}, z, breakpoints, observe, max_steps_,
                           initial_step_, true);
   }
 };
@@ -175,7 +174,7 @@ class Rk4 final : public Integrator {
       const std::function<void(std::size_t, const double*)>& observe) const override {
     FixedStep policy(system, z.size());
     return drive_steps(
-        policy, system, z, breakpoints, observe,
+        policy, z, breakpoints, observe,
         {max_steps_, step_, false,
          fmt::format(" (step {} s too large for this stiff system?)", format_real(step_))});
   }

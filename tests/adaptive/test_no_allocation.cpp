@@ -38,6 +38,7 @@ TEST_CASE("no heap allocation in the right-hand side or the Jacobian", "[adaptiv
   const auto plant = plant_entry->factory(ParameterSet::resolve(plant_entry->info.parameters, {}));
   const auto P = solve_lyapunov(plant->A(), Eigen::MatrixXd::Identity(4, 4)).P;
   const std::function<double(double)> road = [](double s) { return 2 * std::sin(s / 4); };
+  const std::function<double(double)> slope = [](double s) { return 0.5 * std::cos(s / 4); };
   for (const std::string name : {"gaussian", "bspline", "wendland", "matern"}) {
     const auto* entry = kernel_registry().find(name);
     const auto kernel = entry->factory(ParameterSet::resolve(entry->info.parameters, {}), track);
@@ -48,11 +49,10 @@ TEST_CASE("no heap allocation in the right-hand side or the Jacobian", "[adaptiv
       const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(40, 40);
       const Eigen::MatrixXd map = rkhs_law ? Eigen::MatrixXd(solver.solve(identity)) : identity;
       const auto basis = kernel->basis(centres);
-      AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, track, 0.3);
+      AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, slope, track, 0.3);
       const auto m = system.dimension();
       Eigen::VectorXd z = Eigen::VectorXd::Constant(m, 0.1), dz(m), dfdt(m);
       Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
-      system.set_segment(0.0, 100.0);
       system.rhs(z.data(), dz.data(), 1.0);  // first calls may size scratch buffers
       system.jacobian(z.data(), J.data(), 1.0, dfdt.data());
       allocations = 0;

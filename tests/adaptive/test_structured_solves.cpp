@@ -62,7 +62,11 @@ struct Trial {
                    : Eigen::MatrixXd(identity / gamma);
     basis = kernel->basis(centres);
     road = [](double s) { return 2 * std::sin(2 * std::numbers::pi * s / track.length); };
-    system = std::make_unique<AdaptiveSystem>(plant->A(), plant->B(), P, *basis, map, road,
+    slope = [](double s) {
+      const double k = 2 * std::numbers::pi / track.length;
+      return 2 * k * std::cos(k * s);
+    };
+    system = std::make_unique<AdaptiveSystem>(plant->A(), plant->B(), P, *basis, map, road, slope,
                                               track, speed, learning_signal_for(*kernel));
   }
   std::unique_ptr<AnyKernel> kernel;
@@ -70,7 +74,7 @@ struct Trial {
   std::vector<double> centres;
   Eigen::MatrixXd P, map;
   std::unique_ptr<KernelBasis> basis;
-  std::function<double(double)> road;
+  std::function<double(double)> road, slope;
   std::unique_ptr<AdaptiveSystem> system;
 };
 

@@ -45,14 +45,14 @@ void right_hand_side(benchmark::State& state, const std::string& kernel_name, bo
                : Eigen::MatrixXd(Eigen::MatrixXd::Identity(size, size) / 2e4);
   const auto basis = kernel->basis(centres);
   const std::function<double(double)> road = [](double s) { return 2 * std::sin(s / 4); };
-  rkhs::AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, track, 1e-4,
+  const std::function<double(double)> slope = [](double s) { return 0.5 * std::cos(s / 4); };
+  rkhs::AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, slope, track, 1e-4,
                               rkhs::learning_signal_for(*kernel));
   Eigen::VectorXd z = Eigen::VectorXd::Constant(system.dimension(), 0.1), dz(system.dimension());
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(system.dimension(),
                                                                            system.dimension());
   Eigen::VectorXd dfdt(system.dimension());
   double t = 1.0;
-  system.set_segment(0.0, 1e9);
   for (auto _ : state) {
     if (jacobian)
       system.jacobian(z.data(), J.data(), t, dfdt.data());

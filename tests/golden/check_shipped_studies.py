@@ -3,11 +3,14 @@
 `rkhs-study check` for each studies/*.toml are compared with the golden files in
 tests/golden/studies/<study>/.
 
-Adaptive studies run on a short horizon (one lap, one snapshot) so the whole check takes about
-two minutes on two cores; approximation studies run as shipped. Every number must be
-bit-identical (compared as the text the CSV writer printed). Columns may be added, never removed,
-renamed or changed; rows must match in number and order. Verdicts must match line for line,
-except the first line's wall time.
+Adaptive studies run on a short horizon (one lap, one snapshot; a laps axis becomes one lap and
+the limit) so the whole check takes a few minutes on two cores; approximation studies run as
+shipped. Numbers must agree to 1e-9 relative: the last digits of a double depend on the
+processor (glibc picks its exp, log and sin by CPU features at run time, and Eigen its kernels
+at build time), so a refactoring that changes no formula stays well inside that, while a change
+of method does not. Text must match exactly. Columns may be added, never removed, renamed or
+changed; rows must match in number and order. Verdicts must match line for line, except the
+first line's wall time.
 
 Usage:
   check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR            compare (ctest)
@@ -31,7 +34,8 @@ def shortened(text):
     """The study with adaptive horizons cut to one lap (approximation studies unchanged)."""
     if not re.search(r'^kind = "adaptive"', text, re.M):
         return text
-    text, laps = re.subn(r"^laps = \d+", "laps = 1", text, flags=re.M)
+    text, laps = re.subn(r"^laps = (\d+|\[.*\])", lambda m: "laps = 1" if m.group(1)[0] != "["
+                         else 'laps = [1, "limit"]', text, flags=re.M)
     text, snapshots = re.subn(r"^snapshot_laps = \[.*\]", "snapshot_laps = [1]", text, flags=re.M)
     if laps != 1 or snapshots > 1:
         raise SystemExit(f"cannot shorten the horizon: {laps} 'laps =' lines, {snapshots} "
@@ -69,6 +73,20 @@ def read_csv(path):
     return rows[0], rows[1:]
 
 
+RELATIVE_TOLERANCE = 1e-9
+
+
+def same_value(golden, found):
+    """Equal text, or numbers within RELATIVE_TOLERANCE of each other."""
+    if golden == found:
+        return True
+    try:
+        a, b = float(golden), float(found)
+    except ValueError:
+        return False
+    return abs(a - b) <= RELATIVE_TOLERANCE * max(abs(a), abs(b))
+
+
 def compare_csv(golden_path, actual_path):
     """Differences between two CSV files, golden columns only (added columns are allowed)."""
     golden_header, golden_rows = read_csv(golden_path)
@@ -85,7 +103,7 @@ def compare_csv(golden_path, actual_path):
     for number, (golden, actual) in enumerate(zip(golden_rows, actual_rows), start=2):
         for column, value in zip(golden_header, golden):
             found = actual[where[column]]
-            if found != value:
+            if not same_value(value, found):
                 problems.append(f"{actual_path}:{number}: column {column}: found '{found}', "
                                 f"golden '{value}'")
                 if len(problems) >= 20:

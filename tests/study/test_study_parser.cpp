@@ -396,7 +396,7 @@ TEST_CASE("[adaptive] engine and the lap map's tolerances", "[study][laps]") {
   const auto defaults = parse_study(adaptive_text("laps = 2\n"), "s.toml");
   CHECK(defaults.adaptive.engine == rkhs::AdaptiveEngine::automatic);
   CHECK(defaults.adaptive.lap_map_rtol == 1e-10);
-  CHECK(defaults.adaptive.lap_map_atol == 1e-12);
+  CHECK(defaults.adaptive.lap_map_atol == 1e-10);
   const auto chosen = parse_study(
       adaptive_text("laps = 2\nengine = \"lap_map\"\nlap_map_rtol = 1e-8\nlap_map_atol = 1e-9\n"),
       "s.toml");

@@ -214,8 +214,15 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
         return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
       })
                               : std::function<double(double)>([&](double s) { return target(s); });
+  const std::function<double(double)> road_slope =
+      settings.projected_road ? std::function<double(double)>([&](double s) {
+        road_basis->evaluate_derivative(s, road_phi.data());
+        return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
+      })
+                              : std::function<double(double)>(
+                                    [&](double s) { return target.slope(s); });
 
-  AdaptiveSystem system(A, B, P, *basis, learning_map, road, domain, settings.speed,
+  AdaptiveSystem system(A, B, P, *basis, learning_map, road, road_slope, domain, settings.speed,
                         learning_signal_for(kernel));
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)
   if (!settings.projected_road)
@@ -289,7 +296,9 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     metrics[M::slowest_time_constant_laps] = limit.slowest_time_constant_laps;
     metrics[M::unexcited_directions] = static_cast<double>(limit.unexcited_directions);
     for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
-      snapshot(i, powers.advance(z0, static_cast<std::uint64_t>(settings.snapshot_laps[i])).data());
+      if (settings.limit() || settings.snapshot_laps[i] <= settings.laps)  // the ones reached
+        snapshot(i,
+                 powers.advance(z0, static_cast<std::uint64_t>(settings.snapshot_laps[i])).data());
     // Laps until fhat is within 1% (in L2 on the evaluation grid) of its limit.
     auto distance_to_limit = [&](std::uint64_t laps) {
       const Eigen::VectorXd state = powers.advance(z0, laps);

@@ -12,13 +12,15 @@ namespace rkhs {
 AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B,
                                const Eigen::MatrixXd& P, KernelBasis& basis,
                                const Eigen::MatrixXd& learning_map,
-                               const std::function<double(double)>& road, const Domain& domain,
-                               double speed, LearningSignal signal)
+                               const std::function<double(double)>& road,
+                               const std::function<double(double)>& road_slope,
+                               const Domain& domain, double speed, LearningSignal signal)
     : A_(A),
       B_(B),
       b_(P * B),
       basis_(basis),
       road_(road),
+      road_slope_(road_slope),
       domain_(domain),
       speed_(speed),
       d_(A.rows()),
@@ -26,8 +28,8 @@ AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& 
       signal_(signal),
       phi_(basis.size()),
       psi_(basis.size()),
-      plus_(static_cast<std::size_t>(2 * A.rows()) + basis.size()),
-      minus_(plus_.size()) {
+      dphi_(basis.size()),
+      dpsi_(basis.size()) {
   if (signal_ == LearningSignal::by_basis) {
     basis_.set_map(learning_map);
     return;
@@ -89,20 +91,24 @@ void AdaptiveSystem::jacobian_matrix(double t, double* J) const {
 }
 
 void AdaptiveSystem::time_derivative(const double* z, double t, double* dfdt) const {
-  // dF/dt by differences in t, inside the current smooth segment. F depends on t only through
-  // s = v t, so the increment is sized in arc length (1e-6 L): small against the scales of f
-  // and phi, large enough that round-off in f(s +- h) does not dominate.
-  const Eigen::Index m = dimension();
-  const double h = 1e-6 * domain_.length / std::abs(speed_);
-  double lo = t - h, hi = t + h;
-  if (lo < segment_begin_) lo = t;
-  if (hi > segment_end_ && segment_end_ > segment_begin_) hi = t;
-  if (hi == lo) hi = t + h;  // degenerate segment: forward difference
-  rhs(z, plus_.data(), hi);  // counted: part of the cost of a Jacobian
-  rhs(z, minus_.data(), lo);
-  for (Eigen::Index i = 0; i < m; ++i)
-    dfdt[i] =
-        (plus_[static_cast<std::size_t>(i)] - minus_[static_cast<std::size_t>(i)]) / (hi - lo);
+  // F depends on t only through s = v t: dF/dt = v dF/ds.
+  const double s = arc_length(t);
+  basis_.evaluate_derivative(s, dphi_.data());
+  const Eigen::Map<const Eigen::VectorXd> dphi(dphi_.data(), n_);
+  if (signal_ == LearningSignal::by_basis) {
+    basis_.evaluate_mapped_derivative(s, dpsi_.data());
+  } else if (map_.size() == 0) {
+    for (std::size_t i = 0; i < dphi_.size(); ++i) dpsi_[i] = dphi_[i] * scale_;
+  } else {
+    Eigen::Map<Eigen::VectorXd>(dpsi_.data(), n_).noalias() = map_ * dphi;
+  }
+  using Vector = Eigen::Map<const Eigen::VectorXd>;
+  const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
+  Eigen::Map<Eigen::VectorXd> dx(dfdt, d_), dxhat(dfdt + d_, d_), dalpha(dfdt + 2 * d_, n_);
+  const double error = b_.dot(x - xhat);
+  dx = B_ * (speed_ * road_slope_(s));
+  dxhat = B_ * (speed_ * dphi.dot(alpha));
+  dalpha = (speed_ * error) * Vector(dpsi_.data(), n_);
 }
 
 void AdaptiveSystem::linearize(double t, CoupledLinearization& out) const {

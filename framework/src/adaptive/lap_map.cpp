@@ -55,7 +55,7 @@ LapMap compute_lap_map(AdaptiveSystem& system, double lap_time,
   start.leftCols(m).setIdentity();
   Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(start.data(), start.size());
   LapMap out;
-  out.stats = drive_steps(stepper, system, z, times, [](std::size_t, const double*) {},
+  out.stats = drive_steps(stepper, z, times, [](std::size_t, const double*) {},
                           {max_steps, 0.0, false, " (in the lap map)"});
   const Eigen::Map<const Eigen::MatrixXd> end(z.data(), m, m + 1);
   out.monodromy = end.leftCols(m);

@@ -25,13 +25,14 @@ namespace rkhs {
 ///   xhat'  = A xhat + B phi(s)^T alpha
 ///   alpha' = psi(s) b^T (x - xhat),  b = P B,  psi(s) = Gamma^-1 phi(s) (gradient law)
 ///                                            or Gamma^-1 G^-1 phi(s) (rkhs law)
-/// with s = wrap(v t). It is linear in z for given t; the Jacobian is exact and dfdt is a
-/// central difference in t (one-sided at the ends of the current smooth segment, so that no
-/// stencil crosses a kink). Evaluations allocate nothing.
+/// with s = wrap(v t). It is linear in z for given t; the Jacobian and dF/dt are exact:
+///   dF/dt = v [B f'(s); B dphi(s)^T alpha; dpsi(s) b^T (x - xhat)],  dpsi = M dphi,
+/// with the kernel's derivative of its sections (KernelBasis::evaluate_derivative: a closed
+/// form, or its stated difference for a kernel without one) and the road's slope; at a kink the
+/// right-hand derivative, the one the step starting there needs. Evaluations allocate nothing.
 ///
 /// Cost: each rhs() evaluates the basis at one point s, once; each jacobian() evaluates it at s
-/// once and calls rhs() twice (at t +- h, for dfdt), so it costs three basis evaluations and
-/// counts two rhs evaluations. With LearningSignal::from_phi, psi is M applied to that one
+/// once and its derivative once. With LearningSignal::from_phi, psi is M applied to that one
 /// phi(s) (n kernel evaluations per rhs for a direct basis); with LearningSignal::by_basis,
 /// psi comes from basis.evaluate_mapped (a second evaluation at s, which for a basis through a
 /// sparse feature map costs O(features at s x n) against M phi's O(n^2) for a full M).
@@ -41,13 +42,15 @@ class AdaptiveSystem {
   enum class LearningSignal { from_phi, by_basis };
 
   /// `basis` evaluates phi(s); `learning_map` is the n x n matrix M with psi = M phi
-  /// (Gamma^-1 I or Gamma^-1 G^-1). `road` is f. All references must outlive the system.
+  /// (Gamma^-1 I or Gamma^-1 G^-1). `road` is f and `road_slope` f'. All references must
+  /// outlive the system.
   /// from_phi applies a multiple of the identity as a scalar (O(n)) and any other M as a dense
   /// product, with the same operations as a direct basis's evaluate_mapped (bit-identical).
   AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::MatrixXd& P,
                  KernelBasis& basis, const Eigen::MatrixXd& learning_map,
-                 const std::function<double(double)>& road, const Domain& domain, double speed,
-                 LearningSignal signal = LearningSignal::from_phi);
+                 const std::function<double(double)>& road,
+                 const std::function<double(double)>& road_slope, const Domain& domain,
+                 double speed, LearningSignal signal = LearningSignal::from_phi);
 
   Eigen::Index dimension() const noexcept { return 2 * d_ + n_; }
   Eigen::Index plant_dimension() const noexcept { return d_; }
@@ -73,11 +76,6 @@ class AdaptiveSystem {
   /// right-hand side.
   void rhs_columns(const double* Z, double* dZ, Eigen::Index columns, double t) const;
   const Eigen::MatrixXd& plant_matrix() const noexcept { return A_; }
-  /// The smooth segment being integrated (for one-sided differences at its ends).
-  void set_segment(double t_begin, double t_end) noexcept {
-    segment_begin_ = t_begin;
-    segment_end_ = t_end;
-  }
 
   std::size_t rhs_evaluations() const noexcept { return rhs_count_; }
   std::size_t jacobian_evaluations() const noexcept { return jacobian_count_; }
@@ -89,14 +87,14 @@ class AdaptiveSystem {
   Eigen::VectorXd B_, b_;
   KernelBasis& basis_;
   const std::function<double(double)>& road_;
+  const std::function<double(double)>& road_slope_;
   Domain domain_;
   double speed_;
   Eigen::Index d_, n_;
   LearningSignal signal_;
   Eigen::MatrixXd map_;  // from_phi: M, or empty when M is scale_ times the identity
   double scale_ = 0.0;
-  double segment_begin_ = 0, segment_end_ = 0;
-  mutable std::vector<double> phi_, psi_, plus_, minus_;
+  mutable std::vector<double> phi_, psi_, dphi_, dpsi_;
   mutable std::size_t rhs_count_ = 0, jacobian_count_ = 0;
 };
 

@@ -50,18 +50,18 @@ namespace detail {
 [[noreturn]] void throw_non_finite_state(double t, const std::string& hint);
 }  // namespace detail
 
-/// Integrates `system` from t = breakpoints[0] through every later breakpoint with the steps of
+/// Integrates from t = breakpoints[0] through every later breakpoint with the steps of
 /// `stepper`, starting from z and leaving the final state in z. Contract (Integrator):
 ///   - observe(k, state) at every breakpoint k, including 0, with the state there;
-///   - each smooth segment (breakpoints[k-1], breakpoints[k]] is announced to the system
-///     (AdaptiveSystem::set_segment) before it is stepped; a step longer than the rest of the
-///     segment is shortened to land exactly on its end, and does not shrink the next step;
+///   - each smooth segment (breakpoints[k-1], breakpoints[k]] is stepped on its own: a step
+///     longer than the rest of the segment is shortened to land exactly on its end, and does
+///     not shrink the next step;
 ///   - check_cancelled() before every step (and observe may check too);
 ///   - throws std::runtime_error when a rejected step falls below 1e-14 of the time scale,
 ///     when accepted + rejected steps exceed options.max_steps, and when the state at a
 ///     breakpoint is not finite.
 template <SteppingPolicy Stepper>
-IntegrationStats drive_steps(Stepper& stepper, AdaptiveSystem& system, Eigen::VectorXd& z,
+IntegrationStats drive_steps(Stepper& stepper, Eigen::VectorXd& z,
                              std::span<const double> breakpoints,
                              const std::function<void(std::size_t, const double*)>& observe,
                              const SteppingOptions& options) {
@@ -77,7 +77,6 @@ IntegrationStats drive_steps(Stepper& stepper, AdaptiveSystem& system, Eigen::Ve
       observe(k, stepper.state());
       continue;
     }
-    system.set_segment(t, end);
     if constexpr (requires { stepper.reset(); })
       if (options.reset_per_segment) stepper.reset();
     if (dt <= 0) dt = 1e-6 * (end - t);
