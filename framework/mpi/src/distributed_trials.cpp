@@ -110,8 +110,9 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
   job.threads = options.threads > 0 ? options.threads : session.default_threads();
   job.stop_requested = options.stop_requested;
   job.rank_timeout_seconds = rank_timeout_seconds;
+  LapMapCache lap_maps;  // this rank's: trials differing only in laps share their lap map
   job.run = [&](std::uint64_t id) -> std::optional<std::string> {
-    const auto result = run_trial(study, *by_index.at(id), options.stop_requested);
+    const auto result = run_trial(study, *by_index.at(id), options.stop_requested, &lap_maps);
     if (result.skipped) return std::nullopt;  // stopped while it ran: not stored, run again later
     return serialize_result(result);
   };

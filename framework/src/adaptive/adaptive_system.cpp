@@ -130,16 +130,18 @@ void AdaptiveSystem::rhs_columns(const double* Z, double* dZ, Eigen::Index colum
   const Eigen::Map<const Eigen::MatrixXd> z(Z, m, columns);
   Eigen::Map<Eigen::MatrixXd> dz(dZ, m, columns);
   const Eigen::Map<const Eigen::VectorXd> phi(phi_.data(), n_), psi(psi_.data(), n_);
-  for (Eigen::Index j = 0; j < columns; ++j) {
-    const auto x = z.col(j).segment(0, d_), xhat = z.col(j).segment(d_, d_);
-    const auto alpha = z.col(j).segment(2 * d_, n_);
-    const double error = b_.dot(x - xhat);
-    dz.col(j).segment(0, d_).noalias() = A_ * x;
-    dz.col(j).segment(d_, d_).noalias() = A_ * xhat;
-    dz.col(j).segment(d_, d_) += B_ * phi.dot(alpha);
-    dz.col(j).segment(2 * d_, n_) = error * psi;
-  }
-  dz.col(columns - 1).segment(0, d_) += B_ * road_(s);
+  const auto x = z.topRows(d_), xhat = z.middleRows(d_, d_), alpha = z.bottomRows(n_);
+  // Whole blocks at once: d x d products and rank-one updates over the columns.
+  column_scratch_.resize(2, columns);
+  auto estimate = column_scratch_.row(0), error = column_scratch_.row(1);
+  estimate.noalias() = phi.transpose() * alpha;
+  error.noalias() = b_.transpose() * x;
+  error.noalias() -= b_.transpose() * xhat;
+  dz.topRows(d_).noalias() = A_ * x;
+  dz.middleRows(d_, d_).noalias() = A_ * xhat;
+  dz.middleRows(d_, d_).noalias() += B_ * estimate;
+  dz.bottomRows(n_).noalias() = psi * error;
+  dz.col(columns - 1).head(d_) += B_ * road_(s);
 }
 
 namespace detail {

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -49,6 +50,8 @@ LapMap compute_lap_map(AdaptiveSystem& system, double lap_time,
   std::sort(times.begin(), times.end());
   times.erase(std::unique(times.begin(), times.end()), times.end());
 
+  const auto rhs_before = system.rhs_evaluations();
+  const auto jacobians_before = system.jacobian_evaluations();
   LapColumns problem(system);
   RadauIIA5<LapColumns> stepper(problem, atol, rtol);
   Eigen::MatrixXd start = Eigen::MatrixXd::Zero(m, m + 1);
@@ -60,7 +63,35 @@ LapMap compute_lap_map(AdaptiveSystem& system, double lap_time,
   const Eigen::Map<const Eigen::MatrixXd> end(z.data(), m, m + 1);
   out.monodromy = end.leftCols(m);
   out.offset = end.col(m);
+  out.rhs_evaluations = system.rhs_evaluations() - rhs_before;
+  out.jacobian_evaluations = system.jacobian_evaluations() - jacobians_before;
   return out;
+}
+
+std::shared_ptr<const LapMap> LapMapCache::find_or_compute(
+    const std::string& key, const std::function<LapMap()>& compute) {
+  std::promise<std::shared_ptr<const LapMap>> promise;
+  std::shared_future<std::shared_ptr<const LapMap>> future;
+  bool computes = false;
+  {
+    std::lock_guard lock(mutex_);
+    const auto found = maps_.find(key);
+    if (found != maps_.end()) {
+      future = found->second;
+    } else {
+      future = promise.get_future().share();
+      maps_.emplace(key, future);
+      computes = true;
+    }
+  }
+  if (computes) {
+    try {
+      promise.set_value(std::make_shared<const LapMap>(compute()));
+    } catch (...) {
+      promise.set_exception(std::current_exception());
+    }
+  }
+  return future.get();
 }
 
 LapPowers::LapPowers(const LapMap& map) {

@@ -58,8 +58,25 @@ bool metric_may_be_nan(StudyKind kind, std::size_t position) {
 
 }  // namespace
 
+namespace {
+
+// The trial's key without its lap count: what identifies its lap map within a run.
+std::string lap_map_key(const TrialSpec& trial) {
+  std::string key;
+  std::size_t start = 0;
+  while (start <= trial.key.size()) {
+    const auto stop = std::min(trial.key.find(" | ", start), trial.key.size());
+    const auto part = trial.key.substr(start, stop - start);
+    if (!part.starts_with("laps=")) key += (key.empty() ? "" : " | ") + part;
+    start = stop + 3;
+  }
+  return key;
+}
+
+}  // namespace
+
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
-                      const std::function<bool()>& stop_requested) {
+                      const std::function<bool()>& stop_requested, LapMapCache* lap_maps) {
   TrialResult result;
   result.metrics.assign(study.all_metrics().size(),
                         std::numeric_limits<double>::quiet_NaN());
@@ -93,7 +110,8 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
       // The study's settings with this trial's lap count (a laps axis).
       auto measured = measure_adaptive(*kernel, *target, centres, *plant, *law, *integrator,
                                        trial_adaptive_settings(study, trial),
-                                       study.evaluation_points, study.solver);
+                                       study.evaluation_points, study.solver, lap_maps,
+                                       lap_maps ? lap_map_key(trial) : std::string());
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.engine = std::move(measured.engine);
@@ -157,6 +175,7 @@ struct RunState {
   std::condition_variable changed;
   std::size_t finished = 0;   // trials done, skipped or not (the whole run ends at trials.size())
   bool abandoned = false;     // run_trials has returned: no more writes, no more callbacks
+  LapMapCache lap_maps;       // shared by trials that differ only in their lap count
 };
 
 // One oneTBB task per trial. A task does not run the trial of its own index: it claims the next
@@ -190,7 +209,8 @@ void run_in_arena(RunState& state) {
             }
           }
           TrialResult result =
-              stop ? not_started() : run_trial(state.study, state.trials[i], options.stop_requested);
+              stop ? not_started() : run_trial(state.study, state.trials[i], options.stop_requested,
+                                         &state.lap_maps);
           std::lock_guard lock(state.mutex);
           if (state.abandoned) return;
           state.phase[i] = RunState::done;

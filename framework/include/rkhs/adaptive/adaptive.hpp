@@ -95,6 +95,7 @@ class AdaptiveSystem {
   Eigen::MatrixXd map_;  // from_phi: M, or empty when M is scale_ times the identity
   double scale_ = 0.0;
   mutable std::vector<double> phi_, psi_, dphi_, dpsi_;
+  mutable Eigen::MatrixXd column_scratch_;  // rhs_columns: phi^T alpha and b^T (x - xhat)
   mutable std::size_t rhs_count_ = 0, jacobian_count_ = 0;
 };
 
@@ -199,13 +200,17 @@ struct AdaptiveMeasurement {
   std::vector<Snapshot> snapshots;
 };
 
-/// Runs one adaptive trial. Throws on invalid input or failed integration.
+/// Runs one adaptive trial. Throws on invalid input or failed integration. With `lap_maps`, a
+/// lap map is looked up under `lap_map_key` (which must identify everything but the lap count)
+/// and computed only if no trial of the run has (rkhs/adaptive/lap_map.hpp).
 AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFunction& target,
                                      std::span<const double> centres, const class Plant& plant,
                                      const class LearningLaw& law, const Integrator& integrator,
                                      const AdaptiveSettings& settings,
                                      std::size_t evaluation_points,
-                                     const struct SolverOptions& solver);
+                                     const struct SolverOptions& solver,
+                                     class LapMapCache* lap_maps = nullptr,
+                                     const std::string& lap_map_key = {});
 
 }  // namespace rkhs
 

@@ -16,7 +16,7 @@
 //   k_alpha = (r_alpha + psi e) / c
 //   k_xhat  = (c I - A)^-1 r_xhat + u (phi . k_alpha)
 // with u = (c I - A)^-1 B, w^T = b^T (c I - A)^-1 and beta = b^T u. Factorising costs O(d^3 + n)
-// (the dot product phi . psi), each solve O(d^2 + n): no (2d + n)^2 matrix is formed.
+// (the dot product phi . psi), each solve O(d^2 + n) per column: no (2d + n)^2 matrix is formed.
 
 #include <Eigen/Dense>
 #include <complex>
@@ -44,8 +44,8 @@ class SingularStageMatrix : public std::runtime_error {
 
 /// Solves (c I - J) k = r for the J of a CoupledLinearization, Scalar = double or
 /// std::complex<double>. factor() keeps a reference to the linearization: it must outlive
-/// the solves. Nothing is allocated by solve() once the solver has been factored once at
-/// this size.
+/// the solves. Nothing is allocated by solve_in_place() once it has solved a block of the same
+/// number of columns.
 template <class Scalar>
 class ShiftedCoupledSolver {
  public:
@@ -59,55 +59,60 @@ class ShiftedCoupledSolver {
     const Eigen::Index d = linearization.plant_dimension();
     plant_matrix_ = -linearization.A->template cast<Scalar>();
     plant_matrix_.diagonal().array() += shift;
-    plant_lu_.compute(plant_matrix_);
-    const double pivot = plant_lu_.matrixLU().diagonal().cwiseAbs().minCoeff();
+    const Eigen::PartialPivLU<Matrix> lu(plant_matrix_);
+    const double pivot = lu.matrixLU().diagonal().cwiseAbs().minCoeff();
     if (!(pivot > 0)) throw SingularStageMatrix("c I - A is singular in a stage solve");
-    u_ = plant_lu_.solve(linearization.B->template cast<Scalar>());
-    // w^T = b^T (c I - A)^-1, i.e. w = (c I - A)^-T b.
-    w_ = plant_lu_.transpose().solve(linearization.b->template cast<Scalar>());
-    beta_ = linearization.b->template cast<Scalar>().dot(u_);
+    // (c I - A)^-1 explicitly: d is the plant's dimension (4 for the quarter car), and a d x d
+    // product applies it to every column of a block at once.
+    inverse_ = lu.inverse();
+    b_ = linearization.b->template cast<Scalar>();
+    phi_ = linearization.phi.template cast<Scalar>();
+    psi_ = linearization.psi.template cast<Scalar>();
+    u_.noalias() = inverse_ * linearization.B->template cast<Scalar>();
+    // w^T = b^T (c I - A)^-1.
+    w_.noalias() = inverse_.transpose() * b_;
+    beta_ = (b_.transpose() * u_)(0);
     const Scalar overlap = static_cast<Scalar>(linearization.phi.dot(linearization.psi));
     schur_ = Scalar(1) + beta_ * overlap / shift;
     if (!(std::abs(schur_) > 1e-300))
       throw SingularStageMatrix("the Schur complement of a stage solve vanishes");
-    scratch_.resize(d);
+    (void)d;
   }
 
   /// Overwrites each column of `rhs` (dimension() rows) with the solution k of (c I - J) k = r.
+  /// All columns at once: d x d and rank-one products over the block (no conjugation anywhere:
+  /// every product below is the plain bilinear one).
   template <class Derived>
   void solve_in_place(Eigen::MatrixBase<Derived>& rhs) const {
     const Eigen::Index d = lin_->plant_dimension(), n = lin_->phi.size();
-    const auto& phi = lin_->phi;
-    const auto& psi = lin_->psi;
-    const auto& b = *lin_->b;
-    for (Eigen::Index j = 0; j < rhs.cols(); ++j) {
-      auto column = rhs.col(j);
-      auto rx = column.segment(0, d);
-      auto rxhat = column.segment(d, d);
-      auto ralpha = column.segment(2 * d, n);
-      scratch_ = plant_lu_.solve(rx);  // k_x
-      // Eigen's dot() conjugates its first argument: every dot below has a real vector first,
-      // and the one product of two complex vectors (w^T r_xhat) is written as a plain sum.
-      const Scalar right = (b.template cast<Scalar>().dot(scratch_) -
-                            (w_.array() * rxhat.array()).sum()) -
-                           beta_ * phi.template cast<Scalar>().dot(ralpha) / shift_;
-      const Scalar e = right / schur_;
-      rx = scratch_;
-      ralpha = (ralpha + psi.template cast<Scalar>() * e) / shift_;
-      const Scalar phi_k = phi.template cast<Scalar>().dot(ralpha);
-      scratch_ = plant_lu_.solve(rxhat);
-      rxhat = scratch_ + u_ * phi_k;
-    }
+    auto rx = rhs.topRows(d);
+    auto rxhat = rhs.middleRows(d, d);
+    auto ralpha = rhs.bottomRows(n);
+    kx_.noalias() = inverse_ * rx;
+    // e = b^T (k_x - k_xhat), from e (1 + beta (phi . psi) / c)
+    //   = b^T k_x - w^T r_xhat - beta (phi . r_alpha) / c.
+    e_.noalias() = b_.transpose() * kx_;
+    e_.noalias() -= w_.transpose() * rxhat;
+    e_.noalias() -= (beta_ / shift_) * (phi_.transpose() * ralpha);
+    e_ /= schur_;
+    ralpha.noalias() += psi_ * e_;
+    ralpha /= shift_;
+    phi_k_.noalias() = phi_.transpose() * ralpha;
+    kxhat_.noalias() = inverse_ * rxhat;
+    kxhat_.noalias() += u_ * phi_k_;
+    rxhat = kxhat_;
+    rx = kx_;
   }
 
  private:
+  using RowVector = Eigen::Matrix<Scalar, 1, Eigen::Dynamic>;
   const CoupledLinearization* lin_ = nullptr;
   Scalar shift_{};
-  Matrix plant_matrix_;
-  Eigen::PartialPivLU<Matrix> plant_lu_;
-  Vector u_, w_;
+  Matrix plant_matrix_, inverse_;
+  Vector b_, phi_, psi_, u_, w_;
   Scalar beta_{}, schur_{};
-  mutable Vector scratch_;
+  mutable Matrix kx_, kxhat_;
+  mutable RowVector e_, phi_k_;
 };
 
 }  // namespace rkhs

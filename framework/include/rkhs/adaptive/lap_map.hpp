@@ -13,7 +13,13 @@
 
 #include <Eigen/Dense>
 #include <cstdint>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "rkhs/adaptive/adaptive.hpp"
@@ -24,6 +30,23 @@ struct LapMap {
   Eigen::MatrixXd monodromy;  ///< Phi, dimension() x dimension()
   Eigen::VectorXd offset;     ///< c
   IntegrationStats stats;     ///< of the one lap integrated (all columns share its steps)
+  std::size_t rhs_evaluations = 0;       ///< the system's, spent on this map
+  std::size_t jacobian_evaluations = 0;  ///< likewise
+};
+
+/// Lap maps shared by the trials of one run that differ only in their lap count (a laps
+/// axis): the first trial that asks for a key computes the map, trials asking for the same key
+/// meanwhile wait for it, later ones reuse it. The map is deterministic and carries its own
+/// cost (stats, evaluations), so sharing changes no result. Thread-safe; an exception of the
+/// computation reaches every trial that asked for the key.
+class LapMapCache {
+ public:
+  std::shared_ptr<const LapMap> find_or_compute(const std::string& key,
+                                                const std::function<LapMap()>& compute);
+
+ private:
+  std::mutex mutex_;
+  std::map<std::string, std::shared_future<std::shared_ptr<const LapMap>>> maps_;
 };
 
 /// Integrates one lap [0, lap_time] of `system` for the columns [I | 0]: Radau IIA (order 5)

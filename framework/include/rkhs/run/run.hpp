@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "rkhs/run/trial_cost.hpp"
+#include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
@@ -61,8 +62,11 @@ struct RunOptions {
 /// Runs one trial; never throws (failures are returned as results). `stop_requested` is its
 /// cancellation predicate (rkhs/core/cancellation.hpp): a trial stopped by it is returned `skipped`.
 /// limits.trial_seconds is enforced at the trial's cancellation points as it runs.
+/// `lap_maps`, when given, is shared by the trials of one run: trials that differ only in their
+/// lap count compute their lap map once (rkhs/adaptive/lap_map.hpp; results are unchanged).
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
-                      const std::function<bool()>& stop_requested = {});
+                      const std::function<bool()>& stop_requested = {},
+                      LapMapCache* lap_maps = nullptr);
 
 /// True once run_trials abandoned a trial in this process: its thread still runs, so the
 /// process must end with std::_Exit (after flushing its output), not by returning from main.
