@@ -1,4 +1,5 @@
 #include "rkhs/run/run.hpp"
+#include "rkhs/run/trial_cost.hpp"
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
@@ -54,23 +55,6 @@ TrialResult stopped_while_running() {
 bool metric_may_be_nan(StudyKind kind, std::size_t position) {
   if (kind == StudyKind::adaptive) return MetricTable<AdaptiveMetric>::rows[position].may_be_nan;
   return MetricTable<ApproximationMetric>::rows[position].may_be_nan;
-}
-
-}  // namespace
-
-namespace {
-
-// The trial's key without its lap count: what identifies its lap map within a run.
-std::string lap_map_key(const TrialSpec& trial) {
-  std::string key;
-  std::size_t start = 0;
-  while (start <= trial.key.size()) {
-    const auto stop = std::min(trial.key.find(" | ", start), trial.key.size());
-    const auto part = trial.key.substr(start, stop - start);
-    if (!part.starts_with("laps=")) key += (key.empty() ? "" : " | ") + part;
-    start = stop + 3;
-  }
-  return key;
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <exception>
 #include <numeric>
+#include <set>
+#include <string>
 #include <string_view>
 
 #include "rkhs/adaptive/adaptive.hpp"
@@ -97,10 +99,32 @@ double estimated_trial_cost(const StudyDefinition& study, const TrialSpec& trial
   return adaptive_trial_cost(adaptive_trial_shape(study, trial), study.evaluation_points);
 }
 
+std::string lap_map_key(const TrialSpec& trial) {
+  std::string key;
+  std::size_t start = 0;
+  while (start <= trial.key.size()) {
+    const auto stop = std::min(trial.key.find(" | ", start), trial.key.size());
+    const auto part = trial.key.substr(start, stop - start);
+    if (!part.starts_with("laps=")) key += (key.empty() ? "" : " | ") + part;
+    start = stop + 3;
+  }
+  return key;
+}
+
 std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
                                              const std::vector<TrialSpec>& trials) {
   std::vector<double> cost(trials.size());
-  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = estimated_trial_cost(study, trials[i]);
+  std::set<std::string> mapped;  // lap maps already counted
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    cost[i] = estimated_trial_cost(study, trials[i]);
+    if (study.kind != StudyKind::adaptive) continue;
+    auto shape = adaptive_trial_shape(study, trials[i]);
+    if (shape.lap_map && !mapped.insert(lap_map_key(trials[i])).second) {
+      shape.lap_map = false;
+      shape.laps = 2;  // the first and the last lap, integrated; the map is shared
+      cost[i] = adaptive_trial_cost(shape, study.evaluation_points);
+    }
+  }
   std::vector<std::size_t> order(trials.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(),

@@ -59,8 +59,14 @@ AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const Tria
 /// for a trial of study.trials().
 double estimated_trial_cost(const StudyDefinition& study, const TrialSpec& trial);
 
+/// The trial's key without its lap count: what identifies its lap map among the trials of a
+/// run (trials on a laps axis share one, rkhs/adaptive/lap_map.hpp).
+std::string lap_map_key(const TrialSpec& trial);
+
 /// The positions of `trials` ordered by estimated cost, largest first (ties keep grid order):
-/// the order in which both schedulers start trials.
+/// the order in which both schedulers start trials. Of the trials that share a lap map, the
+/// first in grid order carries the map's cost and the others only their own laps, so the maps
+/// are computed first and, on several threads, not twice at once.
 std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
                                              const std::vector<TrialSpec>& trials);
 
