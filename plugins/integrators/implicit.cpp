@@ -27,27 +27,6 @@ std::vector<ParameterSpec> implicit_parameters() {
   return parameters;
 }
 
-/// One trajectory of an AdaptiveSystem as a RadauProblem (one column).
-class TrajectoryProblem {
- public:
-  TrajectoryProblem(AdaptiveSystem& system, LinearSolver solver)
-      : system_(system), solves_(system, solver) {}
-  Eigen::Index rows() const { return system_.dimension(); }
-  Eigen::Index columns() const { return 1; }
-  void rhs(double t, const Eigen::MatrixXd& z, Eigen::MatrixXd& dz) {
-    system_.rhs(z.data(), dz.data(), t);
-  }
-  void factor(double t, double real_shift, std::complex<double> complex_shift) {
-    solves_.factor(t, real_shift, complex_shift);
-  }
-  void solve_real(Eigen::MatrixXd& r) const { solves_.solve_real(r); }
-  void solve_complex(Eigen::MatrixXcd& r) const { solves_.solve_complex(r); }
-
- private:
-  AdaptiveSystem& system_;
-  StageSolves solves_;
-};
-
 class Radau5 final : public AdaptiveStepIntegrator {
  public:
   static PluginInfo info() {
@@ -62,8 +41,8 @@ class Radau5 final : public AdaptiveStepIntegrator {
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
-    TrajectoryProblem problem(system, solver_);
-    RadauIIA5<TrajectoryProblem> stepper(problem, atol_, rtol_);
+    TrajectoryStages problem(system, solver_);
+    RadauIIA5<TrajectoryStages> stepper(problem, atol_, rtol_);
     return drive_steps(stepper, z, breakpoints, observe,
                        {max_steps_, initial_step_, restart_, {}});
   }

@@ -15,7 +15,7 @@
 //
 // Families (each fitted with ->Complexity):
 //   step/<kernel>/<law>/<solver>  one Radau IIA (order 5) step of one trajectory (RadauIIA5 on a
-//     one-column problem, exactly TrajectoryProblem of plugins/integrators/implicit.cpp) at
+//     one-column problem, TrajectoryStages of rkhs/adaptive/stage_solves.hpp) at
 //     rtol 1e-6, atol 1e-8, from a fixed state on a trajectory (1 s after t = 2.5e4 s, the
 //     plant's transients gone) with a fixed h (the controller's, counter `h`): the state copy,
 //     reset(), and try_step: 1 rhs at the start, StageSolves::factor (one linearisation = one basis
@@ -174,39 +174,17 @@ Eigen::VectorXd start_state(Eigen::Index m) {
 
 constexpr double t0 = 2.5e4;  // s = 2.5 m: inside the track, on no knot
 constexpr double h = 1e-3;    // s
-// Radau IIA's shifts mu / h (radau.hpp).
-const double mu_real = 3 + std::cbrt(9.0) - std::cbrt(3.0);
-const std::complex<double> mu_complex{3 + 0.5 * (std::cbrt(3.0) - std::cbrt(9.0)),
-                                      -0.5 * (std::pow(3.0, 5.0 / 6) + std::pow(3.0, 7.0 / 6))};
-
-// One trajectory as a RadauProblem: TrajectoryProblem of plugins/integrators/implicit.cpp.
-class OneTrajectory {
- public:
-  OneTrajectory(AdaptiveSystem& system, LinearSolver solver)
-      : system_(system), solves_(system, solver) {}
-  Eigen::Index rows() const { return system_.dimension(); }
-  Eigen::Index columns() const { return 1; }
-  void rhs(double t, const Eigen::MatrixXd& z, Eigen::MatrixXd& dz) {
-    system_.rhs(z.data(), dz.data(), t);
-  }
-  void factor(double t, double real_shift, std::complex<double> complex_shift) {
-    solves_.factor(t, real_shift, complex_shift);
-  }
-  void solve_real(Eigen::MatrixXd& r) const { solves_.solve_real(r); }
-  void solve_complex(Eigen::MatrixXcd& r) const { solves_.solve_complex(r); }
-
- private:
-  AdaptiveSystem& system_;
-  StageSolves solves_;
-};
+// Radau IIA's shifts mu / h.
+const double mu_real = RadauIIA5<TrajectoryStages>::mu_real;
+const std::complex<double> mu_complex = RadauIIA5<TrajectoryStages>::mu_complex;
 
 // Integrates 1 s (the plant's transients decay) from start_state at t0 with structured
 // Radau IIA steps at rtol 1e-6, atol 1e-8; the timed step starts from the state reached, with
 // the step size the controller proposes there, halved until a step from a reset stepper is
 // accepted.
 void prepare_step(Engine& e) {
-  OneTrajectory problem(*e.system, LinearSolver::structured);
-  RadauIIA5<OneTrajectory> stepper(problem, 1e-8, 1e-6);
+  TrajectoryStages problem(*e.system, LinearSolver::structured);
+  RadauIIA5<TrajectoryStages> stepper(problem, 1e-8, 1e-6);
   const Eigen::Index m = e.system->dimension();
   const Eigen::VectorXd z0 = start_state(m);
   std::copy(z0.data(), z0.data() + m, stepper.state());
@@ -227,8 +205,8 @@ void implicit_step(benchmark::State& state, const KernelCase& kernel_case, bool 
                    LinearSolver solver) {
   const auto n = static_cast<std::size_t>(state.range(0));
   auto& e = engine(kernel_case, rkhs_law, n);
-  OneTrajectory problem(*e.system, solver);
-  RadauIIA5<OneTrajectory> stepper(problem, 1e-8, 1e-6);
+  TrajectoryStages problem(*e.system, solver);
+  RadauIIA5<TrajectoryStages> stepper(problem, 1e-8, 1e-6);
   const Eigen::VectorXd& z0 = e.step_state;
   const std::size_t rhs_before = e.system->rhs_evaluations();
   const std::size_t newton_before = stepper.newton_iterations();

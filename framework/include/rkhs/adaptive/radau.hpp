@@ -46,6 +46,14 @@ concept RadauProblem =
 template <RadauProblem Problem>
 class RadauIIA5 {
  public:
+  /// The real and complex eigenvalues mu of the inverse Butcher matrix: a step of size h
+  /// factorises (mu / h I - J) for both (RadauProblem::factor).
+  static inline const double mu_real =
+      3 + std::cbrt(9.0) - std::cbrt(3.0);  // 3 + 3^(2/3) - 3^(1/3)
+  static inline const std::complex<double> mu_complex{
+      3 + 0.5 * (std::cbrt(3.0) - std::cbrt(9.0)),
+      -0.5 * (std::pow(3.0, 5.0 / 6) + std::pow(3.0, 7.0 / 6))};
+
   RadauIIA5(Problem& problem, double atol, double rtol)
       : problem_(problem),
         atol_(atol),
@@ -168,11 +176,6 @@ class RadauIIA5 {
       {13.0 / 3 + 7 * sqrt6 / 3, -23.0 / 3 - 22 * sqrt6 / 3, 10.0 / 3 + 5 * sqrt6},
       {13.0 / 3 - 7 * sqrt6 / 3, -23.0 / 3 + 22 * sqrt6 / 3, 10.0 / 3 - 5 * sqrt6},
       {1.0 / 3, -8.0 / 3, 10.0 / 3}};
-  static inline const double mu_real =
-      3 + std::cbrt(9.0) - std::cbrt(3.0);  // 3 + 3^(2/3) - 3^(1/3)
-  static inline const std::complex<double> mu_complex{
-      3 + 0.5 * (std::cbrt(3.0) - std::cbrt(9.0)),
-      -0.5 * (std::pow(3.0, 5.0 / 6) + std::pow(3.0, 7.0 / 6))};
   static constexpr int max_newton = 6;
   static constexpr double min_factor = 0.2, max_factor = 10;
 

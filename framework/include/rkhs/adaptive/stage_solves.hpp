@@ -48,4 +48,26 @@ class StageSolves {
   Eigen::PartialPivLU<Eigen::MatrixXcd> complex_lu_;
 };
 
+/// One trajectory of an AdaptiveSystem as a RadauProblem (rkhs/adaptive/radau.hpp): one
+/// column, the system's own right-hand side, and its stage solves.
+class TrajectoryStages {
+ public:
+  TrajectoryStages(AdaptiveSystem& system, LinearSolver solver)
+      : system_(system), solves_(system, solver) {}
+  Eigen::Index rows() const { return system_.dimension(); }
+  Eigen::Index columns() const { return 1; }
+  void rhs(double t, const Eigen::MatrixXd& z, Eigen::MatrixXd& dz) {
+    system_.rhs(z.data(), dz.data(), t);
+  }
+  void factor(double t, double real_shift, std::complex<double> complex_shift) {
+    solves_.factor(t, real_shift, complex_shift);
+  }
+  void solve_real(Eigen::MatrixXd& r) const { solves_.solve_real(r); }
+  void solve_complex(Eigen::MatrixXcd& r) const { solves_.solve_complex(r); }
+
+ private:
+  AdaptiveSystem& system_;
+  StageSolves solves_;
+};
+
 }  // namespace rkhs
