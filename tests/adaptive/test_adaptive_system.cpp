@@ -101,7 +101,8 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                                           "slowest_time_constant_laps",
                                           "laps_to_limit",
                                           "unexcited_directions",
-                                          "lap_map_residual"};
+                                          "lap_map_residual",
+                                          "integration_error"};
   CHECK(adaptive_metric_names() == expected);
   std::vector<std::string> may_be_nan;
   for (const auto& row : MetricTable<AdaptiveMetric>::rows)
@@ -110,5 +111,6 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                                                "lyapunov_max_increase", "lyapunov_ratio",
                                                "learning_spectral_radius",
                                                "slowest_time_constant_laps", "laps_to_limit",
-                                               "unexcited_directions", "lap_map_residual"});
+                                               "unexcited_directions", "lap_map_residual",
+                                               "integration_error"});
 }

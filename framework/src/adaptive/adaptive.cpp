@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -149,6 +150,23 @@ std::vector<std::uint64_t> lap_boundaries(std::uint64_t laps) {
 
 }  // namespace
 
+namespace {
+
+// The state at the last breakpoint, integrated from z = 0 with `reference` through `points`
+// (what the trial's time stepping lands on, with the reference's own kink restarts): the
+// reference solution integration_error compares with. Observes nothing but cancellation.
+Eigen::VectorXd reference_state(AdaptiveSystem& system, const Integrator& reference,
+                                const std::vector<Breakpoint>& points) {
+  std::vector<double> times(points.size());
+  std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(system.dimension());
+  reference.integrate(system, z, times,
+                      [](std::size_t, const double*) { check_cancelled(); });
+  return z;
+}
+
+}  // namespace
+
 AdaptiveSystem::LearningSignal learning_signal_for(const AnyKernel& kernel) {
   // A feature basis applies M to its precomputed features, cheaper than M phi for a full M.
   return kernel.feature_count() > 0 ? AdaptiveSystem::LearningSignal::by_basis
@@ -160,7 +178,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                      const LearningLaw& law, const Integrator& integrator,
                                      const AdaptiveSettings& settings,
                                      std::size_t evaluation_points,
-                                     const SolverOptions& solver_options, LapMapCache* lap_maps,
+                                     const SolverOptions& solver_options,
+                                     const Integrator* reference, LapMapCache* lap_maps,
                                      const std::string& lap_map_key) {
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(centres.size());
@@ -232,6 +251,9 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   const double lap_time = domain.length / settings.speed;
   const AdaptiveEngine engine = adaptive_engine_for(settings, m);
   out.engine = engine == AdaptiveEngine::lap_map ? "lap_map" : "time_stepping";
+  if (reference && engine != AdaptiveEngine::time_stepping)
+    throw std::invalid_argument(
+        "a reference integration needs time stepping (engine = \"time_stepping\")");
 
   // V = 1/2 e^T P e + 1/2 Gamma (alpha* - alpha)^T W (alpha* - alpha), W = G (rkhs law) or I.
   const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
@@ -400,6 +422,19 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       static_cast<double>(system.rhs_evaluations() + reused_rhs_evaluations);
   metrics[M::jacobian_evaluations] =
       static_cast<double>(system.jacobian_evaluations() + reused_jacobian_evaluations);
+  if (reference) {  // after the cost metrics: the reference's evaluations are not the trial's
+    const double final_time = settings.final_time_or_laps(domain.length);
+    const auto started = std::chrono::steady_clock::now();
+    const Eigen::VectorXd z_ref = reference_state(
+        system, *reference,
+        breakpoints(settings, domain, 0.0, final_time, kinks, reference->restarts_at_kinks(),
+                    /*snapshots=*/true));
+    out.reference_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const Eigen::VectorXd estimate_ref = cross * z_ref.tail(n);
+    const double norm_ref = l2(estimate_ref);
+    metrics[M::integration_error] = l2(estimate - estimate_ref) / std::max(norm_ref, 1e-300);
+  }
   return out;
 }
 

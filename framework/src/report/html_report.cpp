@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <utility>
@@ -172,16 +173,32 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
     for (const auto& table : tables)
       if (table.metric == metric) page += rates_table(table);
   }
-  // Other plots (adaptive studies).
-  std::string others;
+  // Other plots (adaptive studies): work precision (a study with a reference integrator),
+  // then estimates and state errors. In name order, so that panels come in a stable order.
+  std::string work_precision, others;
+  std::vector<std::filesystem::path> svgs;
   if (!plots.empty() && std::filesystem::exists(plots))
-    for (const auto& entry : std::filesystem::directory_iterator(plots)) {
-      const auto name = entry.path().filename().string();
-      if (entry.path().extension() == ".svg" && !name.starts_with("convergence_"))
-        others += fmt::format(
-            "<p><img class=\"plot\" alt=\"{0}\" src=\"data:image/svg+xml;base64,{1}\"></p>\n",
-            escape_html(name), base64(read_file(entry.path())));
-    }
+    for (const auto& entry : std::filesystem::directory_iterator(plots))
+      if (entry.path().extension() == ".svg") svgs.push_back(entry.path());
+  std::sort(svgs.begin(), svgs.end());
+  for (const auto& svg : svgs) {
+    const auto name = svg.filename().string();
+    if (name.starts_with("convergence_")) continue;
+    (name.starts_with("work_precision_") ? work_precision : others) += fmt::format(
+        "<p><img class=\"plot\" alt=\"{0}\" src=\"data:image/svg+xml;base64,{1}\"></p>\n",
+        escape_html(name), base64(read_file(svg)));
+  }
+  if (!work_precision.empty())
+    page += fmt::format(
+        "<h2 id=\"work-precision\">Work precision</h2>\n<p class=\"caption\">integration_error "
+        "(the relative L2 distance of fhat(T) from the reference integration with {}) against "
+        "each trial's wall time and against its accepted steps, one line per integrator, "
+        "points labelled with their rtol. Wall time is not deterministic: it depends on the "
+        "machine, its load and the {} threads the trials shared (and includes the trial's "
+        "static part; the reference integration is not counted in steps, but it is in wall "
+        "time); steps and errors are reproducible.</p>\n",
+        escape_html(study.reference.label()), run.threads) +
+            work_precision;
   if (!others.empty()) page += "<h2>Estimates and state errors</h2>\n" + others;
   // The page reports whether every plot loaded (read by the project's browser test).
   page += R"(<script>

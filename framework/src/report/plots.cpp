@@ -10,6 +10,7 @@
 #include <fstream>
 #include <algorithm>
 #include <map>
+#include <variant>
 
 namespace rkhs {
 
@@ -140,6 +141,119 @@ std::string convergence_script(const RunRecord& run, const std::string& metric) 
          "plot " + plot + "\n";
 }
 
+// The tolerances a line of a work-precision plot runs through (the integrator's other
+// parameters make other lines).
+bool is_tolerance(std::string_view parameter) {
+  return parameter == "rtol" || parameter == "atol" || parameter == "step";
+}
+
+// Where a point lies along its line: the relative tolerance (or rk4's step), loosest first.
+double looseness(const PluginChoice& integrator) {
+  for (const char* name : {"rtol", "step"})
+    for (const auto& [parameter, value] : integrator.parameters.values())
+      if (parameter == name) {
+        if (const auto* real = std::get_if<double>(&value)) return *real;
+        if (const auto* integer = std::get_if<std::int64_t>(&value))
+          return static_cast<double>(*integer);
+      }
+  return 0;
+}
+
+// The integrator without its tolerances: one line of a work-precision plot.
+std::string line_key(const PluginChoice& integrator) {
+  std::string out = integrator.name;
+  for (const auto& [parameter, value] : integrator.parameters.values())
+    if (!is_tolerance(parameter) && integrator.parameters.given(parameter))
+      out += " " + parameter + "=" + format_value(value);
+  return out;
+}
+
+// Work-precision plots (DiffEqDevTools' WorkPrecisionSet) of a study with a reference
+// integrator: per panel (every axis but the integrator and its tolerances, n included), the
+// integration_error of each trial against its wall time and against its steps, one line per
+// integrator, its points ordered from the loosest tolerance to the tightest.
+void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
+  const auto error_index = run.study.metric_index("integration_error");
+  const auto steps_index = run.study.metric_index("steps");
+  std::vector<std::string> panels;
+  std::map<std::string, std::vector<std::size_t>> members;  // panel -> trials
+  for (const auto& trial : run.trials) {
+    std::string panel = fmt::format("kernel={} | target={} | centres={} | plant={} | law={}",
+                                    trial.kernel.label(), trial.target.label(),
+                                    trial.centres.label(), trial.plant.label(), trial.law.label());
+    if (trial.laps) panel += " | laps=" + laps_text(*trial.laps);
+    panel += fmt::format(" | n={}", trial.n);
+    if (!members.contains(panel)) panels.push_back(panel);
+    members[panel].push_back(trial.index);
+  }
+  for (std::size_t p = 0; p < panels.size(); ++p) {
+    // Lines in the order their integrators first appear; points by decreasing tolerance.
+    std::vector<std::string> lines;
+    std::map<std::string, std::vector<std::size_t>> points;
+    for (auto index : members[panels[p]]) {
+      const auto& result = run.results[index];
+      if (!result.ok || !usable_on_log_axis(result.metrics[error_index]) ||
+          !usable_on_log_axis(result.seconds))
+        continue;
+      const auto key = line_key(run.trials[index].integrator);
+      if (!points.contains(key)) lines.push_back(key);
+      points[key].push_back(index);
+    }
+    const auto& first = run.trials[members[panels[p]].front()];
+    const auto time_stem = fmt::format("work_precision_time_panel{}", p + 1);
+    const auto steps_stem = fmt::format("work_precision_steps_panel{}", p + 1);
+    if (lines.empty()) {
+      for (const auto& stem : {time_stem, steps_stem})
+        plan.notes.push_back(fmt::format(
+            "{}: not plotted: no trial of panel {} ({}) has a finite positive integration_error",
+            stem, p + 1, panels[p]));
+      continue;
+    }
+    std::string data, plot_time, plot_steps;
+    for (std::size_t l = 0; l < lines.size(); ++l) {
+      auto& indices = points[lines[l]];
+      std::stable_sort(indices.begin(), indices.end(), [&](std::size_t a, std::size_t b) {
+        return looseness(run.trials[a].integrator) > looseness(run.trials[b].integrator);
+      });
+      // seconds, steps, integration_error, tolerance
+      data += fmt::format("$line{} << EOD\n", l);
+      for (auto index : indices)
+        data += fmt::format("{} {} {} {}\n", format_real(run.results[index].seconds),
+                            format_real(run.results[index].metrics[steps_index]),
+                            format_real(run.results[index].metrics[error_index]),
+                            format_real(looseness(run.trials[index].integrator)));
+      data += "EOD\n";
+      const auto title = gnuplot_string(lines[l]);
+      for (const auto& [plot, column] : {std::pair<std::string*, int>{&plot_time, 1},
+                                         std::pair<std::string*, int>{&plot_steps, 2}})
+        *plot += fmt::format(
+            "{}$line{} using {}:3 with linespoints pt 7 lc {} title {}, $line{} using {}:3:(sprintf"
+            "('%g', $4)) with labels offset char 0.6,0.6 font ',8' tc lt {} notitle",
+            plot->empty() ? "" : ", ", l, column, l + 1, title, l, column, l + 1);
+    }
+    const auto where = fmt::format("{}, {}, n = {}{}", first.kernel.label(), first.law.name,
+                                   first.n, first.laps ? ", laps=" + laps_text(*first.laps) : "");
+    std::string tolerances;
+    for (const auto& [parameter, value] : run.study.reference.parameters.values())
+      if (is_tolerance(parameter)) tolerances += " " + parameter + "=" + format_value(value);
+    const auto title = fmt::format("work precision: {}; reference {}{}", where,
+                                   run.study.reference.name, tolerances);
+    const std::string ylabel = "integration error (relative L2 of fhat(T))";
+    plan.scripts.emplace_back(
+        time_stem,
+        data +
+            header(title,
+                   fmt::format("wall time of the trial, s (not deterministic: machine, load, {} "
+                               "threads); labels: rtol",
+                               run.threads),
+                   ylabel, true, true) +
+            "set key inside bottom left box\nplot " + plot_time + "\n");
+    plan.scripts.emplace_back(
+        steps_stem, data + header(title, "accepted steps; labels: rtol", ylabel, true, true) +
+                        "set key inside bottom left box\nplot " + plot_steps + "\n");
+  }
+}
+
 }  // namespace
 
 PlotPlan plot_scripts(const RunRecord& run) {
@@ -154,6 +268,7 @@ PlotPlan plot_scripts(const RunRecord& run) {
           metric, metric));
   }
   if (run.study.kind != StudyKind::adaptive) return plan;
+  if (!run.study.reference.name.empty()) work_precision_scripts(run, plan);
 
   // Per group: the estimates at each snapshot lap (largest n of the group) against the road,
   // and |x - xhat| and V against time for every n.

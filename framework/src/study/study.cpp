@@ -126,6 +126,7 @@ std::string laps_text(double laps) {
 
 AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial) {
   AdaptiveSettings settings = study.adaptive;
+  if (!study.reference.name.empty()) settings.engine = AdaptiveEngine::time_stepping;
   if (!trial.laps) return settings;
   settings.laps = *trial.laps;
   std::erase_if(settings.snapshot_laps, [&](double lap) { return lap > settings.laps; });

@@ -224,7 +224,71 @@ double parse_lap_count(const Reporter& report, const toml::node& node, bool in_l
 struct AdaptiveSection {
   AdaptiveSettings settings;
   std::vector<double> laps_values;  // the laps axis; empty for one value
+  PluginChoice reference;           // [adaptive] reference; empty name: none
 };
+
+// reference = { integrator = "radau5", rtol = 1e-11, atol = 1e-10 }: an integrator and its
+// parameters (one value each, resolved against the integrator's declared parameters; those
+// left out take the integrator's defaults, rtol and atol the reference's: 1e-11 and 1e-10).
+PluginChoice parse_reference(const Reporter& report, const toml::node& node) {
+  constexpr const char* key = "adaptive.reference";
+  const auto* table = node.as_table();
+  if (!table)
+    report.fail(node.source(), key,
+                fmt::format("expected an inline table {{ integrator = \"radau5\", rtol = 1e-11, "
+                            "atol = 1e-10 }}, found {} ({})",
+                            describe(node), show(node)));
+  const auto* name_node = table->get("integrator");
+  if (!name_node)
+    report.fail(table->source(), key,
+                fmt::format("missing 'integrator': the reference integrator's name (known: {})",
+                            fmt::join(integrator_registry().names(), ", ")));
+  if (!name_node->is_string())
+    report.fail(name_node->source(), "adaptive.reference.integrator",
+                fmt::format("expected an integrator name, found {} ({})", describe(*name_node),
+                            show(*name_node)));
+  const std::string name = name_node->as_string()->get();
+  const auto* plugin = integrator_registry().find(name);
+  if (!plugin)
+    report.fail(name_node->source(), "adaptive.reference.integrator",
+                fmt::format("unknown integrator '{}' {}", name,
+                            with_suggestion(name, integrator_registry().names())));
+  const auto& specs = plugin->info.parameters;
+  std::vector<std::string> known;
+  for (const auto& spec : specs) known.push_back(spec.name);
+  std::map<std::string, ParameterValue> given;
+  std::map<std::string, toml::source_region> where;
+  for (auto&& [k, value] : *table) {
+    const std::string parameter(k.str());
+    if (parameter == "integrator") continue;
+    const std::string qualified = std::string(key) + "." + parameter;
+    if (std::find(known.begin(), known.end(), parameter) == known.end())
+      report.fail(k.source(), qualified,
+                  fmt::format("unknown parameter of integrator '{}' {}", name,
+                              known.empty() ? std::string("(it has none)")
+                                            : with_suggestion(parameter, known)));
+    auto scalar = scalar_value(value);
+    if (!scalar)
+      report.fail(value.source(), qualified,
+                  fmt::format("expected one value (a reference is not an axis), found {}",
+                              describe(value)));
+    given[parameter] = std::move(*scalar);
+    where[parameter] = value.source();
+  }
+  // The reference's own defaults where the integrator declares rtol and atol.
+  for (const auto& [parameter, fallback] : {std::pair<const char*, double>{"rtol", 1e-11},
+                                            std::pair<const char*, double>{"atol", 1e-10}})
+    if (std::find(known.begin(), known.end(), parameter) != known.end() &&
+        !given.contains(parameter))
+      given[parameter] = ParameterValue(fallback);
+  try {
+    return PluginChoice{name, ParameterSet::resolve(specs, given), {}};
+  } catch (const ParameterError& e) {
+    const auto found = where.find(e.parameter());
+    report.fail(found != where.end() ? found->second : table->source(),
+                std::string(key) + "." + e.parameter(), e.what());
+  }
+}
 
 // `track_length` is the domain's length (a final time in laps, for snapshot_laps).
 AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
@@ -236,7 +300,7 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
     report.fail({}, "adaptive", "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
   check_keys(report, *table, "adaptive.",
              {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
-              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol"});
+              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol", "reference"});
   settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
 
   const std::vector<std::string> engines{"automatic", "lap_map", "time_stepping"};
@@ -297,6 +361,21 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
     settings.laps = lap_counts.front().first;
   }
   settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, -1e-300);
+
+  // The reference integrates every trial once more by time stepping: never with the lap map.
+  if (const auto* reference = table->get("reference")) {
+    section.reference = parse_reference(report, *reference);
+    if (settings.engine == AdaptiveEngine::lap_map)
+      report.fail(table->get("engine")->source(), "adaptive.engine",
+                  "found \"lap_map\" with a reference: integration_error compares time stepping "
+                  "with time stepping; use engine = \"automatic\" or \"time_stepping\" (a study "
+                  "with a reference steps through time), or remove reference");
+    for (const auto& [laps, node] : lap_counts)
+      if (std::isinf(laps))
+        report.fail(node->source(), "adaptive.laps",
+                    "found \"limit\" with a reference, which integrates by time stepping and "
+                    "cannot reach the periodic limit; give a number of laps or remove reference");
+  }
 
   settings.q = get_string(report, *table, "q", "adaptive.", std::string("identity"));
   try {
@@ -539,6 +618,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     auto adaptive = parse_adaptive(report, root, study.domain.length);
     study.adaptive = std::move(adaptive.settings);
     study.laps_values = std::move(adaptive.laps_values);
+    study.reference = std::move(adaptive.reference);
     if (study.adaptive.snapshot_points == 0) study.adaptive.snapshot_points = study.evaluation_points;
   }
 

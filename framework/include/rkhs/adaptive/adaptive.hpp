@@ -198,17 +198,29 @@ struct AdaptiveMeasurement {
   std::vector<TimeSample> samples;
   std::vector<double> road;  ///< f on the snapshot grid
   std::vector<Snapshot> snapshots;
+  /// Wall time of the reference integration (0 without a reference): run_trial leaves it out
+  /// of the trial's wall time, which then measures the trial's own integrator.
+  double reference_seconds = 0;
 };
 
-/// Runs one adaptive trial. Throws on invalid input or failed integration. With `lap_maps`, a
-/// lap map is looked up under `lap_map_key` (which must identify everything but the lap count)
-/// and computed only if no trial of the run has (rkhs/adaptive/lap_map.hpp).
+/// Runs one adaptive trial. Throws on invalid input or failed integration.
+///
+/// With a `reference` integrator ([adaptive] reference), the trial must step through time
+/// (adaptive_engine_for must give time_stepping; std::invalid_argument otherwise): after the
+/// trial's own integration the same system is integrated again from z = 0 over the same
+/// breakpoints with `reference`, and integration_error = ||fhat(T) - fhat_ref(T)||_L2 /
+/// ||fhat_ref(T)||_L2 on the evaluation grid. steps, rhs_evaluations and the other cost metrics
+/// count the trial's own integrator only. Without a reference integration_error is NaN.
+///
+/// With `lap_maps`, a lap map is looked up under `lap_map_key` (which must identify everything
+/// but the lap count) and computed only if no trial of the run has (rkhs/adaptive/lap_map.hpp).
 AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFunction& target,
                                      std::span<const double> centres, const class Plant& plant,
                                      const class LearningLaw& law, const Integrator& integrator,
                                      const AdaptiveSettings& settings,
                                      std::size_t evaluation_points,
                                      const struct SolverOptions& solver,
+                                     const Integrator* reference = nullptr,
                                      class LapMapCache* lap_maps = nullptr,
                                      const std::string& lap_map_key = {});
 

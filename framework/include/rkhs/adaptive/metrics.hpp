@@ -37,12 +37,13 @@ enum class AdaptiveMetric : std::size_t {
   laps_to_limit,
   unexcited_directions,
   lap_map_residual,
+  integration_error,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 27> rows{{
+  static constexpr std::array<MetricRow<M>, 28> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -97,6 +98,10 @@ struct MetricTable<AdaptiveMetric> {
       {M::lap_map_residual, "lap_map_residual", "1",
        "|z(T) integrated over the last lap - z(T) from the lap map| / |z(T)|; NaN unless "
        "engine = lap_map with whole laps",
+       true, ""},
+      {M::integration_error, "integration_error", "1",
+       "||fhat(T) - fhat_ref(T)|| / ||fhat_ref(T)|| in L2(Omega), fhat_ref integrated with "
+       "[adaptive] reference (time stepping, same breakpoints); NaN without a reference",
        true, ""},
   }};
 };

@@ -2,7 +2,11 @@
 // Plots of a finished run with gnuplot (SVG and PNG, no display needed): one convergence plot
 // per metric (log-log points per group, the fitted rate as a line with its 95% confidence band,
 // flagged values hollow), and for adaptive studies the estimate against the road at each
-// snapshot lap and |x - xhat| and V against time, per group.
+// snapshot lap and |x - xhat| and V against time, per group; for adaptive studies with a
+// reference integrator ([adaptive] reference), work-precision plots: per panel (every axis but
+// the integrator and its tolerances), integration_error against each trial's wall time
+// (work_precision_time_panelK; not deterministic) and against its steps
+// (work_precision_steps_panelK), one line per integrator, points ordered by tolerance.
 
 #include <filesystem>
 #include <string>

@@ -27,7 +27,8 @@ struct TrialResult {
   std::string solve_method;       ///< how the Gram matrix was solved
   std::string engine;             ///< adaptive trials: "time_stepping" or "lap_map"
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
-  double seconds = 0;             ///< wall time (not part of the deterministic results)
+  double seconds = 0;             ///< wall time (not part of the deterministic results),
+                                  ///< without the reference integration of integration_error
   std::string data_provenance;    ///< the target's external data ("sha256:..."), empty if none
   bool skipped = false;           ///< not run: the run was interrupted before it ended
   bool stopped_while_running = false;  ///< skipped after it had started (else never started)

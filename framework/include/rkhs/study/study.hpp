@@ -108,6 +108,10 @@ struct StudyDefinition {
   /// What the file asks for that is valid but doubtful, as "file:line:column: key: why" (e.g. an
   /// evaluation grid too coarse for the largest n); `validate`, `run` and `check` print them.
   std::vector<std::string> warnings;
+  /// [adaptive] reference = { integrator = "radau5", rtol = 1e-11, atol = 1e-10 }: the
+  /// integrator (with its resolved parameters) every trial also integrates with, for
+  /// integration_error; its trials step through time. An empty name: no reference.
+  PluginChoice reference;
 
   /// The Cartesian product kernels x targets x centres [x plants x laws x integrators]
   /// [x laps] x n, n varying fastest.
@@ -134,7 +138,8 @@ struct StudyDefinition {
 std::string laps_text(double laps);
 
 /// The adaptive settings `trial` runs with: study.adaptive with the trial's lap count when the
-/// study has a laps axis, keeping only the snapshot laps the trial reaches.
+/// study has a laps axis, keeping only the snapshot laps the trial reaches, and time stepping
+/// when the study has a reference integrator (the reference is never a lap map's).
 AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial);
 
 /// Every metric a trial of `kind` measures, in output order.
