@@ -45,9 +45,16 @@ TEST_CASE("no heap allocation in the right-hand side or the Jacobian", "[adaptiv
     std::vector<double> centres;
     for (int i = 0; i < 40; ++i) centres.push_back(track.length * i / 40.0);
     const GramSolver solver(kernel->gram(centres), {});
-    for (bool rkhs_law : {false, true}) {
-      const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(40, 40);
-      const Eigen::MatrixXd map = rkhs_law ? Eigen::MatrixXd(solver.solve(identity)) : identity;
+    // The gradient law (a scalar map), the rkhs law (dense), and a low-rank map (the form of a
+    // pseudo-inverse of low rank: here G's 10 largest eigenpairs).
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(kernel->gram(centres));
+    const auto low_rank = LearningMap::low_rank(eigen.eigenvectors().rightCols(10),
+                                                eigen.eigenvalues().tail(10).cwiseInverse());
+    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(40, 40);
+    for (const std::string law : {"gradient", "rkhs", "low_rank"}) {
+      const auto map = law == "gradient" ? LearningMap::dense(identity)
+                       : law == "rkhs"   ? LearningMap::dense(solver.solve(identity))
+                                         : low_rank;
       const auto basis = kernel->basis(centres);
       AdaptiveSystem system(plant->A(), plant->B(), P, *basis, map, road, slope, track, 0.3);
       const auto m = system.dimension();
@@ -62,7 +69,7 @@ TEST_CASE("no heap allocation in the right-hand side or the Jacobian", "[adaptiv
         system.jacobian(z.data(), J.data(), 1.0 + 1.7 * k, dfdt.data());
       }
       counting = false;
-      INFO(name << (rkhs_law ? " rkhs" : " gradient"));
+      INFO(name << " " << law);
       CHECK(allocations == 0);
     }
   }

@@ -210,10 +210,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
   const Eigen::VectorXd alpha_star = solver.solve(at_centres);  // Pi_n f = sum alpha*_i phi_i
   const double gamma = law.gain();
-  const Eigen::MatrixXd learning_map =
-      law.uses_gram_inverse()
-          ? Eigen::MatrixXd(solver.solve(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n))) / gamma)
-          : Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) / gamma);
+  // M in its cheapest exact form: Gamma^-1 as a scalar, G^+ of low rank as V diag(w) V^T.
+  const LearningMap learning_map = law.uses_gram_inverse()
+                                       ? LearningMap::gram_inverse(solver, gamma)
+                                       : LearningMap::scalar(n, 1.0 / gamma);
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
   const Eigen::Index d = A.rows();

@@ -11,7 +11,7 @@ namespace rkhs {
 
 AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B,
                                const Eigen::MatrixXd& P, KernelBasis& basis,
-                               const Eigen::MatrixXd& learning_map,
+                               const LearningMap& learning_map,
                                const std::function<double(double)>& road,
                                const std::function<double(double)>& road_slope,
                                const Domain& domain, double speed, LearningSignal signal)
@@ -30,30 +30,30 @@ AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& 
       psi_(basis.size()),
       dphi_(basis.size()),
       dpsi_(basis.size()) {
-  if (signal_ == LearningSignal::by_basis) {
-    basis_.set_map(learning_map);
-    return;
-  }
-  // The operations of a direct basis's evaluate_mapped: a multiple of the identity (the
-  // gradient law) as a scalar, anything else as a dense product.
-  const Eigen::MatrixXd& map = learning_map;
-  const bool scalar =
-      map.rows() == map.cols() && map.rows() > 0 &&
-      map.isApprox(map(0, 0) * Eigen::MatrixXd::Identity(map.rows(), map.cols()), 0.0);
-  scale_ = scalar ? map(0, 0) : 0.0;
-  if (!scalar) map_ = map;
+  if (learning_map.size() != n_)
+    throw std::invalid_argument(fmt::format("the learning map is {} x {}, the basis has {} sections",
+                                            learning_map.size(), learning_map.size(), n_));
+  if (signal_ == LearningSignal::by_basis)
+    basis_.set_map(learning_map.matrix());
+  else
+    map_ = learning_map;
 }
+
+AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B,
+                               const Eigen::MatrixXd& P, KernelBasis& basis,
+                               const Eigen::MatrixXd& learning_map,
+                               const std::function<double(double)>& road,
+                               const std::function<double(double)>& road_slope,
+                               const Domain& domain, double speed, LearningSignal signal)
+    : AdaptiveSystem(A, B, P, basis, LearningMap::dense(learning_map), road, road_slope, domain,
+                     speed, signal) {}
 
 void AdaptiveSystem::evaluate_basis(double s) const {
   basis_.evaluate(s, phi_.data());
-  if (signal_ == LearningSignal::by_basis) {
+  if (signal_ == LearningSignal::by_basis)
     basis_.evaluate_mapped(s, psi_.data());
-  } else if (map_.size() == 0) {
-    for (std::size_t i = 0; i < phi_.size(); ++i) psi_[i] = phi_[i] * scale_;
-  } else {
-    Eigen::Map<Eigen::VectorXd>(psi_.data(), map_.rows()).noalias() =
-        map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), n_);
-  }
+  else
+    map_.apply(phi_.data(), psi_.data());
 }
 
 void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
@@ -95,13 +95,10 @@ void AdaptiveSystem::time_derivative(const double* z, double t, double* dfdt) co
   const double s = arc_length(t);
   basis_.evaluate_derivative(s, dphi_.data());
   const Eigen::Map<const Eigen::VectorXd> dphi(dphi_.data(), n_);
-  if (signal_ == LearningSignal::by_basis) {
+  if (signal_ == LearningSignal::by_basis)
     basis_.evaluate_mapped_derivative(s, dpsi_.data());
-  } else if (map_.size() == 0) {
-    for (std::size_t i = 0; i < dphi_.size(); ++i) dpsi_[i] = dphi_[i] * scale_;
-  } else {
-    Eigen::Map<Eigen::VectorXd>(dpsi_.data(), n_).noalias() = map_ * dphi;
-  }
+  else
+    map_.apply(dphi_.data(), dpsi_.data());
   using Vector = Eigen::Map<const Eigen::VectorXd>;
   const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
   Eigen::Map<Eigen::VectorXd> dx(dfdt, d_), dxhat(dfdt + d_, d_), dalpha(dfdt + 2 * d_, n_);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rkhs/adaptive/coupled_structure.hpp"
+#include "rkhs/adaptive/learning_map.hpp"
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/kernel/kernel.hpp"
@@ -33,7 +34,8 @@ namespace rkhs {
 ///
 /// Cost: each rhs() evaluates the basis at one point s, once; each jacobian() evaluates it at s
 /// once and its derivative once. With LearningSignal::from_phi, psi is M applied to that one
-/// phi(s) (n kernel evaluations per rhs for a direct basis); with LearningSignal::by_basis,
+/// phi(s) (n kernel evaluations per rhs for a direct basis, then O(n), O(n r) or O(n^2) for M
+/// by its form: rkhs/adaptive/learning_map.hpp); with LearningSignal::by_basis,
 /// psi comes from basis.evaluate_mapped (a second evaluation at s, which for a basis through a
 /// sparse feature map costs O(features at s x n) against M phi's O(n^2) for a full M).
 class AdaptiveSystem {
@@ -41,11 +43,19 @@ class AdaptiveSystem {
   /// How psi(s) = M phi(s) is obtained (see the class comment).
   enum class LearningSignal { from_phi, by_basis };
 
-  /// `basis` evaluates phi(s); `learning_map` is the n x n matrix M with psi = M phi
-  /// (Gamma^-1 I or Gamma^-1 G^-1). `road` is f and `road_slope` f'. All references must
-  /// outlive the system.
-  /// from_phi applies a multiple of the identity as a scalar (O(n)) and any other M as a dense
-  /// product, with the same operations as a direct basis's evaluate_mapped (bit-identical).
+  /// `basis` evaluates phi(s); `learning_map` is M with psi = M phi (Gamma^-1 I or
+  /// Gamma^-1 G^-1, rkhs/adaptive/learning_map.hpp). `road` is f and `road_slope` f'. All
+  /// references must outlive the system.
+  /// from_phi applies M in its own form: a scalar (O(n)), low rank (O(n r)) or dense (O(n^2));
+  /// by_basis hands M to the basis (KernelBasis::set_map).
+  AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::MatrixXd& P,
+                 KernelBasis& basis, const LearningMap& learning_map,
+                 const std::function<double(double)>& road,
+                 const std::function<double(double)>& road_slope, const Domain& domain,
+                 double speed, LearningSignal signal = LearningSignal::from_phi);
+  /// The same with M as an n x n matrix (LearningMap::dense: a multiple of the identity is
+  /// applied as a scalar, any other M as a dense product, with the same operations as a direct
+  /// basis's evaluate_mapped: bit-identical).
   AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::MatrixXd& P,
                  KernelBasis& basis, const Eigen::MatrixXd& learning_map,
                  const std::function<double(double)>& road,
@@ -92,8 +102,7 @@ class AdaptiveSystem {
   double speed_;
   Eigen::Index d_, n_;
   LearningSignal signal_;
-  Eigen::MatrixXd map_;  // from_phi: M, or empty when M is scale_ times the identity
-  double scale_ = 0.0;
+  LearningMap map_;  // from_phi: M
   mutable std::vector<double> phi_, psi_, dphi_, dpsi_;
   mutable Eigen::MatrixXd column_scratch_;  // rhs_columns: phi^T alpha and b^T (x - xhat)
   mutable std::size_t rhs_count_ = 0, jacobian_count_ = 0;

@@ -60,6 +60,15 @@ class GramSolver {
   void quadratic_forms(const Eigen::MatrixXd& columns, Eigen::VectorXd& quadratic,
                        Eigen::VectorXd& solution_norm_squared) const;
 
+  /// The pseudo-inverse's kept eigenpairs, G^+ = V diag(1 / lambda) V^T (V is n x rank):
+  /// null unless the method is the pseudo-inverse.
+  const Eigen::MatrixXd* kept_vectors() const noexcept {
+    return cholesky_ ? nullptr : &kept_vectors_;
+  }
+  const Eigen::VectorXd* kept_values() const noexcept {
+    return cholesky_ ? nullptr : &kept_values_;
+  }
+
  private:
   Eigen::Index n_ = 0;
   GramSpectrum spectrum_;
