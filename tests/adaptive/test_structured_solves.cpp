@@ -285,3 +285,31 @@ TEST_CASE("the periodic limit keeps unexcited directions at their initial value"
   CHECK(limit.spectral_radius == Approx(0.9).epsilon(1e-14));
   CHECK(limit.slowest_time_constant_laps == Approx(-1 / std::log(0.9)).epsilon(1e-12));
 }
+
+TEST_CASE("a lap map cache computes each key once and says who computed it",
+          "[adaptive][lap_map]") {
+  LapMapCache cache;
+  int computations = 0;
+  auto compute = [&] {
+    ++computations;
+    LapMap map;
+    map.monodromy = Eigen::MatrixXd::Identity(2, 2) * 0.5;
+    map.offset = Eigen::VectorXd::Ones(2);
+    map.rhs_evaluations = 7;
+    return map;
+  };
+  const auto first = cache.find_or_compute("a", compute);
+  const auto second = cache.find_or_compute("a", compute);
+  const auto other = cache.find_or_compute("b", compute);
+  CHECK(computations == 2);
+  CHECK(first.computed_here);
+  CHECK_FALSE(second.computed_here);
+  CHECK(other.computed_here);
+  CHECK(first.map == second.map);  // shared, not copied
+  CHECK(first.map != other.map);
+  CHECK(second.map->rhs_evaluations == 7);
+  // A failed computation reaches every caller of its key.
+  auto fail = []() -> LapMap { throw std::runtime_error("step size underflow"); };
+  CHECK_THROWS_WITH(cache.find_or_compute("c", fail), "step size underflow");
+  CHECK_THROWS_WITH(cache.find_or_compute("c", compute), "step size underflow");
+}

@@ -293,7 +293,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   };
 
   Eigen::VectorXd z = Eigen::VectorXd::Zero(m);
-  std::optional<LapMap> lap_map;
+  std::shared_ptr<const LapMap> lap_map;
   std::size_t reused_rhs_evaluations = 0, reused_jacobian_evaluations = 0;
   if (engine == AdaptiveEngine::time_stepping) {
     const double final_time = settings.final_time_or_laps(domain.length);
@@ -311,10 +311,16 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       return compute_lap_map(system, lap_time, kink_times, settings.lap_map_atol,
                              settings.lap_map_rtol, std::numeric_limits<std::int64_t>::max());
     };
-    const auto rhs_before = system.rhs_evaluations();
-    lap_map = lap_maps ? *lap_maps->find_or_compute(lap_map_key, compute) : compute();
+    bool computed_here = true;
+    if (lap_maps) {
+      auto found = lap_maps->find_or_compute(lap_map_key, compute);
+      lap_map = std::move(found.map);
+      computed_here = found.computed_here;
+    } else {
+      lap_map = std::make_shared<const LapMap>(compute());
+    }
     // A map computed by another trial: its cost is this trial's too (deterministic counts).
-    if (system.rhs_evaluations() == rhs_before) {
+    if (!computed_here) {
       reused_rhs_evaluations = lap_map->rhs_evaluations;
       reused_jacobian_evaluations = lap_map->jacobian_evaluations;
     }

@@ -68,7 +68,7 @@ LapMap compute_lap_map(AdaptiveSystem& system, double lap_time,
   return out;
 }
 
-std::shared_ptr<const LapMap> LapMapCache::find_or_compute(
+LapMapCache::Found LapMapCache::find_or_compute(
     const std::string& key, const std::function<LapMap()>& compute) {
   std::promise<std::shared_ptr<const LapMap>> promise;
   std::shared_future<std::shared_ptr<const LapMap>> future;
@@ -91,7 +91,7 @@ std::shared_ptr<const LapMap> LapMapCache::find_or_compute(
       promise.set_exception(std::current_exception());
     }
   }
-  return future.get();
+  return {future.get(), computes};
 }
 
 LapPowers::LapPowers(const LapMap& map) {

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/kernel/kernel_algorithms.hpp"
 
 namespace rkhs {
 
@@ -28,8 +29,7 @@ LearningMap LearningMap::low_rank(Eigen::MatrixXd V, Eigen::VectorXd w) {
 
 LearningMap LearningMap::dense(Eigen::MatrixXd M) {
   if (M.rows() != M.cols()) throw std::invalid_argument("LearningMap::dense: M must be square");
-  if (M.rows() > 0 && M.isApprox(M(0, 0) * Eigen::MatrixXd::Identity(M.rows(), M.cols()), 0.0))
-    return scalar(M.rows(), M(0, 0));
+  if (const auto c = identity_multiple(M)) return scalar(M.rows(), *c);
   LearningMap map;
   map.form_ = Form::dense;
   map.n_ = M.rows();

@@ -41,8 +41,16 @@ struct LapMap {
 /// computation reaches every trial that asked for the key.
 class LapMapCache {
  public:
-  std::shared_ptr<const LapMap> find_or_compute(const std::string& key,
-                                                const std::function<LapMap()>& compute);
+  /// A map from the cache, and whether this call computed it (false: another call did, and
+  /// the caller's system has not been integrated for it).
+  struct Found {
+    std::shared_ptr<const LapMap> map;
+    bool computed_here = false;
+  };
+  /// The map under `key`: computed by `compute` on the first call, waited for by calls that
+  /// come while it is computed, shared afterwards. An exception of `compute` reaches every
+  /// call for that key.
+  Found find_or_compute(const std::string& key, const std::function<LapMap()>& compute);
 
  private:
   std::mutex mutex_;

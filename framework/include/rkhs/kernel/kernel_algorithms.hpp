@@ -14,10 +14,21 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include "rkhs/kernel/kernel.hpp"
 
 namespace rkhs {
+
+/// c when `map` is exactly c I (square, non-empty), nothing otherwise: a learning map that a
+/// basis applies as a scalar (the gradient law's Gamma^-1 I), O(n) instead of O(n^2).
+inline std::optional<double> identity_multiple(const Eigen::MatrixXd& map) {
+  if (map.rows() != map.cols() || map.rows() == 0) return std::nullopt;
+  for (Eigen::Index j = 0; j < map.cols(); ++j)
+    for (Eigen::Index i = 0; i < map.rows(); ++i)
+      if (map(i, j) != (i == j ? map(0, 0) : 0.0)) return std::nullopt;
+  return map(0, 0);
+}
 
 namespace detail {
 
@@ -248,9 +259,8 @@ class DirectBasis final : public KernelBasis {
   }
   void set_map(const Eigen::MatrixXd& map) override {
     // A multiple of the identity (the gradient law) is applied as a scalar: O(n), not O(n^2).
-    const bool scalar = map.rows() == map.cols() && map.rows() > 0 &&
-                        map.isApprox(map(0, 0) * Eigen::MatrixXd::Identity(map.rows(), map.cols()), 0.0);
-    scale_ = scalar ? map(0, 0) : 0.0;
+    const auto scalar = identity_multiple(map);
+    scale_ = scalar.value_or(0.0);
     map_ = scalar ? Eigen::MatrixXd() : map;
   }
   void evaluate_mapped(double s, double* out) const override {
@@ -321,7 +331,12 @@ class FeatureBasis final : public KernelBasis {
   }
   void evaluate(double s, double* phi) const override { apply(centre_features_, s, phi); }
   void set_map(const Eigen::MatrixXd& map) override {
-    mapped_features_ = map * centre_features_;
+    // c I (the gradient law) scales the features: O(n F), not the O(n^2 F) product (which
+    // took 37 s at n = 4096, F = 10235).
+    if (const auto scalar = identity_multiple(map))
+      mapped_features_ = *scalar * centre_features_;
+    else
+      mapped_features_ = map * centre_features_;
     if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) map_ = map;
     if (scratch_.size() < mapped_features_.rows()) scratch_.resize(mapped_features_.rows());
   }
