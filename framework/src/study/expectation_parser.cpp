@@ -335,13 +335,12 @@ std::vector<Expectation> parse_expectations(const toml::table& root, const Study
          fmt::format("expected [[expect]] tables, found {}", show(*node)));
   }
 
-  // One representative trial per group (the selectors look at axes, which a group shares).
-  std::vector<TrialSpec> groups;
-  std::set<std::string> seen;
-  const auto trials = study.trials();
-  for (const auto& trial : trials)
-    if (seen.insert(trial.group_key).second) groups.push_back(trial);
-  const auto columns = axis_columns(trials);
+  // One representative trial per group (the selectors look at axes, which a group shares):
+  // the trials of the grid with its first n only, so the grid is not expanded again.
+  StudyDefinition one_n = study;
+  one_n.n_values.resize(std::min<std::size_t>(one_n.n_values.size(), 1));
+  const auto groups = one_n.trials();
+  const auto columns = axis_columns(groups);
 
   const ExpectationReader reader(study, groups, columns);
   std::vector<Expectation> out;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -32,7 +33,16 @@ using namespace detail;
 
 namespace {
 
-// n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }
+// The largest n a study may ask for (no Gram matrix is anywhere near this size), and the
+// most values of n one grid may list.
+constexpr std::int64_t max_n = 1'000'000'000;
+constexpr std::int64_t max_n_values = 100000;
+// [limits] trials when the file does not give it (docs/study-files.md).
+constexpr std::uint64_t default_max_trials = 1'000'000;
+
+// n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }.
+// Ranges are counted before they are expanded, without overflow: bounds above max_n and more
+// than max_n_values values are errors.
 std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node) {
   std::vector<std::pair<std::int64_t, toml::source_region>> values;
   if (const auto* array = node.as_array()) {
@@ -58,15 +68,31 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
       report.fail(range->source(), "grid.n", "a range needs 'from' and 'to'");
     if (step.has_value() == factor.has_value())
       report.fail(range->source(), "grid.n", "a range needs exactly one of 'step' or 'factor'");
+    for (const char* key : {"from", "to"}) {
+      const auto value = *integer(key);
+      if (value < 1 || value > max_n)
+        report.fail(range->get(key)->source(), fmt::format("grid.n.{}", key),
+                    fmt::format("must be between 1 and {} (centres), found {}", max_n, value));
+    }
     if (step && *step < 1) report.fail(range->get("step")->source(), "grid.n.step",
                                        fmt::format("must be >= 1, found {}", *step));
     if (factor && *factor < 2) report.fail(range->get("factor")->source(), "grid.n.factor",
                                            fmt::format("must be >= 2, found {}", *factor));
     if (*to < *from)
       report.fail(range->source(), "grid.n", fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
-    for (std::int64_t v = *from; v <= *to && v > 0; v = step ? v + *step : v * *factor) {
-      values.emplace_back(v, range->source());
-      if (values.size() > 100000) report.fail(range->source(), "grid.n", "more than 100000 values");
+    // 1 <= from <= to <= max_n: neither the count nor the values can overflow.
+    if (step) {
+      const std::int64_t count = (*to - *from) / *step + 1;
+      if (count > max_n_values)
+        report.fail(range->source(), "grid.n",
+                    fmt::format("{} values of n (from {} to {} in steps of {}), more than {}",
+                                count, *from, *to, *step, max_n_values));
+      for (std::int64_t i = 0; i < count; ++i) values.emplace_back(*from + i * *step, range->source());
+    } else {
+      for (std::int64_t v = *from;; v *= *factor) {
+        values.emplace_back(v, range->source());
+        if (v > *to / *factor) break;  // v * factor > to, computed without overflow
+      }
     }
   } else {
     report.fail(node.source(), "grid.n",
@@ -78,12 +104,119 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
   std::vector<std::size_t> n;
   for (const auto& [v, where] : values) {
     if (v < 1) report.fail(where, "grid.n", fmt::format("must be >= 1, found {}", v));
+    if (v > max_n)
+      report.fail(where, "grid.n", fmt::format("must be <= {} (centres), found {}", max_n, v));
     n.push_back(static_cast<std::size_t>(v));
   }
   std::sort(n.begin(), n.end());
   if (std::adjacent_find(n.begin(), n.end()) != n.end())
     report.fail(node.source(), "grid.n", "values must be distinct");
   return n;
+}
+
+// The grid's size counted from the file's lists, before any trial or plugin choice is built:
+// the product of every axis (each the sum over its entries of the product of their parameter
+// lists), saturating instead of overflowing.
+std::uint64_t saturating_product(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t product = 0;
+  return __builtin_mul_overflow(a, b, &product) ? std::numeric_limits<std::uint64_t>::max()
+                                                : product;
+}
+
+struct GridFactor {
+  std::string text;            // "60 kernels ([[kernel]] 'gaussian' at line 8: sigma 10 x nu 6)"
+  std::uint64_t count = 1;     // of this axis
+  std::uint64_t largest = 0;   // of its largest entry (or list)
+  toml::source_region where;   // of that entry
+  std::string key;             // of that entry: "kernel", "grid.n", "adaptive.laps"
+};
+
+// `[[section]]` entries: how many choices they expand to, without expanding them.
+GridFactor count_plugin_axis(const toml::table& root, std::string_view section,
+                             std::string_view singular, std::string_view plural) {
+  GridFactor factor{std::string(), 1, 1, {}, std::string(section)};
+  const auto* node = root.get(section);
+  if (!node) {
+    factor.text = fmt::format("1 {} (the default)", singular);
+    return factor;
+  }
+  factor.where = node->source();
+  std::vector<const toml::node*> entries;
+  if (const auto* array = node->as_array())
+    for (const auto& item : *array) entries.push_back(&item);
+  else
+    entries.push_back(node);
+  std::uint64_t total = 0;
+  std::vector<std::string> parts;
+  for (const auto* entry : entries) {
+    std::uint64_t count = 1;
+    std::vector<std::string> lists;
+    if (const auto* table = entry->as_table())
+      for (auto&& [key, value] : *table) {
+        if (key.str() == "name" || key.str() == "tier") continue;
+        if (const auto* values = value.as_array(); values && values->size() > 1) {
+          count = saturating_product(count, values->size());
+          lists.push_back(fmt::format("{} {}", key.str(), values->size()));
+        }
+      }
+    total = count > std::numeric_limits<std::uint64_t>::max() - total
+                ? std::numeric_limits<std::uint64_t>::max()
+                : total + count;
+    if (count > factor.largest) {
+      factor.largest = count;
+      factor.where = entry->source();
+    }
+    if (!lists.empty()) {
+      const auto* name = entry->as_table() ? entry->as_table()->get("name") : nullptr;
+      parts.push_back(fmt::format("[[{}]] {}at line {}: {}", section,
+                                  name ? show(*name) + " " : std::string(),
+                                  entry->source().begin.line, fmt::join(lists, " x ")));
+    }
+  }
+  factor.count = total;
+  factor.text = fmt::format("{} {}", total, total == 1 ? singular : plural);
+  if (!parts.empty()) factor.text += fmt::format(" ({})", fmt::join(parts, "; "));
+  return factor;
+}
+
+// Refuses a grid of more than `cap` trials before anything of it is built, at the entry or
+// list that contributes most, naming the product and the lists that multiply to it.
+void check_grid_size(const Reporter& report, const toml::table& root, StudyKind kind,
+                     std::size_t n_count, const toml::node& n_node, std::uint64_t cap) {
+  std::vector<GridFactor> factors{count_plugin_axis(root, "kernel", "kernel", "kernels"),
+                                  count_plugin_axis(root, "target", "target", "targets"),
+                                  count_plugin_axis(root, "centres", "centre placement",
+                                                    "centre placements")};
+  if (kind == StudyKind::adaptive) {
+    factors.push_back(count_plugin_axis(root, "plant", "plant", "plants"));
+    factors.push_back(count_plugin_axis(root, "law", "learning law", "learning laws"));
+    factors.push_back(count_plugin_axis(root, "integrator", "integrator", "integrators"));
+    const auto* adaptive = root.get("adaptive");
+    const auto* laps = adaptive && adaptive->as_table() ? adaptive->as_table()->get("laps") : nullptr;
+    if (laps && laps->as_array() && laps->as_array()->size() > 1) {
+      const auto count = laps->as_array()->size();
+      factors.push_back({fmt::format("{} values of laps", count), count, count, laps->source(),
+                         "adaptive.laps"});
+    }
+  }
+  factors.push_back({fmt::format("{} value{} of n", n_count, n_count == 1 ? "" : "s"), n_count,
+                     n_count, n_node.source(), "grid.n"});
+  std::uint64_t trials = 1;
+  const GridFactor* largest = &factors.front();
+  for (const auto& factor : factors) {
+    trials = saturating_product(trials, factor.count);
+    if (factor.largest > largest->largest) largest = &factor;
+  }
+  if (trials <= cap) return;
+  std::vector<std::string> texts;
+  for (const auto& factor : factors) texts.push_back(factor.text);
+  report.fail(largest->where, largest->key,
+              fmt::format("the grid has {} trials, more than [limits] trials = {}: {}; shorten "
+                          "these lists, or raise [limits] trials",
+                          trials == std::numeric_limits<std::uint64_t>::max()
+                              ? std::string("more than 10^19")
+                              : std::to_string(trials),
+                          cap, fmt::join(texts, " x ")));
 }
 
 // One [[kernel]] / [[target]] / [[centres]] entry: a name and parameters, each a value or an
@@ -607,6 +740,23 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   check_keys(report, *grid, "grid.", {"n"});
   study.n_values = parse_n(report, *grid->get("n"));
 
+  std::uint64_t max_trials = default_max_trials;
+  if (const auto* limits = optional_table(report, root, "limits")) {
+    check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes", "trials"});
+    study.limits.trial_seconds = get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
+    study.limits.matrix_megabytes =
+        get_number(report, *limits, "matrix_megabytes", "limits.", study.limits.matrix_megabytes, 0);
+    const double trials =
+        get_number(report, *limits, "trials", "limits.", static_cast<double>(max_trials), 0);
+    if (trials != std::floor(trials) || trials > 1e15)
+      report.fail(limits->get("trials")->source(), "limits.trials",
+                  fmt::format("must be a whole number between 1 and 1e15, found {}",
+                              show(*limits->get("trials"))));
+    max_trials = static_cast<std::uint64_t>(trials);
+  }
+  // Before any plugin choice or trial is built: a short file can ask for billions of trials.
+  check_grid_size(report, root, study.kind, study.n_values.size(), *grid->get("n"), max_trials);
+
   study.kernels = parse_plugins(report, root, "kernel", kernel_registry(), std::nullopt);
   study.targets = parse_plugins(report, root, "target", target_registry(), std::string("sine"));
   study.centres = parse_plugins(report, root, "centres", centre_registry(), std::string("uniform"));
@@ -633,12 +783,6 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                   fmt::format("found \"{}\", expected \"pseudo_inverse\", \"regularised\" or \"fail\"",
                               policy));
     study.solver.regularisation = get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
-  }
-  if (const auto* limits = optional_table(report, root, "limits")) {
-    check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes"});
-    study.limits.trial_seconds = get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
-    study.limits.matrix_megabytes =
-        get_number(report, *limits, "matrix_megabytes", "limits.", study.limits.matrix_megabytes, 0);
   }
 
   // Build every kernel and target once: a combination that is invalid only for this domain
