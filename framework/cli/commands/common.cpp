@@ -85,4 +85,13 @@ void print_run_sources(const pipeline::PipelineOutcome& outcome,
                              outcome.store_file, outcome.completed->stored.ran);
 }
 
+void print_store_problems(const pipeline::PipelineOutcome& outcome) {
+  const StoredRun* run = outcome.completed     ? &outcome.completed->stored
+                         : outcome.interrupted ? &*outcome.interrupted
+                                               : nullptr;
+  if (!run) return;
+  for (const auto& line : run->store_problems)
+    std::cerr << fmt::format("rkhs-study: warning: {}\n", line);
+}
+
 }  // namespace rkhs::cli
