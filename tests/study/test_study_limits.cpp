@@ -133,3 +133,41 @@ TEST_CASE("n ranges with huge bounds are errors, not overflows", "[study][limits
       "s.toml");
   CHECK(doubling.n_values == std::vector<std::size_t>{8, 16, 32, 64, 128, 256, 512});
 }
+
+TEST_CASE("a mistake beside a large grid is found before the grid is built", "[study][limits]") {
+  // 100 x 100 x 100 = 1e6 targets, within the cap; expanding them takes seconds and a gigabyte.
+  const std::string large = R"([study]
+name = "large"
+evaluation_points = 2048
+[domain]
+radius = 4
+[grid]
+n = [10]
+[[kernel]]
+name = "gaussian"
+[[target]]
+name = "sine"
+amplitude = )" + values(100, 1.0, 0.01) +
+                            "\nphase = " + values(100, 0.0, 0.01) +
+                            "\ncycles = " + values(100, 1.0, 1.0) + "\n";
+  auto timed_error = [](const std::string& text) {
+    const auto start = std::chrono::steady_clock::now();
+    auto error = error_of(text);
+    CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < 1);
+    return error;
+  };
+  CHECK(timed_error(large + "[[centres]]\nname = \"nosuch\"\n") ==
+        "s.toml:16:8: centres.name: unknown centres 'nosuch' (known: random, uniform)");
+  CHECK(timed_error(large + "[solver]\nsingular = \"never\"\n") ==
+        "s.toml:16:12: solver.singular: found \"never\", expected \"pseudo_inverse\", "
+        "\"regularised\" or \"fail\"");
+  // A value out of range, or listed twice, in the large entry itself.
+  std::string negative = large;
+  negative.replace(negative.find("100.000000"), 10, "-1.000000");
+  CHECK_THAT(timed_error(negative), Catch::StartsWith("s.toml:14:"));
+  CHECK_THAT(timed_error(negative), Catch::Contains(": target.cycles: "));
+  std::string twice = large;
+  twice.replace(twice.find("1.010000"), 8, "1.000000");
+  CHECK_THAT(timed_error(twice), Catch::StartsWith("s.toml:12:24: target.amplitude: 'sine amplitude=1 cycles=1 phase=0'"));
+  CHECK_THAT(timed_error(twice), Catch::EndsWith("' is listed twice"));
+}

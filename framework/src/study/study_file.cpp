@@ -219,43 +219,67 @@ void check_grid_size(const Reporter& report, const toml::table& root, StudyKind 
                           cap, fmt::join(texts, " x ")));
 }
 
-// One [[kernel]] / [[target]] / [[centres]] entry: a name and parameters, each a value or an
-// array of values (an axis). Returns every combination, the first parameter varying slowest.
-template <class RegistryType>
-std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml::table& entry,
-                                             std::string_view section,
-                                             const RegistryType& registry) {
-  const std::string prefix = std::string(section) + ".";
-  const std::string name = get_string(report, entry, "name", prefix, std::nullopt);
-  const auto* plugin = registry.find(name);
-  if (!plugin)
-    report.fail(entry.get("name")->source(), prefix + "name",
-                fmt::format("unknown {} '{}' {}", registry.kind(), name,
-                            with_suggestion(name, registry.names())));
-  const auto& specs = plugin->info.parameters;
-  std::vector<std::string> known;
-  for (const auto& spec : specs) known.push_back(spec.name);
-
-  // Axis values per parameter, in declaration order.
+// A [[kernel]] / [[target]] / [[centres]] / ... entry read and checked (its name, its
+// parameters' names, each value), not yet expanded: a name and parameters, each a value or an
+// array of values (an axis).
+struct PluginEntry {
   struct Axis {
     std::string name;
     std::vector<std::pair<ParameterValue, toml::source_region>> values;
   };
-  std::vector<Axis> axes;
+  std::string name;
+  const std::vector<ParameterSpec>* specs = nullptr;
+  std::vector<Axis> axes;  // in the order the plugin declares its parameters
   std::vector<std::string> tiers;
-  for (auto&& [key, node] : entry) {
+  toml::source_region where;
+};
+
+// The choice of `entry` with value at[a] of each axis a; fails at the value a ParameterError
+// names.
+PluginChoice resolve_choice(const Reporter& report, std::string_view section,
+                            const PluginEntry& entry, const std::vector<std::size_t>& at) {
+  std::map<std::string, ParameterValue> given;
+  for (std::size_t a = 0; a < entry.axes.size(); ++a)
+    given[entry.axes[a].name] = entry.axes[a].values[at[a]].first;
+  try {
+    return {entry.name, ParameterSet::resolve(*entry.specs, given), entry.tiers};
+  } catch (const ParameterError& e) {
+    toml::source_region where = entry.where;
+    for (std::size_t a = 0; a < entry.axes.size(); ++a)
+      if (entry.axes[a].name == e.parameter()) where = entry.axes[a].values[at[a]].second;
+    report.fail(where, fmt::format("{}.{}", section, e.parameter()), e.what());
+  }
+}
+
+template <class RegistryType>
+PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
+                              std::string_view section, const RegistryType& registry) {
+  const std::string prefix = std::string(section) + ".";
+  PluginEntry entry;
+  entry.where = table.source();
+  entry.name = get_string(report, table, "name", prefix, std::nullopt);
+  const auto* plugin = registry.find(entry.name);
+  if (!plugin)
+    report.fail(table.get("name")->source(), prefix + "name",
+                fmt::format("unknown {} '{}' {}", registry.kind(), entry.name,
+                            with_suggestion(entry.name, registry.names())));
+  entry.specs = &plugin->info.parameters;
+  std::vector<std::string> known;
+  for (const auto& spec : *entry.specs) known.push_back(spec.name);
+
+  for (auto&& [key, node] : table) {
     const std::string parameter(key.str());
     if (parameter == "name") continue;
     if (parameter == "tier") {  // the tiers this entry belongs to (docs/verification.md)
-      tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
+      entry.tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
       continue;
     }
     if (std::find(known.begin(), known.end(), parameter) == known.end())
       report.fail(key.source(), prefix + parameter,
-                  fmt::format("unknown parameter of {} '{}' {}", registry.kind(), name,
+                  fmt::format("unknown parameter of {} '{}' {}", registry.kind(), entry.name,
                               known.empty() ? std::string("(it has none)")
                                             : with_suggestion(parameter, known)));
-    Axis axis{parameter, {}};
+    PluginEntry::Axis axis{parameter, {}};
     if (const auto* array = node.as_array()) {
       if (array->empty()) report.fail(node.source(), prefix + parameter, "empty list of values");
       for (const auto& item : *array) {
@@ -272,63 +296,86 @@ std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml:
                     fmt::format("expected a value or a list of values, found {}", describe(node)));
       axis.values.emplace_back(std::move(*value), node.source());
     }
-    axes.push_back(std::move(axis));
+    entry.axes.push_back(std::move(axis));
   }
-  std::sort(axes.begin(), axes.end(), [&](const Axis& a, const Axis& b) {
+  std::sort(entry.axes.begin(), entry.axes.end(), [&](const auto& a, const auto& b) {
     return std::find(known.begin(), known.end(), a.name) <
            std::find(known.begin(), known.end(), b.name);
   });
-
-  std::vector<PluginChoice> out;
-  std::vector<std::size_t> at(axes.size(), 0);
-  while (true) {
-    std::map<std::string, ParameterValue> given;
-    for (std::size_t a = 0; a < axes.size(); ++a) given[axes[a].name] = axes[a].values[at[a]].first;
-    try {
-      out.push_back({name, ParameterSet::resolve(specs, given), tiers});
-    } catch (const ParameterError& e) {
-      toml::source_region where = entry.source();
-      for (std::size_t a = 0; a < axes.size(); ++a)
-        if (axes[a].name == e.parameter()) where = axes[a].values[at[a]].second;
-      report.fail(where, prefix + e.parameter(), e.what());
+  // Every value once, with the first of the other lists (a choice of the grid): a value out of
+  // range or listed twice is found here, before the entry is expanded.
+  const std::vector<std::size_t> first(entry.axes.size(), 0);
+  resolve_choice(report, section, entry, first);
+  for (std::size_t a = 0; a < entry.axes.size(); ++a) {
+    std::set<std::string> labels;
+    for (std::size_t v = 0; v < entry.axes[a].values.size(); ++v) {
+      auto at = first;
+      at[a] = v;
+      const auto label = resolve_choice(report, section, entry, at).label();
+      if (!labels.insert(label).second)
+        report.fail(entry.axes[a].values[v].second, prefix + entry.axes[a].name,
+                    fmt::format("'{}' is listed twice", label));
     }
-    std::size_t a = axes.size();
-    while (a > 0 && ++at[a - 1] == axes[a - 1].values.size()) at[--a] = 0;
-    if (a == 0) break;
   }
-  return out;
+  return entry;
 }
 
+// Every combination of an entry's lists, the first parameter varying slowest.
+void expand_plugin_entry(const Reporter& report, std::string_view section,
+                         const PluginEntry& entry, std::vector<PluginChoice>& out) {
+  std::vector<std::size_t> at(entry.axes.size(), 0);
+  while (true) {
+    out.push_back(resolve_choice(report, section, entry, at));
+    std::size_t a = entry.axes.size();
+    while (a > 0 && ++at[a - 1] == entry.axes[a - 1].values.size()) at[--a] = 0;
+    if (a == 0) break;
+  }
+}
+
+// A plugin axis ([[kernel]], [[target]], ...) read and checked, expanded later (expand_plugins):
+// everything cheap in a study file is checked before anything large is built.
+struct PluginAxis {
+  std::string section;
+  const toml::node* node = nullptr;  // the section; nullptr: the default plugin
+  std::vector<PluginEntry> entries;
+};
+
 template <class RegistryType>
-std::vector<PluginChoice> parse_plugins(const Reporter& report, const toml::table& root,
-                                        std::string_view section, const RegistryType& registry,
-                                        std::optional<std::string> default_name) {
-  const auto* node = root.get(section);
-  if (!node) {
+PluginAxis read_plugins(const Reporter& report, const toml::table& root, std::string_view section,
+                        const RegistryType& registry, std::optional<std::string> default_name) {
+  PluginAxis axis{std::string(section), root.get(section), {}};
+  if (!axis.node) {
     if (!default_name)
       report.fail({}, section,
                   fmt::format("missing: add at least one [[{}]] table with a name (known: {})",
                               section, fmt::join(registry.names(), ", ")));
-    const auto& specs = registry.find(*default_name)->info.parameters;
-    return {PluginChoice{*default_name, ParameterSet::resolve(specs, {}), {}}};
+    axis.entries.push_back(
+        PluginEntry{*default_name, &registry.find(*default_name)->info.parameters, {}, {}, {}});
+    return axis;
   }
-  std::vector<PluginChoice> out;
   auto add_entry = [&](const toml::node& item) {
     if (!item.is_table())
       report.fail(item.source(), section,
                   fmt::format("expected a table ([[{}]]), found {}", section, describe(item)));
-    auto choices = parse_plugin_entry(report, *item.as_table(), section, registry);
-    out.insert(out.end(), choices.begin(), choices.end());
+    axis.entries.push_back(read_plugin_entry(report, *item.as_table(), section, registry));
   };
-  if (const auto* array = node->as_array()) {
+  if (const auto* array = axis.node->as_array()) {
     for (const auto& item : *array) add_entry(item);
   } else {
-    add_entry(*node);
+    add_entry(*axis.node);
   }
+  return axis;
+}
+
+std::vector<PluginChoice> expand_plugins(const Reporter& report, const PluginAxis& axis) {
+  std::vector<PluginChoice> out;
+  for (const auto& entry : axis.entries) expand_plugin_entry(report, axis.section, entry, out);
+  if (!axis.node) return out;
   std::set<std::string> seen;
   for (const auto& choice : out)
     if (!seen.insert(choice.label()).second)
-      report.fail(node->source(), section, fmt::format("'{}' is listed twice", choice.label()));
+      report.fail(axis.node->source(), axis.section,
+                  fmt::format("'{}' is listed twice", choice.label()));
   return out;
 }
 
@@ -757,14 +804,17 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   // Before any plugin choice or trial is built: a short file can ask for billions of trials.
   check_grid_size(report, root, study.kind, study.n_values.size(), *grid->get("n"), max_trials);
 
-  study.kernels = parse_plugins(report, root, "kernel", kernel_registry(), std::nullopt);
-  study.targets = parse_plugins(report, root, "target", target_registry(), std::string("sine"));
-  study.centres = parse_plugins(report, root, "centres", centre_registry(), std::string("uniform"));
+  // The plugin axes are read and checked here and expanded once the rest of the file is
+  // checked: a mistake anywhere is found before a large grid is built.
+  std::vector<PluginAxis> axes{
+      read_plugins(report, root, "kernel", kernel_registry(), std::nullopt),
+      read_plugins(report, root, "target", target_registry(), std::string("sine")),
+      read_plugins(report, root, "centres", centre_registry(), std::string("uniform"))};
   if (study.kind == StudyKind::adaptive) {
-    study.plants = parse_plugins(report, root, "plant", plant_registry(), std::string("quarter_car"));
-    study.laws = parse_plugins(report, root, "law", law_registry(), std::string("rkhs"));
-    study.integrators =
-        parse_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4"));
+    axes.push_back(read_plugins(report, root, "plant", plant_registry(), std::string("quarter_car")));
+    axes.push_back(read_plugins(report, root, "law", law_registry(), std::string("rkhs")));
+    axes.push_back(
+        read_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4")));
     auto adaptive = parse_adaptive(report, root, study.domain.length);
     study.adaptive = std::move(adaptive.settings);
     study.laps_values = std::move(adaptive.laps_values);
@@ -783,6 +833,16 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                   fmt::format("found \"{}\", expected \"pseudo_inverse\", \"regularised\" or \"fail\"",
                               policy));
     study.solver.regularisation = get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
+  }
+
+  check_evaluation_grid(report, *header, study);
+  study.kernels = expand_plugins(report, axes[0]);
+  study.targets = expand_plugins(report, axes[1]);
+  study.centres = expand_plugins(report, axes[2]);
+  if (study.kind == StudyKind::adaptive) {
+    study.plants = expand_plugins(report, axes[3]);
+    study.laws = expand_plugins(report, axes[4]);
+    study.integrators = expand_plugins(report, axes[5]);
   }
 
   // Build every kernel and target once: a combination that is invalid only for this domain
@@ -817,7 +877,6 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                                               Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
   });
-  check_evaluation_grid(report, *header, study);
   study.expectations = detail::parse_expectations(root, study);
   return study;
 }
