@@ -161,6 +161,12 @@ amplitude = )" + values(100, 1.0, 0.01) +
   CHECK(timed_error(large + "[solver]\nsingular = \"never\"\n") ==
         "s.toml:16:12: solver.singular: found \"never\", expected \"pseudo_inverse\", "
         "\"regularised\" or \"fail\"");
+  CHECK(timed_error(large + "[[expect]]\nmetric = \"power_function_sup\"\namplitud = 1.0\n"
+                            "rate = -1.0\ntolerance = 0.1\n") ==
+        "s.toml:17:1: expect.amplitud: unknown key (an expectation takes metric, name, tier, "
+        "theory, rate, tolerance, model, bound, and this study's axis columns as group "
+        "selectors: kernel, sigma, convention, target, target_amplitude, target_cycles, "
+        "target_phase, centres, centres_offset)");
   // A value out of range, or listed twice, in the large entry itself.
   std::string negative = large;
   negative.replace(negative.find("100.000000"), 10, "-1.000000");

@@ -367,6 +367,15 @@ PluginAxis read_plugins(const Reporter& report, const toml::table& root, std::st
   return axis;
 }
 
+// The first choice of each entry of `axis` (an outline of the axis: the same parameters).
+std::vector<PluginChoice> first_choices(const Reporter& report, const PluginAxis& axis) {
+  std::vector<PluginChoice> out;
+  for (const auto& entry : axis.entries)
+    out.push_back(resolve_choice(report, axis.section, entry,
+                                 std::vector<std::size_t>(entry.axes.size(), 0)));
+  return out;
+}
+
 std::vector<PluginChoice> expand_plugins(const Reporter& report, const PluginAxis& axis) {
   std::vector<PluginChoice> out;
   for (const auto& entry : axis.entries) expand_plugin_entry(report, axis.section, entry, out);
@@ -836,14 +845,17 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   }
 
   check_evaluation_grid(report, *header, study);
-  study.kernels = expand_plugins(report, axes[0]);
-  study.targets = expand_plugins(report, axes[1]);
-  study.centres = expand_plugins(report, axes[2]);
-  if (study.kind == StudyKind::adaptive) {
-    study.plants = expand_plugins(report, axes[3]);
-    study.laws = expand_plugins(report, axes[4]);
-    study.integrators = expand_plugins(report, axes[5]);
-  }
+  // Where each axis of `axes` goes, in the same order.
+  static constexpr std::vector<PluginChoice> StudyDefinition::*axis_members[] = {
+      &StudyDefinition::kernels, &StudyDefinition::targets, &StudyDefinition::centres,
+      &StudyDefinition::plants,  &StudyDefinition::laws,    &StudyDefinition::integrators};
+  // [[expect]] tables first against an outline of the grid (the first choice of each entry:
+  // the same axis columns), then the axes expanded.
+  for (std::size_t a = 0; a < axes.size(); ++a)
+    study.*axis_members[a] = first_choices(report, axes[a]);
+  auto expectations = detail::read_expectations(root, study);
+  for (std::size_t a = 0; a < axes.size(); ++a)
+    study.*axis_members[a] = expand_plugins(report, axes[a]);
 
   // Build every kernel and target once: a combination that is invalid only for this domain
   // (e.g. a non-periodic sine on a closed track) is an input error, not a failed trial.
@@ -877,7 +889,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                                               Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
   });
-  study.expectations = detail::parse_expectations(root, study);
+  detail::check_expectation_selections(root, study, expectations);
+  study.expectations = std::move(expectations);
   return study;
 }
 
