@@ -2,13 +2,18 @@
 // store and trial and run again (trials.csv equals a clean run's); study files that ask for
 // too much are refused at once with file:line:column; an output write that fails leaves no
 // temporary behind; a store file copied alone after a run holds every trial.
+#include <fcntl.h>
+#include <signal.h>
 #include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include "cli_support.hpp"
 #include "rkhs/core/sha256.hpp"
@@ -265,4 +270,52 @@ TEST_CASE("after a run the store file alone holds every trial", "[cli][store][re
   REQUIRE(run.exit_code == 0);
   fs::copy_file(store, dir / "copy.sqlite");  // without store.sqlite-wal
   CHECK(rkhs::ResultStore(dir / "copy.sqlite").size() == 10);
+}
+
+TEST_CASE("SIGTERM ends a run within 2 s while every thread is inside a long trial",
+          "[cli][store][reliability]") {
+  // Two trials of minutes each (eigendecompositions of 4000 x 4000 Gram matrices, without
+  // cancellation points), one per thread: the machine is busy when the signal arrives.
+  const auto dir = rkhs::test::scratch_directory("reliable_sigterm");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "busy"
+evaluation_points = 16384
+metrics = ["gram_condition_number", "power_function_sup"]
+[domain]
+radius = 4
+[grid]
+n = [4000, 4001]
+[[kernel]]
+name = "matern"
+nu = 2.5
+)";
+  const auto log = dir / "log.txt";
+  const pid_t pid = fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
+    const std::string study = (dir / "study.toml").string(), store = (dir / "s.sqlite").string();
+    execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "run", study.c_str(), "--threads", "2",
+          "--store", store.c_str(), nullptr);
+    _exit(127);
+  }
+  // Until both trials are running (the progress line says so), then 2 s more inside them.
+  for (int i = 0; i < 600 && read_text(log).find("running 2: ") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  const auto signalled = std::chrono::steady_clock::now();
+  kill(pid, SIGTERM);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  INFO(read_text(log));
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK(seconds < 2);
+  CHECK_THAT(read_text(log), Catch::Contains("2 stopped while running"));
 }

@@ -15,7 +15,7 @@ namespace {
 std::atomic<bool> interrupted{false};
 // A trial busy in a call without cancellation points (a large eigendecomposition) is given this
 // long after Ctrl-C, then abandoned.
-constexpr double abandon_after_seconds = 2.0;
+constexpr double abandon_after_seconds = 1.5;
 
 extern "C" void request_stop(int) {
   interrupted = true;
