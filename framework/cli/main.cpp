@@ -61,6 +61,19 @@ int rkhs_study_main(int argc, char** argv) {
   merge->add_option("from", merge_from, "stores to copy from")
       ->required()
       ->check(CLI::ExistingFile);
+  StoreCommand store_arguments;
+  auto* store = app.add_subcommand(
+      "store",
+      "the result store: check (verify every record), vacuum (remove the records that "
+      "do not verify), export (records as CSV or JSON)");
+  store->add_option("action", store_arguments.action, "check, vacuum or export")
+      ->required()
+      ->check(CLI::IsMember({"check", "vacuum", "export"}));
+  store->add_option("--store", store_arguments.store_file,
+                    "result store (default: results/rkhs-study.sqlite)");
+  store->add_option("--format", store_arguments.format, "export: csv (default) or json")
+      ->check(CLI::IsMember({"csv", "json"}));
+  store->add_option("--out", store_arguments.out_file, "export: write to FILE (default: stdout)");
   run->add_flag("--mpi", session.use_mpi,
                 "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
   const auto add_rank_timeout = [&](CLI::App* command) {
@@ -159,6 +172,7 @@ int rkhs_study_main(int argc, char** argv) {
     if (*check) return command_check(check_arguments, executor);
     if (*verify) return command_verify_plugin(plugin_to_verify);
     if (*merge) return command_merge(merge_into, merge_from);
+    if (*store) return command_store(store_arguments);
     if (*list) return command_list(kind);
     if (*report) return command_report(report_dir, report_format, report_store);
     if (*validate) return command_validate(study_file);

@@ -47,9 +47,15 @@ double Harmonics::slope(double s, double length) const {
 
 Harmonics iso8608_harmonics(const Iso8608Settings& settings, double length) {
   const double dn = 1.0 / length;
-  const auto first =
-      static_cast<std::size_t>(std::max(1.0, std::ceil(settings.n_min * length - 1e-9)));
-  const auto last = static_cast<std::size_t>(std::floor(settings.n_max * length + 1e-9));
+  // Counted in floating point before anything is built: n_max L may be far beyond any size.
+  const double first_real = std::max(1.0, std::ceil(settings.n_min * length - 1e-9));
+  const double last_real = std::floor(settings.n_max * length + 1e-9);
+  if (last_real - first_real + 1 > static_cast<double>(max_iso8608_harmonics))
+    throw std::invalid_argument(fmt::format("{} harmonics (n_max L) is more than {}",
+                                            format_real(last_real - first_real + 1),
+                                            max_iso8608_harmonics));
+  const auto first = static_cast<std::size_t>(first_real);
+  const auto last = static_cast<std::size_t>(std::max(0.0, last_real));
   if (last < first)
     throw std::invalid_argument(
         fmt::format("no harmonic k / L (L = {} m) lies in [n_min, n_max] = [{}, {}] cycles/m",
@@ -119,9 +125,6 @@ class Iso8608Road final : public TargetFunction {
     } catch (const std::invalid_argument& e) {
       throw ParameterError("n_max", e.what());
     }
-    if (harmonics_.k.size() > 100000)
-      throw ParameterError(
-          "n_max", fmt::format("{} harmonics (n_max L) is more than 100000", harmonics_.k.size()));
   }
 
   void evaluate(std::span<const double> points, std::span<double> out) const override {

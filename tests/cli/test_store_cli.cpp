@@ -223,7 +223,7 @@ nu = 2.5
   INFO(output);
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 130);
-  CHECK(seconds < 15);  // the trial alone needs minutes; the run gives it 2 s, then ends
+  CHECK(seconds < 15);  // the trial alone needs minutes; the run gives it 1.5 s, then ends
   CHECK_THAT(output, Catch::Contains("rkhs-study: interrupted: 0 trials finished and stored, 1 "
                                      "stopped while running and 0 not started (not stored). Run "
                                      "the same command again to resume"));

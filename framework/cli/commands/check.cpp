@@ -36,6 +36,7 @@ int command_check(const CheckCommand& arguments, pipeline::Executor& executor) {
   stop_on_signals(options);
   const auto outcome = pipeline::run_study(executor, study, trials, options, arguments.store);
   if (!root) return stop_was_requested() ? exit_interrupted : exit_ok;
+  print_store_problems(outcome);
   if (!quiet) print_run_sources(outcome, executor);
   if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments.store);
 

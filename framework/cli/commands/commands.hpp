@@ -41,4 +41,14 @@ int command_list(const std::string& kind);
 int command_merge(const std::string& into, const std::vector<std::string>& from);
 int command_verify_plugin(const std::string& file);
 
+/// `store check|vacuum|export`: the records of a result store verified (exit 1 when some do
+/// not), the ones that do not verify removed, or every record written as CSV or JSON.
+struct StoreCommand {
+  std::string action;  ///< "check", "vacuum" or "export"
+  std::string store_file = "results/rkhs-study.sqlite";
+  std::string format = "csv";  ///< export: "csv" or "json"
+  std::string out_file;        ///< export: "" or "-" for stdout
+};
+int command_store(const StoreCommand& arguments);
+
 }  // namespace rkhs::cli

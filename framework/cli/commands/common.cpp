@@ -15,7 +15,7 @@ namespace {
 std::atomic<bool> interrupted{false};
 // A trial busy in a call without cancellation points (a large eigendecomposition) is given this
 // long after Ctrl-C, then abandoned.
-constexpr double abandon_after_seconds = 2.0;
+constexpr double abandon_after_seconds = 1.5;
 
 extern "C" void request_stop(int) {
   interrupted = true;
@@ -83,6 +83,15 @@ void print_run_sources(const pipeline::PipelineOutcome& outcome,
     std::cerr << fmt::format("  {} reused from {}, {} run now\n",
                              counted(outcome.completed->stored.reused, "trial", "trials"),
                              outcome.store_file, outcome.completed->stored.ran);
+}
+
+void print_store_problems(const pipeline::PipelineOutcome& outcome) {
+  const StoredRun* run = outcome.completed     ? &outcome.completed->stored
+                         : outcome.interrupted ? &*outcome.interrupted
+                                               : nullptr;
+  if (!run) return;
+  for (const auto& line : run->store_problems)
+    std::cerr << fmt::format("rkhs-study: warning: {}\n", line);
 }
 
 }  // namespace rkhs::cli

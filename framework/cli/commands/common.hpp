@@ -37,4 +37,8 @@ int report_interruption(const StoredRun& run, const pipeline::StoreOptions& stor
 void print_run_sources(const pipeline::PipelineOutcome& outcome,
                        const pipeline::Executor& executor);
 
+/// "rkhs-study: warning: STORE: trial KEY: what is wrong; run again" for every stored record a
+/// run did not trust (StoredRun::store_problems), on stderr, also with --quiet.
+void print_store_problems(const pipeline::PipelineOutcome& outcome);
+
 }  // namespace rkhs::cli

@@ -19,6 +19,7 @@ int command_report(const std::string& directory, const std::string& format,
   RunOptions options;
   stop_on_signals(options);
   auto outcome = pipeline::run_study(executor, study, trials, options, store);
+  print_store_problems(outcome);
   if (outcome.interrupted) return report_interruption(*outcome.interrupted, store);
   auto& run = *outcome.completed;
   // The tables describe the stored results, not this process: one thread, no wall time.

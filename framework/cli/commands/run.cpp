@@ -52,6 +52,7 @@ int run_shard(const RunCommand& arguments, const StudyDefinition& study,
   stop_on_signals(options);
   const auto outcome = pipeline::run_study(executor, study, mine, options, arguments.store,
                                            pipeline::Rates::not_fitted);
+  print_store_problems(outcome);
   if (!arguments.quiet) print_run_sources(outcome, executor);
   if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments.store);
   const auto& stored = outcome.completed->stored;
@@ -129,6 +130,7 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   if (!root) return stop_was_requested() ? exit_interrupted : exit_ok;
   if (!quiet) print_run_sources(outcome, executor);
   if (progress) progress->stop();
+  print_store_problems(outcome);
   if (outcome.interrupted)
     return report_interruption(*outcome.interrupted, arguments.store, journal->file().string());
 

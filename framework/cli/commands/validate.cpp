@@ -13,12 +13,15 @@ namespace rkhs::cli {
 int command_validate(const std::string& study_file) {
   const auto study = load_study(study_file);
   print_warnings(study);
-  const auto trials = study.trials();
+  // Counted from the axes: a valid grid may still be large, and nothing here needs its trials.
   std::vector<std::string> factors;
-  for (const auto& axis : study.grid_axes())
+  std::size_t trials = 1;
+  for (const auto& axis : study.grid_axes()) {
     factors.push_back(counted(axis.count, axis.singular, axis.plural));
+    trials *= axis.count;
+  }
   std::cout << fmt::format("{}: valid; {} = {}\n", study_file, fmt::join(factors, " x "),
-                           counted(trials.size(), "trial", "trials"));
+                           counted(trials, "trial", "trials"));
   if (const auto tiers = study_tiers(study); !study.expectations.empty() || !tiers.empty())
     std::cout << fmt::format(
         "  {} expectation{}; tiers: {}\n", study.expectations.size(),

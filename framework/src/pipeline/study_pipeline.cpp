@@ -31,6 +31,8 @@ PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
   const auto start = std::chrono::steady_clock::now();
   auto stored = executor.run(study, trials, options, store ? &*store : nullptr,
                              store_options.fresh);
+  // The database file alone then holds every trial (a copy without its -wal file is whole).
+  if (store) store->checkpoint();
   PipelineOutcome outcome;
   if (!stored) return outcome;
   outcome.store_file = store ? store->file().string() : std::string();

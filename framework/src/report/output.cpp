@@ -3,8 +3,14 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -33,6 +39,30 @@ std::string abscissa_name(const StudyDefinition& study) {
 std::string model_id(RateModel model) {
   return model == RateModel::power_law ? "power_law" : "exponential";
 }
+
+std::string json_value(const ParameterValue& value) {
+  if (std::holds_alternative<std::string>(value)) return json_string(std::get<std::string>(value));
+  if (std::holds_alternative<bool>(value)) return std::get<bool>(value) ? "true" : "false";
+  return format_value(value);
+}
+
+std::string json_parameters(const ParameterSet& parameters) {
+  std::vector<std::string> items;
+  for (const auto& [name, value] : parameters.values())
+    items.push_back(fmt::format("{}: {}", json_string(name), json_value(value)));
+  return fmt::format("{{{}}}", fmt::join(items, ", "));
+}
+
+std::string json_plugin(const PluginChoice& choice) {
+  return fmt::format("{{\"name\": {}, \"parameters\": {}}}", json_string(choice.name),
+                     json_parameters(choice.parameters));
+}
+
+std::string group_label(const TrialSpec& trial) {
+  return trial.group_key;
+}
+
+}  // namespace
 
 // Minimal JSON writing: strings escaped, non-finite numbers as null (with the value kept as
 // a string beside it where it matters, e.g. an infinite condition number).
@@ -70,30 +100,6 @@ std::string json_number(double value) {
   if (std::isnan(value)) return "null";
   return value > 0 ? "\"inf\"" : "\"-inf\"";
 }
-
-std::string json_value(const ParameterValue& value) {
-  if (std::holds_alternative<std::string>(value)) return json_string(std::get<std::string>(value));
-  if (std::holds_alternative<bool>(value)) return std::get<bool>(value) ? "true" : "false";
-  return format_value(value);
-}
-
-std::string json_parameters(const ParameterSet& parameters) {
-  std::vector<std::string> items;
-  for (const auto& [name, value] : parameters.values())
-    items.push_back(fmt::format("{}: {}", json_string(name), json_value(value)));
-  return fmt::format("{{{}}}", fmt::join(items, ", "));
-}
-
-std::string json_plugin(const PluginChoice& choice) {
-  return fmt::format("{{\"name\": {}, \"parameters\": {}}}", json_string(choice.name),
-                     json_parameters(choice.parameters));
-}
-
-std::string group_label(const TrialSpec& trial) {
-  return trial.group_key;
-}
-
-}  // namespace
 
 std::string csv_field(const std::string& value) {
   if (value.find_first_of(",\"\n\r") == std::string::npos) return value;
@@ -355,16 +361,50 @@ std::string timeseries_csv(const RunRecord& run) {
   return out;
 }
 
-void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
-  const auto temporary = file.string() + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + temporary);
-    out << content;
-    out.flush();
-    if (!out) throw std::runtime_error("error writing " + temporary);
+namespace {
+
+// Writes all of `content` to `fd`; false (errno set) when the system refuses.
+bool write_all(int fd, std::string_view content) {
+  while (!content.empty()) {
+    const auto written = ::write(fd, content.data(), content.size());
+    if (written < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    content.remove_prefix(static_cast<std::size_t>(written));
   }
-  std::filesystem::rename(temporary, file);
+  return true;
+}
+
+// Makes a rename in `directory` durable.
+void sync_directory(const std::filesystem::path& directory) {
+  const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;  // nothing to sync through (the rename itself succeeded)
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
+  static std::atomic<unsigned long> counter{0};
+  const auto temporary = std::filesystem::path(
+      fmt::format("{}.tmp.{}.{}", file.string(), static_cast<long>(::getpid()), counter++));
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0)
+    throw std::runtime_error(
+        fmt::format("cannot write {}: {}", file.string(), std::strerror(errno)));
+  const auto fail = [&](const char* step, int error, bool open) {
+    if (open) ::close(fd);
+    ::unlink(temporary.c_str());
+    throw std::runtime_error(
+        fmt::format("cannot write {} ({}): {}", file.string(), step, std::strerror(error)));
+  };
+  if (!write_all(fd, content)) fail("write", errno, true);
+  if (::fsync(fd) != 0) fail("fsync", errno, true);
+  if (::close(fd) != 0) fail("close", errno, false);
+  if (::rename(temporary.c_str(), file.c_str()) != 0) fail("rename", errno, false);
+  sync_directory(file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
 }
 
 void write_outputs(const RunRecord& run, const std::filesystem::path& directory) {

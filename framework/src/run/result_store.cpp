@@ -3,6 +3,7 @@
 #include "rkhs/run/trial_identity.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <sqlite3.h>
 
 #include <charconv>
@@ -88,21 +89,35 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
                                              : known_hashes;
   std::vector<TrialSpec> pending;
   std::vector<std::size_t> position;  // index into `trials` of each pending trial
+  std::size_t old_format = 0;
   for (std::size_t i = 0; i < trials.size(); ++i) {
-    if (store && !fresh)
-      if (auto found = store->find(hashes[i])) {
-        out.results[i] = std::move(*found);
+    if (store && !fresh) {
+      auto check = store->lookup(hashes[i], &study.all_metrics());
+      if (check.result) {
+        out.results[i] = std::move(*check.result);
         ++out.reused;
         continue;
       }
+      if (check.old_format)
+        ++old_format;
+      else if (!check.problem.empty())
+        out.store_problems.push_back(fmt::format(
+            "{}: trial {}: {}; run again", store->file().string(), trials[i].key, check.problem));
+    }
     pending.push_back(trials[i]);
     position.push_back(i);
   }
+  if (old_format)
+    out.store_problems.push_back(fmt::format(
+        "{}: {} stored in the old record format (no checksum): run again and stored anew",
+        store->file().string(),
+        old_format == 1 ? "1 trial" : fmt::format("{} trials", old_format)));
   std::map<std::size_t, std::size_t> slot;  // trial index -> position in `trials`
   for (std::size_t k = 0; k < pending.size(); ++k) slot[pending[k].index] = position[k];
   RunOptions storing = options;
   storing.on_trial_finished = [&](const TrialSpec& trial, const TrialResult& result) {
-    if (store) store->put(hashes[slot.at(trial.index)], study.name, trial.key, result);
+    if (store)
+      store->put(hashes[slot.at(trial.index)], study.name, trial.key, result, study.all_metrics());
     if (options.on_trial_finished) options.on_trial_finished(trial, result);
   };
   auto ran = execute(study, pending, storing);
@@ -178,6 +193,96 @@ TrialResult deserialize_result(std::string_view text) {
   return r;
 }
 
+namespace {
+
+// A line of a record for a message: at most 60 characters.
+std::string quoted_excerpt(std::string_view text) {
+  return text.size() <= 60 ? fmt::format("'{}'", text) : fmt::format("'{}...'", text.substr(0, 57));
+}
+
+constexpr std::string_view record_header = "rkhs-record 2\n";
+constexpr std::string_view names_field = "metric_names";
+constexpr std::string_view checksum_field = "\nchecksum ";
+
+std::string record_checksum(const std::string& hash, std::string_view body) {
+  Sha256 sum;
+  sum.update(hash);
+  sum.update("\n");
+  sum.update(body);
+  return sum.hex_digest();
+}
+
+}  // namespace
+
+std::string store_record(const std::string& hash, const TrialResult& result,
+                         const std::vector<std::string>& metric_names) {
+  std::string body(record_header);
+  body += names_field;
+  for (const auto& name : metric_names) body += " " + name;
+  body += "\n" + serialize_result(result);
+  return body + "checksum " + record_checksum(hash, body) + "\n";
+}
+
+RecordCheck read_record(const std::string& hash, std::string_view text,
+                        const std::vector<std::string>* expected_metrics) {
+  RecordCheck check;
+  const auto first_line = text.substr(0, text.find('\n'));
+  if (first_line == "rkhs-trial 1") {
+    check.old_format = true;
+    check.problem = "old record format (no checksum)";
+    return check;
+  }
+  if (!text.starts_with(record_header)) {
+    check.problem = fmt::format("not a stored record: first line {}, expected 'rkhs-record {}'",
+                                quoted_excerpt(first_line), record_format);
+    return check;
+  }
+  const auto at_checksum = text.rfind(checksum_field);
+  if (at_checksum == std::string_view::npos) {
+    check.problem = "no checksum line";
+    return check;
+  }
+  const auto body = text.substr(0, at_checksum + 1);
+  auto stored = text.substr(at_checksum + checksum_field.size());
+  if (stored.ends_with('\n')) stored.remove_suffix(1);
+  if (const auto computed = record_checksum(hash, body); stored != computed) {
+    // Their first 16 digits: enough to tell them apart, short enough to read.
+    check.problem = fmt::format("checksum mismatch (stored {}..., computed {}...)",
+                                stored.substr(0, 16), computed.substr(0, 16));
+    return check;
+  }
+  auto rest = body.substr(record_header.size());
+  const auto names_line = rest.substr(0, rest.find('\n'));
+  if (!names_line.starts_with(names_field) ||
+      (names_line.size() > names_field.size() && names_line[names_field.size()] != ' ')) {
+    check.problem =
+        fmt::format("second line {}, expected 'metric_names ...'", quoted_excerpt(names_line));
+    return check;
+  }
+  std::istringstream names{std::string(names_line.substr(names_field.size()))};
+  for (std::string name; names >> name;) check.metric_names.push_back(name);
+  TrialResult result;
+  try {
+    result = deserialize_result(rest.substr(std::min(rest.size(), names_line.size() + 1)));
+  } catch (const std::exception& e) {
+    check.problem = e.what();
+    return check;
+  }
+  if (result.metrics.size() != check.metric_names.size()) {
+    check.problem = fmt::format("{} metric values for {} metric names", result.metrics.size(),
+                                check.metric_names.size());
+    return check;
+  }
+  if (expected_metrics && check.metric_names != *expected_metrics) {
+    check.problem =
+        fmt::format("it holds the metrics {}, the study measures {}",
+                    fmt::join(check.metric_names, ", "), fmt::join(*expected_metrics, ", "));
+    return check;
+  }
+  check.result = std::move(result);
+  return check;
+}
+
 ResultStore::ResultStore(const std::filesystem::path& file) : file_(file) {
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
   if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
@@ -222,27 +327,86 @@ struct Statement {
 };
 }  // namespace
 
-std::optional<TrialResult> ResultStore::find(const std::string& hash) const {
+[[noreturn]] void ResultStore::fail(const std::string& what) const {
+  throw std::runtime_error(
+      fmt::format("{}: result store: {}: {}", file_.string(), what, sqlite3_errmsg(db_)));
+}
+
+RecordCheck ResultStore::lookup(const std::string& hash,
+                                const std::vector<std::string>* metric_names) const {
   Statement statement(db_, "SELECT result FROM trials WHERE hash = ?1", file_);
   sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
-  if (sqlite3_step(statement.handle) != SQLITE_ROW) return std::nullopt;
+  const int status = sqlite3_step(statement.handle);
+  if (status == SQLITE_DONE) return {};
+  if (status != SQLITE_ROW) fail("cannot read the trial " + hash);
   const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, 0));
-  return deserialize_result(text ? text : "");
+  return read_record(hash, text ? text : "", metric_names);
+}
+
+std::optional<TrialResult> ResultStore::find(const std::string& hash) const {
+  return lookup(hash).result;
 }
 
 void ResultStore::put(const std::string& hash, const std::string& study, const std::string& key,
-                      const TrialResult& result) {
+                      const TrialResult& result, const std::vector<std::string>& metric_names) {
   Statement statement(db_,
                       "INSERT OR REPLACE INTO trials (hash, study, key, result, stored) "
                       "VALUES (?1, ?2, ?3, ?4, datetime('now'))",
                       file_);
-  const auto record = serialize_result(result);
+  const auto record = store_record(hash, result, metric_names);
   sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 2, study.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 3, key.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 4, record.c_str(), -1, SQLITE_TRANSIENT);
-  if (sqlite3_step(statement.handle) != SQLITE_DONE)
-    throw std::runtime_error(fmt::format("{}: result store: {}", file_.string(), sqlite3_errmsg(db_)));
+  if (sqlite3_step(statement.handle) != SQLITE_DONE) fail("cannot store the trial " + key);
+}
+
+void ResultStore::for_each(const std::function<void(const Entry&)>& visit) const {
+  Statement statement(db_, "SELECT hash, study, key, result, stored FROM trials ORDER BY key, hash",
+                      file_);
+  auto column = [&](int i) {
+    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, i));
+    return std::string(text ? text : "");
+  };
+  while (true) {
+    const int status = sqlite3_step(statement.handle);
+    if (status == SQLITE_DONE) return;
+    if (status != SQLITE_ROW) fail("cannot read the stored trials");
+    Entry entry{column(0), column(1), column(2), column(4), {}};
+    entry.check = read_record(entry.hash, column(3));
+    visit(entry);
+  }
+}
+
+std::size_t ResultStore::remove(const std::vector<std::string>& hashes) {
+  exec("BEGIN IMMEDIATE");
+  std::size_t removed = 0;
+  try {
+    Statement statement(db_, "DELETE FROM trials WHERE hash = ?1", file_);
+    for (const auto& hash : hashes) {
+      sqlite3_reset(statement.handle);
+      sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
+      if (sqlite3_step(statement.handle) != SQLITE_DONE) fail("cannot remove the trial " + hash);
+      removed += static_cast<std::size_t>(sqlite3_changes(db_));
+    }
+  } catch (...) {
+    exec("ROLLBACK");
+    throw;
+  }
+  exec("COMMIT");
+  return removed;
+}
+
+void ResultStore::vacuum() {
+  exec("VACUUM");
+}
+
+bool ResultStore::checkpoint() {
+  const int status =
+      sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_TRUNCATE, nullptr, nullptr);
+  if (status == SQLITE_BUSY) return false;
+  if (status != SQLITE_OK) fail("cannot checkpoint the WAL");
+  return true;
 }
 
 std::size_t ResultStore::merge_from(const std::filesystem::path& other) {
@@ -266,7 +430,7 @@ std::size_t ResultStore::merge_from(const std::filesystem::path& other) {
 
 std::size_t ResultStore::size() const {
   Statement statement(db_, "SELECT COUNT(*) FROM trials", file_);
-  if (sqlite3_step(statement.handle) != SQLITE_ROW) return 0;
+  if (sqlite3_step(statement.handle) != SQLITE_ROW) fail("cannot count the stored trials");
   return static_cast<std::size_t>(sqlite3_column_int64(statement.handle, 0));
 }
 

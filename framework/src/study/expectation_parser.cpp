@@ -26,9 +26,8 @@ bool valid_tier_name(const std::string& name) {
 // Reads one [[expect]] table; `columns` are the study's axis columns (the selector keys).
 class ExpectationReader {
  public:
-  ExpectationReader(const StudyDefinition& study, const std::vector<TrialSpec>& groups,
-                    const std::vector<std::string>& columns)
-      : study_(study), groups_(groups), columns_(columns) {}
+  ExpectationReader(const StudyDefinition& study, const std::vector<std::string>& columns)
+      : study_(study), columns_(columns) {}
 
   Expectation read(const toml::table& table, std::size_t number) const {
     Expectation e;
@@ -41,7 +40,6 @@ class ExpectationReader {
     if (const auto* node = table.get("tier")) e.tiers = parse_tiers(*node, study_.source, "expect.tier");
     read_selectors(table, e);
     read_kind(table, e);
-    check_selection(table, e);
     return e;
   }
 
@@ -239,8 +237,11 @@ class ExpectationReader {
     }
   }
 
-  // Every expectation must select a group; a theory expectation must have a theory there.
-  void check_selection(const toml::table& table, const Expectation& e) const {
+  // Every expectation must select a group of `groups_` (one trial per group of the study); a
+  // theory expectation must have a theory there.
+ public:
+  void check_selection(const toml::table& table, const Expectation& e,
+                       const std::vector<TrialSpec>& groups_) const {
     std::vector<const TrialSpec*> selected;
     for (const auto& group : groups_)
       if (e.selects(group)) selected.push_back(&group);
@@ -293,9 +294,35 @@ class ExpectationReader {
   }
 
   const StudyDefinition& study_;
-  const std::vector<TrialSpec>& groups_;
   const std::vector<std::string>& columns_;
 };
+
+// Trials in which every choice of every plugin axis appears, in the order of the axis (the
+// others at their last choice once theirs run out): as many trials as the longest axis, with
+// the axis columns of the whole grid.
+std::vector<TrialSpec> one_trial_per_choice(const StudyDefinition& study) {
+  struct Axis {
+    std::vector<PluginChoice> StudyDefinition::*choices;
+    PluginChoice TrialSpec::*choice;
+  };
+  static constexpr Axis axes[] = {{&StudyDefinition::kernels, &TrialSpec::kernel},
+                                  {&StudyDefinition::targets, &TrialSpec::target},
+                                  {&StudyDefinition::centres, &TrialSpec::centres},
+                                  {&StudyDefinition::plants, &TrialSpec::plant},
+                                  {&StudyDefinition::laws, &TrialSpec::law},
+                                  {&StudyDefinition::integrators, &TrialSpec::integrator}};
+  std::size_t count = 1;
+  for (const auto& axis : axes) count = std::max(count, (study.*axis.choices).size());
+  std::vector<TrialSpec> out(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    for (const auto& axis : axes)
+      if (const auto& choices = study.*axis.choices; !choices.empty())
+        out[i].*axis.choice = choices[std::min(i, choices.size() - 1)];
+    if (!study.laps_values.empty()) out[i].laps = study.laps_values.front();
+    out[i].n = study.n_values.empty() ? 0 : study.n_values.front();
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -317,7 +344,11 @@ std::vector<std::string> parse_tiers(const toml::node& node, const std::string& 
   return tiers;
 }
 
-std::vector<Expectation> parse_expectations(const toml::table& root, const StudyDefinition& study) {
+namespace {
+
+// The [[expect]] tables of `root` (none when it has none).
+std::vector<const toml::table*> expect_tables(const toml::table& root,
+                                              const StudyDefinition& study) {
   const auto* node = root.get("expect");
   if (!node) return {};
   std::vector<const toml::table*> tables;
@@ -334,19 +365,35 @@ std::vector<Expectation> parse_expectations(const toml::table& root, const Study
     fail(study.source, node->source(), "expect",
          fmt::format("expected [[expect]] tables, found {}", show(*node)));
   }
+  return tables;
+}
 
-  // One representative trial per group (the selectors look at axes, which a group shares).
-  std::vector<TrialSpec> groups;
-  std::set<std::string> seen;
-  const auto trials = study.trials();
-  for (const auto& trial : trials)
-    if (seen.insert(trial.group_key).second) groups.push_back(trial);
-  const auto columns = axis_columns(trials);
+}  // namespace
 
-  const ExpectationReader reader(study, groups, columns);
+std::vector<Expectation> read_expectations(const toml::table& root,
+                                           const StudyDefinition& outline) {
+  const auto tables = expect_tables(root, outline);
+  if (tables.empty()) return {};
+  const auto columns = axis_columns(one_trial_per_choice(outline));
+  const ExpectationReader reader(outline, columns);
   std::vector<Expectation> out;
   for (std::size_t i = 0; i < tables.size(); ++i) out.push_back(reader.read(*tables[i], i + 1));
   return out;
+}
+
+void check_expectation_selections(const toml::table& root, const StudyDefinition& study,
+                                  const std::vector<Expectation>& expectations) {
+  const auto tables = expect_tables(root, study);
+  if (tables.empty()) return;
+  const auto columns = axis_columns(one_trial_per_choice(study));
+  const ExpectationReader reader(study, columns);
+  // One representative trial per group (the selectors look at axes, which a group shares):
+  // the trials of the grid with its first n only, so the grid is not expanded again.
+  StudyDefinition one_n = study;
+  one_n.n_values.resize(std::min<std::size_t>(one_n.n_values.size(), 1));
+  const auto groups = one_n.trials();
+  for (std::size_t i = 0; i < tables.size(); ++i)
+    reader.check_selection(*tables[i], expectations.at(i), groups);
 }
 
 }  // namespace rkhs::detail

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -32,7 +33,16 @@ using namespace detail;
 
 namespace {
 
-// n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }
+// The largest n a study may ask for (no Gram matrix is anywhere near this size), and the
+// most values of n one grid may list.
+constexpr std::int64_t max_n = 1'000'000'000;
+constexpr std::int64_t max_n_values = 100000;
+// [limits] trials when the file does not give it (docs/study-files.md).
+constexpr std::uint64_t default_max_trials = 1'000'000;
+
+// n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }.
+// Ranges are counted before they are expanded, without overflow: bounds above max_n and more
+// than max_n_values values are errors.
 std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node) {
   std::vector<std::pair<std::int64_t, toml::source_region>> values;
   if (const auto* array = node.as_array()) {
@@ -58,15 +68,31 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
       report.fail(range->source(), "grid.n", "a range needs 'from' and 'to'");
     if (step.has_value() == factor.has_value())
       report.fail(range->source(), "grid.n", "a range needs exactly one of 'step' or 'factor'");
+    for (const char* key : {"from", "to"}) {
+      const auto value = *integer(key);
+      if (value < 1 || value > max_n)
+        report.fail(range->get(key)->source(), fmt::format("grid.n.{}", key),
+                    fmt::format("must be between 1 and {} (centres), found {}", max_n, value));
+    }
     if (step && *step < 1) report.fail(range->get("step")->source(), "grid.n.step",
                                        fmt::format("must be >= 1, found {}", *step));
     if (factor && *factor < 2) report.fail(range->get("factor")->source(), "grid.n.factor",
                                            fmt::format("must be >= 2, found {}", *factor));
     if (*to < *from)
       report.fail(range->source(), "grid.n", fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
-    for (std::int64_t v = *from; v <= *to && v > 0; v = step ? v + *step : v * *factor) {
-      values.emplace_back(v, range->source());
-      if (values.size() > 100000) report.fail(range->source(), "grid.n", "more than 100000 values");
+    // 1 <= from <= to <= max_n: neither the count nor the values can overflow.
+    if (step) {
+      const std::int64_t count = (*to - *from) / *step + 1;
+      if (count > max_n_values)
+        report.fail(range->source(), "grid.n",
+                    fmt::format("{} values of n (from {} to {} in steps of {}), more than {}",
+                                count, *from, *to, *step, max_n_values));
+      for (std::int64_t i = 0; i < count; ++i) values.emplace_back(*from + i * *step, range->source());
+    } else {
+      for (std::int64_t v = *from;; v *= *factor) {
+        values.emplace_back(v, range->source());
+        if (v > *to / *factor) break;  // v * factor > to, computed without overflow
+      }
     }
   } else {
     report.fail(node.source(), "grid.n",
@@ -78,6 +104,8 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
   std::vector<std::size_t> n;
   for (const auto& [v, where] : values) {
     if (v < 1) report.fail(where, "grid.n", fmt::format("must be >= 1, found {}", v));
+    if (v > max_n)
+      report.fail(where, "grid.n", fmt::format("must be <= {} (centres), found {}", max_n, v));
     n.push_back(static_cast<std::size_t>(v));
   }
   std::sort(n.begin(), n.end());
@@ -86,43 +114,172 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
   return n;
 }
 
-// One [[kernel]] / [[target]] / [[centres]] entry: a name and parameters, each a value or an
-// array of values (an axis). Returns every combination, the first parameter varying slowest.
-template <class RegistryType>
-std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml::table& entry,
-                                             std::string_view section,
-                                             const RegistryType& registry) {
-  const std::string prefix = std::string(section) + ".";
-  const std::string name = get_string(report, entry, "name", prefix, std::nullopt);
-  const auto* plugin = registry.find(name);
-  if (!plugin)
-    report.fail(entry.get("name")->source(), prefix + "name",
-                fmt::format("unknown {} '{}' {}", registry.kind(), name,
-                            with_suggestion(name, registry.names())));
-  const auto& specs = plugin->info.parameters;
-  std::vector<std::string> known;
-  for (const auto& spec : specs) known.push_back(spec.name);
+// The grid's size counted from the file's lists, before any trial or plugin choice is built:
+// the product of every axis (each the sum over its entries of the product of their parameter
+// lists), saturating instead of overflowing.
+std::uint64_t saturating_product(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t product = 0;
+  return __builtin_mul_overflow(a, b, &product) ? std::numeric_limits<std::uint64_t>::max()
+                                                : product;
+}
 
-  // Axis values per parameter, in declaration order.
+struct GridFactor {
+  std::string text;            // "60 kernels ([[kernel]] 'gaussian' at line 8: sigma 10 x nu 6)"
+  std::uint64_t count = 1;     // of this axis
+  std::uint64_t largest = 0;   // of its largest entry (or list)
+  toml::source_region where;   // of that entry
+  std::string key;             // of that entry: "kernel", "grid.n", "adaptive.laps"
+};
+
+// `[[section]]` entries: how many choices they expand to, without expanding them.
+GridFactor count_plugin_axis(const toml::table& root, std::string_view section,
+                             std::string_view singular, std::string_view plural) {
+  GridFactor factor{std::string(), 1, 1, {}, std::string(section)};
+  const auto* node = root.get(section);
+  if (!node) {
+    factor.text = fmt::format("1 {} (the default)", singular);
+    return factor;
+  }
+  factor.where = node->source();
+  std::vector<const toml::node*> entries;
+  if (const auto* array = node->as_array())
+    for (const auto& item : *array) entries.push_back(&item);
+  else
+    entries.push_back(node);
+  std::uint64_t total = 0;
+  std::vector<std::string> parts;
+  for (const auto* entry : entries) {
+    std::uint64_t count = 1;
+    std::vector<std::string> lists;
+    if (const auto* table = entry->as_table())
+      for (auto&& [key, value] : *table) {
+        if (key.str() == "name" || key.str() == "tier") continue;
+        if (const auto* values = value.as_array(); values && values->size() > 1) {
+          count = saturating_product(count, values->size());
+          lists.push_back(fmt::format("{} {}", key.str(), values->size()));
+        }
+      }
+    total = count > std::numeric_limits<std::uint64_t>::max() - total
+                ? std::numeric_limits<std::uint64_t>::max()
+                : total + count;
+    if (count > factor.largest) {
+      factor.largest = count;
+      factor.where = entry->source();
+    }
+    if (!lists.empty()) {
+      const auto* name = entry->as_table() ? entry->as_table()->get("name") : nullptr;
+      parts.push_back(fmt::format("[[{}]] {}at line {}: {}", section,
+                                  name ? show(*name) + " " : std::string(),
+                                  entry->source().begin.line, fmt::join(lists, " x ")));
+    }
+  }
+  factor.count = total;
+  factor.text = fmt::format("{} {}", total, total == 1 ? singular : plural);
+  if (!parts.empty()) factor.text += fmt::format(" ({})", fmt::join(parts, "; "));
+  return factor;
+}
+
+// Refuses a grid of more than `cap` trials before anything of it is built, at the entry or
+// list that contributes most, naming the product and the lists that multiply to it.
+void check_grid_size(const Reporter& report, const toml::table& root, StudyKind kind,
+                     std::size_t n_count, const toml::node& n_node, std::uint64_t cap) {
+  std::vector<GridFactor> factors{count_plugin_axis(root, "kernel", "kernel", "kernels"),
+                                  count_plugin_axis(root, "target", "target", "targets"),
+                                  count_plugin_axis(root, "centres", "centre placement",
+                                                    "centre placements")};
+  if (kind == StudyKind::adaptive) {
+    factors.push_back(count_plugin_axis(root, "plant", "plant", "plants"));
+    factors.push_back(count_plugin_axis(root, "law", "learning law", "learning laws"));
+    factors.push_back(count_plugin_axis(root, "integrator", "integrator", "integrators"));
+    const auto* adaptive = root.get("adaptive");
+    const auto* laps = adaptive && adaptive->as_table() ? adaptive->as_table()->get("laps") : nullptr;
+    if (laps && laps->as_array() && laps->as_array()->size() > 1) {
+      const auto count = laps->as_array()->size();
+      factors.push_back({fmt::format("{} values of laps", count), count, count, laps->source(),
+                         "adaptive.laps"});
+    }
+  }
+  factors.push_back({fmt::format("{} value{} of n", n_count, n_count == 1 ? "" : "s"), n_count,
+                     n_count, n_node.source(), "grid.n"});
+  std::uint64_t trials = 1;
+  const GridFactor* largest = &factors.front();
+  for (const auto& factor : factors) {
+    trials = saturating_product(trials, factor.count);
+    if (factor.largest > largest->largest) largest = &factor;
+  }
+  if (trials <= cap) return;
+  std::vector<std::string> texts;
+  for (const auto& factor : factors) texts.push_back(factor.text);
+  report.fail(largest->where, largest->key,
+              fmt::format("the grid has {} trials, more than [limits] trials = {}: {}; shorten "
+                          "these lists, or raise [limits] trials",
+                          trials == std::numeric_limits<std::uint64_t>::max()
+                              ? std::string("more than 10^19")
+                              : std::to_string(trials),
+                          cap, fmt::join(texts, " x ")));
+}
+
+// A [[kernel]] / [[target]] / [[centres]] / ... entry read and checked (its name, its
+// parameters' names, each value), not yet expanded: a name and parameters, each a value or an
+// array of values (an axis).
+struct PluginEntry {
   struct Axis {
     std::string name;
     std::vector<std::pair<ParameterValue, toml::source_region>> values;
   };
-  std::vector<Axis> axes;
+  std::string name;
+  const std::vector<ParameterSpec>* specs = nullptr;
+  std::vector<Axis> axes;  // in the order the plugin declares its parameters
   std::vector<std::string> tiers;
-  for (auto&& [key, node] : entry) {
+  toml::source_region where;
+};
+
+// The choice of `entry` with value at[a] of each axis a; fails at the value a ParameterError
+// names.
+PluginChoice resolve_choice(const Reporter& report, std::string_view section,
+                            const PluginEntry& entry, const std::vector<std::size_t>& at) {
+  std::map<std::string, ParameterValue> given;
+  for (std::size_t a = 0; a < entry.axes.size(); ++a)
+    given[entry.axes[a].name] = entry.axes[a].values[at[a]].first;
+  try {
+    return {entry.name, ParameterSet::resolve(*entry.specs, given), entry.tiers};
+  } catch (const ParameterError& e) {
+    toml::source_region where = entry.where;
+    for (std::size_t a = 0; a < entry.axes.size(); ++a)
+      if (entry.axes[a].name == e.parameter()) where = entry.axes[a].values[at[a]].second;
+    report.fail(where, fmt::format("{}.{}", section, e.parameter()), e.what());
+  }
+}
+
+template <class RegistryType>
+PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
+                              std::string_view section, const RegistryType& registry) {
+  const std::string prefix = std::string(section) + ".";
+  PluginEntry entry;
+  entry.where = table.source();
+  entry.name = get_string(report, table, "name", prefix, std::nullopt);
+  const auto* plugin = registry.find(entry.name);
+  if (!plugin)
+    report.fail(table.get("name")->source(), prefix + "name",
+                fmt::format("unknown {} '{}' {}", registry.kind(), entry.name,
+                            with_suggestion(entry.name, registry.names())));
+  entry.specs = &plugin->info.parameters;
+  std::vector<std::string> known;
+  for (const auto& spec : *entry.specs) known.push_back(spec.name);
+
+  for (auto&& [key, node] : table) {
     const std::string parameter(key.str());
     if (parameter == "name") continue;
     if (parameter == "tier") {  // the tiers this entry belongs to (docs/verification.md)
-      tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
+      entry.tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
       continue;
     }
     if (std::find(known.begin(), known.end(), parameter) == known.end())
       report.fail(key.source(), prefix + parameter,
-                  fmt::format("unknown parameter of {} '{}' {}", registry.kind(), name,
+                  fmt::format("unknown parameter of {} '{}' {}", registry.kind(), entry.name,
                               known.empty() ? std::string("(it has none)")
                                             : with_suggestion(parameter, known)));
-    Axis axis{parameter, {}};
+    PluginEntry::Axis axis{parameter, {}};
     if (const auto* array = node.as_array()) {
       if (array->empty()) report.fail(node.source(), prefix + parameter, "empty list of values");
       for (const auto& item : *array) {
@@ -139,63 +296,95 @@ std::vector<PluginChoice> parse_plugin_entry(const Reporter& report, const toml:
                     fmt::format("expected a value or a list of values, found {}", describe(node)));
       axis.values.emplace_back(std::move(*value), node.source());
     }
-    axes.push_back(std::move(axis));
+    entry.axes.push_back(std::move(axis));
   }
-  std::sort(axes.begin(), axes.end(), [&](const Axis& a, const Axis& b) {
+  std::sort(entry.axes.begin(), entry.axes.end(), [&](const auto& a, const auto& b) {
     return std::find(known.begin(), known.end(), a.name) <
            std::find(known.begin(), known.end(), b.name);
   });
-
-  std::vector<PluginChoice> out;
-  std::vector<std::size_t> at(axes.size(), 0);
-  while (true) {
-    std::map<std::string, ParameterValue> given;
-    for (std::size_t a = 0; a < axes.size(); ++a) given[axes[a].name] = axes[a].values[at[a]].first;
-    try {
-      out.push_back({name, ParameterSet::resolve(specs, given), tiers});
-    } catch (const ParameterError& e) {
-      toml::source_region where = entry.source();
-      for (std::size_t a = 0; a < axes.size(); ++a)
-        if (axes[a].name == e.parameter()) where = axes[a].values[at[a]].second;
-      report.fail(where, prefix + e.parameter(), e.what());
+  // Every value once, with the first of the other lists (a choice of the grid): a value out of
+  // range or listed twice is found here, before the entry is expanded.
+  const std::vector<std::size_t> first(entry.axes.size(), 0);
+  resolve_choice(report, section, entry, first);
+  for (std::size_t a = 0; a < entry.axes.size(); ++a) {
+    std::set<std::string> labels;
+    for (std::size_t v = 0; v < entry.axes[a].values.size(); ++v) {
+      auto at = first;
+      at[a] = v;
+      const auto label = resolve_choice(report, section, entry, at).label();
+      if (!labels.insert(label).second)
+        report.fail(entry.axes[a].values[v].second, prefix + entry.axes[a].name,
+                    fmt::format("'{}' is listed twice", label));
     }
-    std::size_t a = axes.size();
-    while (a > 0 && ++at[a - 1] == axes[a - 1].values.size()) at[--a] = 0;
-    if (a == 0) break;
   }
-  return out;
+  return entry;
 }
 
+// Every combination of an entry's lists, the first parameter varying slowest.
+void expand_plugin_entry(const Reporter& report, std::string_view section,
+                         const PluginEntry& entry, std::vector<PluginChoice>& out) {
+  std::vector<std::size_t> at(entry.axes.size(), 0);
+  while (true) {
+    out.push_back(resolve_choice(report, section, entry, at));
+    std::size_t a = entry.axes.size();
+    while (a > 0 && ++at[a - 1] == entry.axes[a - 1].values.size()) at[--a] = 0;
+    if (a == 0) break;
+  }
+}
+
+// A plugin axis ([[kernel]], [[target]], ...) read and checked, expanded later (expand_plugins):
+// everything cheap in a study file is checked before anything large is built.
+struct PluginAxis {
+  std::string section;
+  const toml::node* node = nullptr;  // the section; nullptr: the default plugin
+  std::vector<PluginEntry> entries;
+};
+
 template <class RegistryType>
-std::vector<PluginChoice> parse_plugins(const Reporter& report, const toml::table& root,
-                                        std::string_view section, const RegistryType& registry,
-                                        std::optional<std::string> default_name) {
-  const auto* node = root.get(section);
-  if (!node) {
+PluginAxis read_plugins(const Reporter& report, const toml::table& root, std::string_view section,
+                        const RegistryType& registry, std::optional<std::string> default_name) {
+  PluginAxis axis{std::string(section), root.get(section), {}};
+  if (!axis.node) {
     if (!default_name)
       report.fail({}, section,
                   fmt::format("missing: add at least one [[{}]] table with a name (known: {})",
                               section, fmt::join(registry.names(), ", ")));
-    const auto& specs = registry.find(*default_name)->info.parameters;
-    return {PluginChoice{*default_name, ParameterSet::resolve(specs, {}), {}}};
+    axis.entries.push_back(
+        PluginEntry{*default_name, &registry.find(*default_name)->info.parameters, {}, {}, {}});
+    return axis;
   }
-  std::vector<PluginChoice> out;
   auto add_entry = [&](const toml::node& item) {
     if (!item.is_table())
       report.fail(item.source(), section,
                   fmt::format("expected a table ([[{}]]), found {}", section, describe(item)));
-    auto choices = parse_plugin_entry(report, *item.as_table(), section, registry);
-    out.insert(out.end(), choices.begin(), choices.end());
+    axis.entries.push_back(read_plugin_entry(report, *item.as_table(), section, registry));
   };
-  if (const auto* array = node->as_array()) {
+  if (const auto* array = axis.node->as_array()) {
     for (const auto& item : *array) add_entry(item);
   } else {
-    add_entry(*node);
+    add_entry(*axis.node);
   }
+  return axis;
+}
+
+// The first choice of each entry of `axis` (an outline of the axis: the same parameters).
+std::vector<PluginChoice> first_choices(const Reporter& report, const PluginAxis& axis) {
+  std::vector<PluginChoice> out;
+  for (const auto& entry : axis.entries)
+    out.push_back(resolve_choice(report, axis.section, entry,
+                                 std::vector<std::size_t>(entry.axes.size(), 0)));
+  return out;
+}
+
+std::vector<PluginChoice> expand_plugins(const Reporter& report, const PluginAxis& axis) {
+  std::vector<PluginChoice> out;
+  for (const auto& entry : axis.entries) expand_plugin_entry(report, axis.section, entry, out);
+  if (!axis.node) return out;
   std::set<std::string> seen;
   for (const auto& choice : out)
     if (!seen.insert(choice.label()).second)
-      report.fail(node->source(), section, fmt::format("'{}' is listed twice", choice.label()));
+      report.fail(axis.node->source(), axis.section,
+                  fmt::format("'{}' is listed twice", choice.label()));
   return out;
 }
 
@@ -607,14 +796,34 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   check_keys(report, *grid, "grid.", {"n"});
   study.n_values = parse_n(report, *grid->get("n"));
 
-  study.kernels = parse_plugins(report, root, "kernel", kernel_registry(), std::nullopt);
-  study.targets = parse_plugins(report, root, "target", target_registry(), std::string("sine"));
-  study.centres = parse_plugins(report, root, "centres", centre_registry(), std::string("uniform"));
+  std::uint64_t max_trials = default_max_trials;
+  if (const auto* limits = optional_table(report, root, "limits")) {
+    check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes", "trials"});
+    study.limits.trial_seconds = get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
+    study.limits.matrix_megabytes =
+        get_number(report, *limits, "matrix_megabytes", "limits.", study.limits.matrix_megabytes, 0);
+    const double trials =
+        get_number(report, *limits, "trials", "limits.", static_cast<double>(max_trials), 0);
+    if (trials != std::floor(trials) || trials > 1e15)
+      report.fail(limits->get("trials")->source(), "limits.trials",
+                  fmt::format("must be a whole number between 1 and 1e15, found {}",
+                              show(*limits->get("trials"))));
+    max_trials = static_cast<std::uint64_t>(trials);
+  }
+  // Before any plugin choice or trial is built: a short file can ask for billions of trials.
+  check_grid_size(report, root, study.kind, study.n_values.size(), *grid->get("n"), max_trials);
+
+  // The plugin axes are read and checked here and expanded once the rest of the file is
+  // checked: a mistake anywhere is found before a large grid is built.
+  std::vector<PluginAxis> axes{
+      read_plugins(report, root, "kernel", kernel_registry(), std::nullopt),
+      read_plugins(report, root, "target", target_registry(), std::string("sine")),
+      read_plugins(report, root, "centres", centre_registry(), std::string("uniform"))};
   if (study.kind == StudyKind::adaptive) {
-    study.plants = parse_plugins(report, root, "plant", plant_registry(), std::string("quarter_car"));
-    study.laws = parse_plugins(report, root, "law", law_registry(), std::string("rkhs"));
-    study.integrators =
-        parse_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4"));
+    axes.push_back(read_plugins(report, root, "plant", plant_registry(), std::string("quarter_car")));
+    axes.push_back(read_plugins(report, root, "law", law_registry(), std::string("rkhs")));
+    axes.push_back(
+        read_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4")));
     auto adaptive = parse_adaptive(report, root, study.domain.length);
     study.adaptive = std::move(adaptive.settings);
     study.laps_values = std::move(adaptive.laps_values);
@@ -634,12 +843,19 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                               policy));
     study.solver.regularisation = get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
   }
-  if (const auto* limits = optional_table(report, root, "limits")) {
-    check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes"});
-    study.limits.trial_seconds = get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
-    study.limits.matrix_megabytes =
-        get_number(report, *limits, "matrix_megabytes", "limits.", study.limits.matrix_megabytes, 0);
-  }
+
+  check_evaluation_grid(report, *header, study);
+  // Where each axis of `axes` goes, in the same order.
+  static constexpr std::vector<PluginChoice> StudyDefinition::*axis_members[] = {
+      &StudyDefinition::kernels, &StudyDefinition::targets, &StudyDefinition::centres,
+      &StudyDefinition::plants,  &StudyDefinition::laws,    &StudyDefinition::integrators};
+  // [[expect]] tables first against an outline of the grid (the first choice of each entry:
+  // the same axis columns), then the axes expanded.
+  for (std::size_t a = 0; a < axes.size(); ++a)
+    study.*axis_members[a] = first_choices(report, axes[a]);
+  auto expectations = detail::read_expectations(root, study);
+  for (std::size_t a = 0; a < axes.size(); ++a)
+    study.*axis_members[a] = expand_plugins(report, axes[a]);
 
   // Build every kernel and target once: a combination that is invalid only for this domain
   // (e.g. a non-periodic sine on a closed track) is an input error, not a failed trial.
@@ -673,8 +889,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                                               Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
   });
-  check_evaluation_grid(report, *header, study);
-  study.expectations = detail::parse_expectations(root, study);
+  detail::check_expectation_selections(root, study, expectations);
+  study.expectations = std::move(expectations);
   return study;
 }
 

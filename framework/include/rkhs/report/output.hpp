@@ -2,10 +2,12 @@
 // A finished run written out: trials.csv (tidy, one row per trial), rates.csv (one row per
 // group, metric and rate: the fit and every pairwise rate), summary.json (the study, its
 // provenance, trials and rates), and the console tables. Files are written to a temporary name
-// and renamed, so a reader never sees a half-written file.
+// unique to the write, synced and renamed, so a reader never sees a half-written file, a crash
+// leaves the old file or the new one, and a failed write leaves no temporary behind.
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rkhs/run/run.hpp"
@@ -48,12 +50,20 @@ std::string console_tables(const RunRecord& run);
 /// timeseries.csv) into `directory` (created if needed).
 void write_outputs(const RunRecord& run, const std::filesystem::path& directory);
 
-/// Writes `content` to `file` atomically (temporary file, then rename).
+/// Writes `content` to `file` atomically: to `<file>.tmp.<pid>.<counter>` in the same
+/// directory (created exclusively), fsync, rename over `file`, fsync of the directory. On any
+/// failure the temporary is removed and std::runtime_error names `file`, the step and the
+/// system's reason ("cannot write out/trials.csv (write): File too large").
 void write_file_atomically(const std::filesystem::path& file, const std::string& content);
 
 /// A CSV field, quoted when it contains a comma, quote or line break (RFC 4180).
 std::string csv_field(const std::string& value);
 /// A real for CSV: shortest round-trip representation, "inf"/"-inf", "" for NaN.
 std::string csv_number(double value);
+
+/// A JSON string literal (quotes, backslashes and control characters escaped).
+std::string json_string(std::string_view text);
+/// A real for JSON: shortest round-trip representation, "inf"/"-inf" as strings, null for NaN.
+std::string json_number(double value);
 
 }  // namespace rkhs

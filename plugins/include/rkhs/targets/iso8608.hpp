@@ -44,8 +44,12 @@ struct Harmonics {
   double slope(double s, double length) const;
 };
 
+/// The most harmonics one realisation may have.
+inline constexpr std::size_t max_iso8608_harmonics = 100000;
+
 /// The harmonics of one realisation on a track of `length` metres. Deterministic for a given
-/// seed. Throws std::invalid_argument when no harmonic k / L lies in [n_min, n_max].
+/// seed. Throws std::invalid_argument when no harmonic k / L lies in [n_min, n_max], or when
+/// more than max_iso8608_harmonics do (checked before any is built).
 Harmonics iso8608_harmonics(const Iso8608Settings& settings, double length);
 
 }  // namespace rkhs

@@ -1,0 +1,184 @@
+// `rkhs-study store check|vacuum|export`: the result store's records verified one by one
+// (read_record, rkhs/run/result_store.hpp), the ones that do not verify removed, or every
+// record written out as CSV or JSON.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+
+#include "commands/commands.hpp"
+#include "commands/common.hpp"
+#include "rkhs/report/output.hpp"
+#include "rkhs/run/result_store.hpp"
+
+namespace rkhs::cli {
+
+namespace {
+
+// An existing store: `store` commands never create one.
+ResultStore open_existing(const std::string& file) {
+  if (!std::filesystem::is_regular_file(file))
+    throw std::runtime_error(fmt::format("{}: no such result store", file));
+  return ResultStore(file);
+}
+
+// "STORE: trial KEY (study S, hash 1a2b3c4d5e6f): what is wrong".
+std::string bad_record_line(const std::string& file, const ResultStore::Entry& entry) {
+  return fmt::format("{}: trial {} (study {}, hash {}): {}", file, entry.key, entry.study,
+                     entry.hash.substr(0, 12), entry.check.problem);
+}
+
+int store_check(const std::string& file) {
+  const auto store = open_existing(file);
+  std::size_t total = 0, bad = 0, old_format = 0;
+  store.for_each([&](const ResultStore::Entry& entry) {
+    ++total;
+    if (entry.check.sound()) return;
+    if (entry.check.old_format) {
+      ++old_format;
+      return;
+    }
+    ++bad;
+    std::cout << bad_record_line(file, entry) << "\n";
+  });
+  std::cout << fmt::format("{}: {}, {} verified, {} bad, {} in the old record format (no checksum)",
+                           file, counted(total, "record", "records"), total - bad - old_format, bad,
+                           old_format);
+  std::cout << (bad + old_format ? "; `rkhs-study store vacuum` removes them (their trials run "
+                                   "again when a study needs them)\n"
+                                 : "\n");
+  return bad + old_format ? exit_failed_trials : exit_ok;
+}
+
+int store_vacuum(const std::string& file) {
+  auto store = open_existing(file);
+  std::vector<std::string> doomed;
+  std::size_t bad = 0, old_format = 0;
+  store.for_each([&](const ResultStore::Entry& entry) {
+    if (entry.check.sound()) return;
+    doomed.push_back(entry.hash);
+    if (entry.check.old_format) {
+      ++old_format;
+    } else {
+      ++bad;
+      std::cout << "removed " << bad_record_line(file, entry) << "\n";
+    }
+  });
+  store.remove(doomed);
+  store.vacuum();
+  store.checkpoint();
+  std::cout << fmt::format("{}: removed {} bad and {} old-format records; it holds {}\n", file, bad,
+                           old_format, counted(store.size(), "trial", "trials"));
+  return exit_ok;
+}
+
+// The metric names of every record that verifies, in the order they first appear.
+std::vector<std::string> metric_columns(const std::vector<ResultStore::Entry>& entries) {
+  std::vector<std::string> columns;
+  for (const auto& entry : entries)
+    for (const auto& name : entry.check.metric_names)
+      if (std::find(columns.begin(), columns.end(), name) == columns.end()) columns.push_back(name);
+  return columns;
+}
+
+std::string flags_text(const TrialResult& result) {
+  return fmt::format("{}", fmt::join(result.flags, ";"));
+}
+
+std::string export_csv(const std::vector<ResultStore::Entry>& entries) {
+  const auto metrics = metric_columns(entries);
+  std::vector<std::string> header{"hash",   "study", "key",    "stored", "check",   "status",
+                                  "reason", "solve", "engine", "flags",  "seconds", "data"};
+  header.insert(header.end(), metrics.begin(), metrics.end());
+  auto row = [](const std::vector<std::string>& fields) {
+    std::string line;
+    for (std::size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + csv_field(fields[i]);
+    return line + "\n";
+  };
+  std::string out = row(header);
+  for (const auto& entry : entries) {
+    std::vector<std::string> fields{entry.hash, entry.study, entry.key, entry.stored,
+                                    entry.check.sound() ? "ok" : entry.check.problem};
+    if (const auto& r = entry.check.result) {
+      fields.insert(fields.end(), {r->ok ? "ok" : "failed", r->reason, r->solve_method, r->engine,
+                                   flags_text(*r), csv_number(r->seconds), r->data_provenance});
+      for (const auto& metric : metrics) {
+        const auto& names = entry.check.metric_names;
+        const auto at = std::find(names.begin(), names.end(), metric);
+        fields.push_back(at == names.end() ? "" : csv_number(r->metrics[at - names.begin()]));
+      }
+    } else {
+      fields.resize(header.size());
+    }
+    out += row(fields);
+  }
+  return out;
+}
+
+std::string json_reals(const std::vector<double>& values) {
+  std::vector<std::string> items;
+  for (double v : values) items.push_back(json_number(v));
+  return fmt::format("[{}]", fmt::join(items, ", "));
+}
+
+std::string export_json(const std::vector<ResultStore::Entry>& entries) {
+  std::vector<std::string> records;
+  for (const auto& entry : entries) {
+    std::string record = fmt::format(
+        "  {{\"hash\": {}, \"study\": {}, \"key\": {}, \"stored\": {}, \"check\": {}",
+        json_string(entry.hash), json_string(entry.study), json_string(entry.key),
+        json_string(entry.stored), json_string(entry.check.sound() ? "ok" : entry.check.problem));
+    if (const auto& r = entry.check.result) {
+      std::vector<std::string> metrics, samples, snapshots;
+      for (std::size_t i = 0; i < r->metrics.size(); ++i)
+        metrics.push_back(fmt::format("{}: {}", json_string(entry.check.metric_names[i]),
+                                      json_number(r->metrics[i])));
+      for (const auto& s : r->samples)
+        samples.push_back(json_reals({s.t, s.state_error, s.lyapunov}));
+      for (const auto& s : r->snapshots)
+        snapshots.push_back(fmt::format("{{\"lap\": {}, \"estimate\": {}}}", json_number(s.lap),
+                                        json_reals(s.estimate)));
+      record += fmt::format(
+          ", \"status\": {}, \"reason\": {}, \"solve\": {}, \"engine\": {}, \"flags\": {}, "
+          "\"seconds\": {}, \"data\": {}, \"metrics\": {{{}}}, \"samples\": [{}], \"road\": {}, "
+          "\"snapshots\": [{}]",
+          json_string(r->ok ? "ok" : "failed"), json_string(r->reason),
+          json_string(r->solve_method), json_string(r->engine), json_string(flags_text(*r)),
+          json_number(r->seconds), json_string(r->data_provenance), fmt::join(metrics, ", "),
+          fmt::join(samples, ", "), json_reals(r->road), fmt::join(snapshots, ", "));
+    }
+    records.push_back(record + "}");
+  }
+  return records.empty() ? "[]\n" : fmt::format("[\n{}\n]\n", fmt::join(records, ",\n"));
+}
+
+int store_export(const std::string& file, const std::string& format, const std::string& out) {
+  const auto store = open_existing(file);
+  std::vector<ResultStore::Entry> entries;
+  store.for_each([&](const ResultStore::Entry& entry) { entries.push_back(entry); });
+  const auto text = format == "json" ? export_json(entries) : export_csv(entries);
+  if (out.empty() || out == "-") {
+    std::cout << text;
+  } else {
+    write_file_atomically(out, text);
+    std::cerr << fmt::format("wrote {} of {} to {}\n", counted(entries.size(), "record", "records"),
+                             file, out);
+  }
+  return exit_ok;
+}
+
+}  // namespace
+
+int command_store(const StoreCommand& arguments) {
+  if (arguments.action == "check") return store_check(arguments.store_file);
+  if (arguments.action == "vacuum") return store_vacuum(arguments.store_file);
+  if (arguments.action == "export")
+    return store_export(arguments.store_file, arguments.format, arguments.out_file);
+  throw std::invalid_argument(fmt::format("unknown store action '{}'", arguments.action));
+}
+
+}  // namespace rkhs::cli
