@@ -9,6 +9,7 @@
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/kernel/kernel_algorithms.hpp"
 
 using namespace rkhs;
 
@@ -143,4 +144,38 @@ TEST_CASE("the coupled system is the same with the rkhs law's map low rank or de
   CHECK_THROWS_AS(AdaptiveSystem(plant->A(), plant->B(), P, *low_basis,
                                  LearningMap::scalar(n + 1, 1.0), road, slope, track, 1e-4),
                   std::invalid_argument);
+}
+
+TEST_CASE("a learning map c I is recognised exactly and applied as a scalar by every basis",
+          "[adaptive]") {
+  CHECK(identity_multiple(Eigen::MatrixXd::Identity(4, 4) * 0.25) == 0.25);
+  Eigen::MatrixXd almost = Eigen::MatrixXd::Identity(4, 4);
+  almost(1, 2) = 1e-300;
+  CHECK_FALSE(identity_multiple(almost));
+  almost = Eigen::MatrixXd::Identity(4, 4);
+  almost(3, 3) = 1 + 1e-16 * 4;
+  CHECK_FALSE(identity_multiple(almost));
+  CHECK_FALSE(identity_multiple(Eigen::MatrixXd::Identity(3, 4)));
+  CHECK_FALSE(identity_multiple(Eigen::MatrixXd()));
+
+  // A feature-map basis (B-spline: c scales its features, so psi sums c-scaled columns) and a
+  // direct one (Wendland: psi = c phi, bit for bit).
+  const Domain track{2 * std::numbers::pi * 4, true};
+  for (const std::string name : {"bspline", "wendland"}) {
+    INFO(name);
+    const auto k = kernel(name, {}, track);
+    const auto centres = uniform_centres(track, 24);
+    const auto basis = k->basis(centres);
+    basis->set_map(Eigen::MatrixXd::Identity(24, 24) / 2e4);
+    std::vector<double> phi(24), psi(24);
+    for (double s : {0.3, 7.1, 19.9}) {
+      basis->evaluate(s, phi.data());
+      basis->evaluate_mapped(s, psi.data());
+      for (std::size_t i = 0; i < phi.size(); ++i)
+        if (name == "wendland")
+          CHECK(psi[i] == (1 / 2e4) * phi[i]);
+        else
+          CHECK(psi[i] == Approx((1 / 2e4) * phi[i]).epsilon(1e-15));
+    }
+  }
 }
