@@ -339,10 +339,11 @@ class CsvRoad final : public TargetFunction {
         const auto [z, z_column] = number(elevation_index, elevation);
         const double position = u * arc_scale;
         if (!u_.empty() && !(position > u_.back())) {
-          const auto fail = [&](const std::string& what) {
+          // Captured by copy: a lambda may not capture a structured binding in C++20 (clang).
+          const auto fail = [&, column = u_column, given = u](const std::string& what) {
             return std::invalid_argument(
                 fmt::format("{}:{}:{}: arc length {} {} (arc length must be strictly increasing)",
-                            file_, line_number, u_column, format_real(u), what));
+                            file_, line_number, column, format_real(given), what));
           };
           if (position == u_.back()) throw fail(fmt::format("repeats line {}", lines_.back()));
           throw fail(fmt::format("is less than {} on line {}", format_real(u_.back() / arc_scale),
