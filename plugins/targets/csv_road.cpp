@@ -226,9 +226,15 @@ class CsvRoad final : public TargetFunction {
     }
   }
   bool has_exact_derivative() const override { return true; }
-  std::string data_provenance() const override { return provenance_; }
-  std::vector<std::string> notes() const override { return notes_; }
-  std::vector<double> kink_points() const override { return kinks_; }
+  void describe_provenance(const std::function<void(std::string_view)>& sink) const override {
+    sink(provenance_);
+  }
+  void list_notes(const std::function<void(std::string_view)>& sink) const override {
+    for (const auto& note : notes_) sink(note);
+  }
+  void list_kink_points(const std::function<void(double)>& sink) const override {
+    for (double s : kinks_) sink(s);
+  }
 
  private:
   // Reads every sample; throws std::invalid_argument "file:line:column: ..." for any problem.
