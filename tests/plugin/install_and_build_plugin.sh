@@ -89,7 +89,7 @@ if grep -q "SSE2" <<<"$("$rkhs" verify-plugin "$plugin" 2>&1)" && grep -qw avx /
   status=0
   "$rkhs" verify-plugin "$work/kernel-plugin/build-avx/inverse_multiquadric.so" > "$work/avx.txt" 2>&1 || status=$?
   [[ $status != 0 ]] || { cat "$work/avx.txt"; fail "the -mavx plugin was accepted"; }
-  grep -q "built for .*AVX.*, this rkhs-study is built for .*SSE2.*(vectorisation AVX against SSE2)" "$work/avx.txt" \
+  grep -q "built for .*AVX.*, this rkhs-study is built for .*SSE2.*; vectorisation AVX against SSE2)" "$work/avx.txt" \
     || { cat "$work/avx.txt"; fail "the refusal does not name both configurations"; }
   cat "$work/avx.txt"
 else
