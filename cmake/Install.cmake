@@ -20,6 +20,12 @@ add_library(rkhs_study_plugin INTERFACE)
 add_library(rkhs_study::plugin ALIAS rkhs_study_plugin)
 target_link_libraries(rkhs_study_plugin INTERFACE rkhs_study)
 target_compile_definitions(rkhs_study_plugin INTERFACE RKHS_BUILDING_PLUGIN)
+# A plugin is compiled with this build's sanitizers, or the loader refuses it
+# (plugin/build_configuration.hpp).
+if(RKHS_STUDY_SANITIZE)
+  target_compile_options(rkhs_study_plugin INTERFACE ${RKHS_SANITIZER_FLAGS})
+  target_link_options(rkhs_study_plugin INTERFACE -fsanitize=${RKHS_STUDY_SANITIZE})
+endif()
 set_target_properties(rkhs_study_plugin PROPERTIES EXPORT_NAME plugin)
 include(${PROJECT_SOURCE_DIR}/cmake/rkhs_studyPlugin.cmake)
 

@@ -22,13 +22,16 @@ class UniformCentres final : public CentrePlacement {
   }
   explicit UniformCentres(const ParameterSet& p) : offset_(p.real("offset")) {}
 
-  std::vector<double> place(std::size_t n, const Domain& domain, std::uint64_t) const override {
-    if (n == 0) return {};
-    if (!domain.periodic) return domain.uniform_points(n);
-    std::vector<double> c(n);
+  void place_into(const Domain& domain, std::uint64_t, std::span<double> c) const override {
+    const std::size_t n = c.size();
+    if (n == 0) return;
+    if (!domain.periodic) {
+      const auto points = domain.uniform_points(n);
+      std::copy(points.begin(), points.end(), c.begin());
+      return;
+    }
     for (std::size_t i = 0; i < n; ++i)
       c[i] = (static_cast<double>(i) + offset_) * domain.length / static_cast<double>(n);
-    return c;
   }
 
  private:
@@ -48,12 +51,11 @@ class RandomCentres final : public CentrePlacement {
   explicit RandomCentres(const ParameterSet& p)
       : seed_(static_cast<std::uint64_t>(p.integer("seed"))) {}
 
-  std::vector<double> place(std::size_t n, const Domain& domain, std::uint64_t) const override {
+  void place_into(const Domain& domain, std::uint64_t, std::span<double> c) const override {
+    const std::size_t n = c.size();
     Random random(hash_combine(hash64("centres/random"), hash_combine(seed_, n)));
-    std::vector<double> c(n);
     for (auto& x : c) x = random.uniform() * domain.length;
     std::sort(c.begin(), c.end());
-    return c;
   }
 
  private:

@@ -39,12 +39,16 @@ class Radau5 final : public AdaptiveStepIntegrator {
   explicit Radau5(const ParameterSet& p)
       : AdaptiveStepIntegrator(p), solver_(linear_solver_from_name(p.text("linear_solver"))) {}
   IntegrationStats integrate(
-      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
+      std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
+    Eigen::VectorXd z = state;  // the integrator's own copy (Integrator: the state's owner)
     TrajectoryStages problem(system, solver_);
     RadauIIA5<TrajectoryStages> stepper(problem, atol_, rtol_);
-    return drive_steps(stepper, z, breakpoints, observe,
-                       {max_steps_, initial_step_, restart_, {}});
+    const IntegrationStats stats =
+        drive_steps(stepper, z, breakpoints, observe, {max_steps_, initial_step_, restart_, {}});
+    state = z;
+    return stats;
   }
 
  private:
@@ -159,11 +163,15 @@ class Rodas4 final : public AdaptiveStepIntegrator {
   explicit Rodas4(const ParameterSet& p)
       : AdaptiveStepIntegrator(p), solver_(linear_solver_from_name(p.text("linear_solver"))) {}
   IntegrationStats integrate(
-      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
+      std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
+    Eigen::VectorXd z = state;  // the integrator's own copy (Integrator: the state's owner)
     Rodas4Stepper stepper(system, solver_, atol_, rtol_);
-    return drive_steps(stepper, z, breakpoints, observe,
-                       {max_steps_, initial_step_, false, {}});
+    const IntegrationStats stats =
+        drive_steps(stepper, z, breakpoints, observe, {max_steps_, initial_step_, false, {}});
+    state = z;
+    return stats;
   }
 
  private:

@@ -89,12 +89,17 @@ class Rosenbrock4 final : public AdaptiveStepIntegrator {
   }
   explicit Rosenbrock4(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
   IntegrationStats integrate(
-      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
+      std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
+    Eigen::VectorXd z = state;  // the integrator's own copy (Integrator: the state's owner)
     using Stepper = odeint::rosenbrock4<double, CorrectedRosenbrockCoefficients>;
     odeint::rosenbrock4_controller<Stepper> stepper(atol_, rtol_);
-    return drive_controlled(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), z,
-                          breakpoints, observe, max_steps_, initial_step_, false);
+    const IntegrationStats stats =
+        drive_controlled(stepper, std::make_pair(Rhs{&system}, Jacobian{&system}), z, breakpoints,
+                         observe, max_steps_, initial_step_, false);
+    state = z;
+    return stats;
   }
 };
 
@@ -105,12 +110,16 @@ class ExplicitAdaptive final : public AdaptiveStepIntegrator {
   static PluginInfo info() { return Describe::info(); }
   explicit ExplicitAdaptive(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
   IntegrationStats integrate(
-      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
+      std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
+    Eigen::VectorXd z = state;  // the integrator's own copy (Integrator: the state's owner)
     auto stepper = odeint::make_controlled(atol_, rtol_, Stepper());
     // Reset per segment: a first-same-as-last derivative must not cross a kink.
-    return drive_controlled(stepper, Rhs{&system}, z, breakpoints, observe, max_steps_,
-                          initial_step_, true);
+    const IntegrationStats stats = drive_controlled(stepper, Rhs{&system}, z, breakpoints, observe,
+                                                    max_steps_, initial_step_, true);
+    state = z;
+    return stats;
   }
 };
 
@@ -170,13 +179,17 @@ class Rk4 final : public Integrator {
         restart_(p.boolean("restart_at_kinks")) {}
   bool restarts_at_kinks() const noexcept override { return restart_; }
   IntegrationStats integrate(
-      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
+      std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const override {
+    Eigen::VectorXd z = state;  // the integrator's own copy (Integrator: the state's owner)
     FixedStep policy(system, z.size());
-    return drive_steps(
+    const IntegrationStats stats = drive_steps(
         policy, z, breakpoints, observe,
         {max_steps_, step_, false,
          fmt::format(" (step {} s too large for this stiff system?)", format_real(step_))});
+    state = z;
+    return stats;
   }
 
  private:

@@ -226,9 +226,15 @@ class CsvRoad final : public TargetFunction {
     }
   }
   bool has_exact_derivative() const override { return true; }
-  std::string data_provenance() const override { return provenance_; }
-  std::vector<std::string> notes() const override { return notes_; }
-  std::vector<double> kink_points() const override { return kinks_; }
+  void describe_provenance(const std::function<void(std::string_view)>& sink) const override {
+    sink(provenance_);
+  }
+  void list_notes(const std::function<void(std::string_view)>& sink) const override {
+    for (const auto& note : notes_) sink(note);
+  }
+  void list_kink_points(const std::function<void(double)>& sink) const override {
+    for (double s : kinks_) sink(s);
+  }
 
  private:
   // Reads every sample; throws std::invalid_argument "file:line:column: ..." for any problem.
@@ -339,10 +345,11 @@ class CsvRoad final : public TargetFunction {
         const auto [z, z_column] = number(elevation_index, elevation);
         const double position = u * arc_scale;
         if (!u_.empty() && !(position > u_.back())) {
-          const auto fail = [&](const std::string& what) {
+          // Captured by copy: a lambda may not capture a structured binding in C++20 (clang).
+          const auto fail = [&, column = u_column, given = u](const std::string& what) {
             return std::invalid_argument(
                 fmt::format("{}:{}:{}: arc length {} {} (arc length must be strictly increasing)",
-                            file_, line_number, u_column, format_real(u), what));
+                            file_, line_number, column, format_real(given), what));
           };
           if (position == u_.back()) throw fail(fmt::format("repeats line {}", lines_.back()));
           throw fail(fmt::format("is less than {} on line {}", format_real(u_.back() / arc_scale),

@@ -1,16 +1,16 @@
 // The right-hand side and the Jacobian of the coupled system allocate nothing: every global
 // operator new of this test binary is counted while the hot calls run.
-#include <catch2/catch.hpp>
-
 #include <atomic>
+#include <catch2/catch.hpp>
+#include <cstddef>
 #include <cstdlib>
 #include <new>
 #include <numbers>
 
 #include "rkhs/adaptive/adaptive.hpp"
-#include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/gram_solver.hpp"
 
 namespace {
 std::atomic<long> allocations{0};
@@ -18,17 +18,81 @@ thread_local bool counting = false;
 }  // namespace
 
 // Replacements of the global allocation functions for this executable (the standard allows
-// exactly one definition per program): they count while `counting` is set.
-void* operator new(std::size_t size) {
+// exactly one definition per program): they count while `counting` is set. Every variant is
+// replaced (plain, array, nothrow, aligned, sized), each pair on std::malloc / std::free or
+// std::aligned_alloc / std::free, so that whatever form a library allocates with, the matching
+// release is ours too: under AddressSanitizer, which also interposes these functions, a pair
+// split between its versions and ours would be reported as alloc-dealloc-mismatch.
+namespace {
+void* counted_allocation(std::size_t size, std::size_t alignment) noexcept {
   if (counting) ++allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  if (size == 0) size = 1;
+  if (alignment <= alignof(std::max_align_t)) return std::malloc(size);
+  // aligned_alloc wants a size that is a multiple of the alignment.
+  return std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
+}
+void* counted_or_throw(std::size_t size, std::size_t alignment) {
+  if (void* p = counted_allocation(size, alignment)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t size) { return operator new(size); }
+constexpr std::size_t plain = alignof(std::max_align_t);
+std::size_t value(std::align_val_t alignment) {
+  return static_cast<std::size_t>(alignment);
+}
+}  // namespace
+
+void* operator new(std::size_t size) {
+  return counted_or_throw(size, plain);
+}
+void* operator new[](std::size_t size) {
+  return counted_or_throw(size, plain);
+}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  return counted_allocation(size, plain);
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  return counted_allocation(size, plain);
+}
+void* operator new(std::size_t size, std::align_val_t a) {
+  return counted_or_throw(size, value(a));
+}
+void* operator new[](std::size_t size, std::align_val_t a) {
+  return counted_or_throw(size, value(a));
+}
+void* operator new(std::size_t size, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return counted_allocation(size, value(a));
+}
+void* operator new[](std::size_t size, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return counted_allocation(size, value(a));
+}
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
 
 using namespace rkhs;
 

@@ -46,10 +46,14 @@ chmod +x "$work/netns-rsh"
 printf '10.231.0.1 slots=1\n10.231.0.2 slots=1\n' > "$work/hosts"
 
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# Under AddressSanitizer (the asan preset) leak checking is off for the ranks: Open MPI's
+# components leak at MPI_Finalize and are unloaded before LeakSanitizer runs, so no suppression
+# can name them (tests/cli/test_mpi_cli.cpp); every other check stays on. Other builds ignore it.
+ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0" \
 ip netns exec "$ns1" "$mpirun" --hostfile "$work/hosts" -np 2 --bind-to none \
   --mca plm_rsh_agent "$work/netns-rsh" --mca btl tcp,self \
   --mca btl_tcp_if_include 10.231.0.0/24 --mca oob_tcp_if_include 10.231.0.0/24 \
-  -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM \
+  -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM -x ASAN_OPTIONS \
   "$rkhs_study" run "$study" --mpi --no-plots --store "$work/mpi.sqlite" --out "$work/mpi" \
   > "$work/mpi.log" 2>&1 || { cat "$work/mpi.log"; echo "mpi_two_hosts: the MPI run failed"; exit 1; }
 "$rkhs_study" run "$study" --quiet --no-plots --no-store --out "$work/single" > "$work/single.log" 2>&1

@@ -6,11 +6,18 @@
 # RKHS_STUDY_PLUGIN_PATH. With tests/docs/check_tutorial_snippets.py (every code block of the
 # page is an excerpt of these files) it makes the page's code compile.
 #
-# Usage: install_and_build_plugin.sh BUILD_DIR SOURCE_DIR [CMAKE]
+# The plugin is compiled by CXX_COMPILER, the compiler of the build (the loader refuses a plugin
+# built by another compiler family or version, plugin/build_configuration.hpp). Then the same
+# plugin is built once more with -mavx where the build is for generic x86-64 and the processor has
+# AVX: the installed rkhs-study refuses it, naming both configurations.
+#
+# Usage: install_and_build_plugin.sh BUILD_DIR SOURCE_DIR [CMAKE [CXX_COMPILER]]
 set -euo pipefail
 build=$1
 source=$2
 cmake=${3:-cmake}
+compiler=()
+[[ -n ${4:-} ]] && compiler=(-DCMAKE_CXX_COMPILER="$4")
 work=$(mktemp -d "${TMPDIR:-/tmp}/rkhs_install_test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 prefix=$work/prefix
@@ -38,7 +45,7 @@ rm -rf "$work/kernel-plugin/build"
 generator=()
 command -v ninja > /dev/null && generator=(-G Ninja)
 "$cmake" -S "$work/kernel-plugin" -B "$work/kernel-plugin/build" "${generator[@]}" \
-  -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" > "$work/configure.log" \
+  -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" "${compiler[@]}" > "$work/configure.log" \
   || { cat "$work/configure.log"; fail "configure"; }
 "$cmake" --build "$work/kernel-plugin/build" -j 2 > "$work/build.log" || { cat "$work/build.log"; fail "build"; }
 plugin=$work/kernel-plugin/build/inverse_multiquadric.so
@@ -73,4 +80,19 @@ grep -v '^plugins' kernel-plugin/imq_study.toml > "$work/no_plugins_key.toml"
 "$rkhs" validate "$work/no_plugins_key.toml" > /dev/null 2>&1 && fail "the kernel is known without its plugin"
 "$rkhs" validate --plugin "$plugin" "$work/no_plugins_key.toml"
 RKHS_STUDY_PLUGIN_PATH=$work/kernel-plugin/build "$rkhs" validate "$work/no_plugins_key.toml"
+step "the same plugin built with -mavx is refused, naming both configurations"
+if grep -q "SSE2" <<<"$("$rkhs" verify-plugin "$plugin" 2>&1)" && grep -qw avx /proc/cpuinfo; then
+  "$cmake" -S "$work/kernel-plugin" -B "$work/kernel-plugin/build-avx" "${generator[@]}" \
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" "${compiler[@]}" \
+    -DCMAKE_CXX_FLAGS=-mavx > "$work/configure-avx.log" || { cat "$work/configure-avx.log"; fail "configure -mavx"; }
+  "$cmake" --build "$work/kernel-plugin/build-avx" -j 2 > "$work/build-avx.log" || { cat "$work/build-avx.log"; fail "build -mavx"; }
+  status=0
+  "$rkhs" verify-plugin "$work/kernel-plugin/build-avx/inverse_multiquadric.so" > "$work/avx.txt" 2>&1 || status=$?
+  [[ $status != 0 ]] || { cat "$work/avx.txt"; fail "the -mavx plugin was accepted"; }
+  grep -q "built for .*AVX.*, this rkhs-study is built for .*SSE2.*; vectorisation AVX against SSE2)" "$work/avx.txt" \
+    || { cat "$work/avx.txt"; fail "the refusal does not name both configurations"; }
+  cat "$work/avx.txt"
+else
+  echo "(skipped: this build is not for generic x86-64 with SSE2, or the processor has no AVX)"
+fi
 echo "installed package, out-of-tree plugin, verify-plugin and study: ok"

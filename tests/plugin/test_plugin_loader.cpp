@@ -10,12 +10,13 @@
 #include <string>
 
 #include "plugin_test_support.hpp"
+#include "rkhs/adaptive/plant.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/kernel/kernel.hpp"
-#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/plugin/build_configuration.hpp"
+#include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/module.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
-#include "rkhs/plugin/builtins.hpp"
 #include "study_support.hpp"
 
 namespace fs = std::filesystem;
@@ -112,6 +113,34 @@ TEST_CASE("plugin error: built against another plugin ABI, refused before it reg
         file.string() + ": built against plugin ABI 999 (rkhs-study 9.9.9), this rkhs-study " +
             build_info().version + " has plugin ABI " + std::to_string(RKHS_PLUGIN_ABI_VERSION) +
             "; rebuild the plugin against this rkhs-study");
+}
+
+TEST_CASE(
+    "plugin error: built with other flags than rkhs-study, refused naming both "
+    "configurations",
+    "[plugin]") {
+  const BuildConfiguration framework = framework_build_configuration();
+  CHECK(framework == RKHS_BUILD_CONFIGURATION);  // the tests are built like the framework
+  CHECK_FALSE(describe(framework).empty());
+#if defined(RKHS_TEST_AVX_PLUGIN)
+  // inverse_multiquadric_avx.so: the example plugin compiled with -mavx. Its static
+  // initialisers may use AVX, so it is opened only on a processor that has it.
+  if (framework.vectorisation != static_cast<int>(VectorisationClass::sse2) ||
+      !__builtin_cpu_supports("avx")) {
+    WARN("not checked: this build is not for generic x86-64, or the processor has no AVX");
+    return;
+  }
+  const auto file = module("inverse_multiquadric_avx");
+  const auto message = refusal(file);
+  BuildConfiguration avx = framework;
+  avx.vectorisation = static_cast<int>(VectorisationClass::avx);
+  avx.max_align_bytes = 32;
+  CHECK_THAT(message,
+             Catch::StartsWith(file.string() + ": built for " + describe(avx) +
+                               ", this rkhs-study is built for " + describe(framework) + " ("));
+  CHECK_THAT(message, Catch::Contains("vectorisation AVX against SSE2"));
+  CHECK_THAT(message, Catch::Contains("Eigen alignment 32 bytes against 16 bytes"));
+#endif
 }
 
 TEST_CASE("plugin error: duplicate names (a kernel, a module)", "[plugin]") {

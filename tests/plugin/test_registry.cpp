@@ -68,7 +68,7 @@ namespace registry_test {
 struct Fine : CentrePlacement {
   explicit Fine(const ParameterSet&) {}
   static PluginInfo info() { return {"fine", "places nothing", {}, {}}; }
-  std::vector<double> place(std::size_t, const Domain&, std::uint64_t) const override { return {}; }
+  void place_into(const Domain&, std::uint64_t, std::span<double>) const override {}
 };
 struct ThrowingInfo : Fine {
   using Fine::Fine;

@@ -27,9 +27,6 @@
 #include <fmt/format.h>
 #include <mpi.h>
 #include <sched.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -45,6 +42,7 @@
 #include <sstream>
 #include <thread>
 
+#include "rkhs/core/concurrency.hpp"
 #include "rkhs/distributed.hpp"
 
 namespace rkhs::distributed {
@@ -151,17 +149,8 @@ class LocalPool {
 
  private:
   void run_consumers() {
-    const auto threads = static_cast<std::size_t>(job_.threads);
-    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, threads);
-    tbb::task_arena arena(job_.threads);
-    arena.execute([&] {
-      tbb::parallel_for(
-          tbb::blocked_range<std::size_t>(0, threads, 1),
-          [&](const tbb::blocked_range<std::size_t>& range) {
-            for (auto k = range.begin(); k != range.end(); ++k) consume();
-          },
-          tbb::simple_partitioner());
-    });
+    run_concurrently(static_cast<std::size_t>(job_.threads), job_.threads,
+                     [&](std::size_t) { consume(); });
   }
 
   // Runs queued tasks until the pool is closed and the queue is empty.

@@ -196,7 +196,8 @@ std::string validate_spec(const ParameterSpec& spec) {
 
 ParameterSet ParameterSet::resolve(const std::vector<ParameterSpec>& specs,
                                    const std::map<std::string, ParameterValue>& given) {
-  for (const auto& [name, value] : given) {
+  for (const auto& entry : given) {
+    const std::string& name = entry.first;  // not a structured binding: the lambda captures it
     if (std::none_of(specs.begin(), specs.end(), [&](const auto& s) { return s.name == name; })) {
       std::string known;
       for (std::size_t i = 0; i < specs.size(); ++i) known += (i ? ", " : "") + specs[i].name;

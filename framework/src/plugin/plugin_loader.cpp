@@ -10,6 +10,7 @@
 #include <mutex>
 
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/plugin/build_configuration.hpp"
 #include "rkhs/plugin/module.hpp"
 #include "rkhs/plugin/plugin_kinds.hpp"
 
@@ -137,6 +138,22 @@ LoadedPlugin load_plugin(const fs::path& file) {
         fmt::format("built against plugin ABI {} (rkhs-study {}), this rkhs-study {} has plugin "
                     "ABI {}; rebuild the plugin against this rkhs-study",
                     abi, built_with, build_info().version, RKHS_PLUGIN_ABI_VERSION));
+  auto* configuration_of =
+      symbol<const BuildConfiguration*() noexcept>(handle, "rkhs_plugin_build_configuration");
+  const BuildConfiguration* configuration = configuration_of ? configuration_of() : nullptr;
+  if (!configuration)
+    fail(fmt::format(
+        "not an rkhs-study plugin (it has plugin ABI {} but exports no "
+        "rkhs_plugin_build_configuration; declare the module with RKHS_PLUGIN_MODULE(name))",
+        abi));
+  const BuildConfiguration framework = framework_build_configuration();
+  if (!(*configuration == framework))
+    fail(fmt::format(
+        "built for {}, this rkhs-study is built for {} ({}); build the plugin with the same "
+        "compiler and flags as rkhs-study (its CMake package's rkhs_study::plugin carries the "
+        "sanitizer flags; do not add -march, -mavx or EIGEN_* alignment options)",
+        describe(*configuration), describe(framework),
+        describe_difference(*configuration, framework)));
   if (!RegistryState::take().same(before))
     fail(
         "registered plugins while being loaded, before its ABI could be checked: compile every "
@@ -177,6 +194,7 @@ LoadedPlugin load_plugin(const fs::path& file) {
   plugin.name = name;
   plugin.rkhs_study_version = built_with;
   plugin.abi_version = abi;
+  plugin.build_configuration = describe(*configuration);
   bool registered = false;
   for_each_plugin_kind([&](auto kind) {
     using Kind = decltype(kind);

@@ -1,10 +1,6 @@
 #include "rkhs/run/run.hpp"
-#include "rkhs/run/trial_cost.hpp"
 
 #include <fmt/format.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -17,13 +13,15 @@
 #include <thread>
 
 #include "rkhs/adaptive/metrics.hpp"
-#include "rkhs/approx/approximation.hpp"
-#include "rkhs/approx/metrics.hpp"
-#include "rkhs/core/cancellation.hpp"
-#include "rkhs/approx/centres.hpp"
-#include "rkhs/kernel/kernel.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/metrics.hpp"
 #include "rkhs/approx/target.hpp"
+#include "rkhs/core/cancellation.hpp"
+#include "rkhs/core/concurrency.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/run/trial_cost.hpp"
 
 namespace rkhs {
 
@@ -172,49 +170,40 @@ struct RunState {
   LapMapCache lap_maps;       // shared by trials that differ only in their lap count
 };
 
-// One oneTBB task per trial. A task does not run the trial of its own index: it claims the next
-// trial of `order` (largest first) when it starts, under the mutex that also calls
-// on_trial_started, so trials start in exactly that order whatever the thread count and
-// whichever task a thread happens to take (a thread that steals takes the far end of a range,
-// which here would be the cheapest trials).
+// One scheduled task per trial (run_concurrently, core/concurrency.hpp). A task does not run
+// the trial of its own index: it claims the next trial of `order` (largest first) when it
+// starts, under the mutex that also calls on_trial_started, so trials start in exactly that
+// order whatever the thread count, the scheduling backend and whichever task a thread happens to
+// take (a oneTBB thread that steals takes the far end of a range, which here would be the
+// cheapest trials).
 void run_in_arena(RunState& state) {
   const auto order = largest_first_order(state.study, state.trials);
   const auto& options = state.options;
-  const int threads =
-      options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
-  // Raise TBB's worker limit to the requested count (it defaults to the hardware threads).
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
-                                  static_cast<std::size_t>(threads));
-  tbb::task_arena arena(threads);
+  const int threads = options.threads > 0 ? options.threads : default_concurrency();
   std::size_t claimed = 0;  // trials of `order` taken by a task (guarded by state.mutex)
-  arena.execute([&] {
-    tbb::parallel_for(
-        std::size_t{0}, order.size(), std::size_t{1},
-        [&](std::size_t) {
-          const bool stop = options.stop_requested && options.stop_requested();
-          std::size_t i = 0;
-          {
-            std::lock_guard lock(state.mutex);
-            if (state.abandoned) return;
-            i = order[claimed++];
-            if (!stop) {
-              state.phase[i] = RunState::running;
-              if (options.on_trial_started) options.on_trial_started(state.trials[i]);
-            }
-          }
-          TrialResult result =
-              stop ? not_started() : run_trial(state.study, state.trials[i], options.stop_requested,
-                                         &state.lap_maps);
-          std::lock_guard lock(state.mutex);
-          if (state.abandoned) return;
-          state.phase[i] = RunState::done;
-          state.results[i] = std::move(result);
-          if (!state.results[i].skipped && options.on_trial_finished)
-            options.on_trial_finished(state.trials[i], state.results[i]);
-          ++state.finished;
-          state.changed.notify_all();
-        },
-        tbb::simple_partitioner());
+  run_concurrently(order.size(), threads, [&](std::size_t) {
+    const bool stop = options.stop_requested && options.stop_requested();
+    std::size_t i = 0;
+    {
+      std::lock_guard lock(state.mutex);
+      if (state.abandoned) return;
+      i = order[claimed++];
+      if (!stop) {
+        state.phase[i] = RunState::running;
+        if (options.on_trial_started) options.on_trial_started(state.trials[i]);
+      }
+    }
+    TrialResult result =
+        stop ? not_started()
+             : run_trial(state.study, state.trials[i], options.stop_requested, &state.lap_maps);
+    std::lock_guard lock(state.mutex);
+    if (state.abandoned) return;
+    state.phase[i] = RunState::done;
+    state.results[i] = std::move(result);
+    if (!state.results[i].skipped && options.on_trial_finished)
+      options.on_trial_finished(state.trials[i], state.results[i]);
+    ++state.finished;
+    state.changed.notify_all();
   });
 }
 

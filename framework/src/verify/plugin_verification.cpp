@@ -203,8 +203,9 @@ PluginVerification verify_plugin(const std::filesystem::path& file) {
 
 std::string format_verification(const PluginVerification& v) {
   std::string out = fmt::format(
-      "plugin {}\n  module '{}', plugin ABI {}, built against rkhs-study {}\n",
-      v.plugin.file.string(), v.plugin.name, v.plugin.abi_version, v.plugin.rkhs_study_version);
+      "plugin {}\n  module '{}', plugin ABI {}, built against rkhs-study {}\n  built for {}\n",
+      v.plugin.file.string(), v.plugin.name, v.plugin.abi_version, v.plugin.rkhs_study_version,
+      v.plugin.build_configuration);
   auto names = [](const std::vector<std::string>& list) {
     std::string s;
     for (std::size_t i = 0; i < list.size(); ++i) s += (i ? ", " : "") + list[i];

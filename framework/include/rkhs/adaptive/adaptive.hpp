@@ -123,11 +123,16 @@ struct IntegrationStats {
 /// state (dimension() doubles).
 /// Throws std::runtime_error when the step size underflows or the step budget is exhausted,
 /// and when the state becomes non-finite.
+///
+/// The state is the caller's storage, of fixed size (system.dimension()): an integrator reads
+/// the initial state from it and writes the final state into it, and works on copies it owns
+/// (nothing it allocates is freed by the caller, nor the reverse: plugin/module.hpp).
 class Integrator {
  public:
   virtual ~Integrator() = default;
   virtual IntegrationStats integrate(
-      AdaptiveSystem& system, Eigen::VectorXd& z, std::span<const double> breakpoints,
+      AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
+      std::span<const double> breakpoints,
       const std::function<void(std::size_t, const double*)>& observe) const = 0;
   /// Whether to stop and restart at the kinks of phi(s(t)) and f(s(t)).
   virtual bool restarts_at_kinks() const noexcept = 0;

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "rkhs/core/domain.hpp"
@@ -13,10 +14,17 @@ namespace rkhs {
 class CentrePlacement {
  public:
   virtual ~CentrePlacement() = default;
-  /// n centres in the domain, sorted increasingly. `trial_seed` is derived from the trial's key
-  /// (random placements seed from it, deterministic ones ignore it).
-  virtual std::vector<double> place(std::size_t n, const Domain& domain,
-                                    std::uint64_t trial_seed) const = 0;
+  /// Writes out.size() centres in the domain into `out` (the caller's storage), sorted
+  /// increasingly. `trial_seed` is derived from the trial's key (random placements seed from
+  /// it, deterministic ones ignore it). Nothing crosses the plugin boundary but the values.
+  virtual void place_into(const Domain& domain, std::uint64_t trial_seed,
+                          std::span<double> out) const = 0;
+  /// n centres (place_into, allocated on the caller's side).
+  std::vector<double> place(std::size_t n, const Domain& domain, std::uint64_t trial_seed) const {
+    std::vector<double> out(n);
+    place_into(domain, trial_seed, out);
+    return out;
+  }
 };
 
 using CentreRegistry = Registry<CentrePlacement>;

@@ -1,9 +1,11 @@
 #pragma once
 // Target functions: the unknown f the estimate approximates (a road profile in arc length).
 
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rkhs/core/domain.hpp"
@@ -11,6 +13,9 @@
 
 namespace rkhs {
 
+/// The boundary owns nothing across it (plugin/module.hpp): values are written into the
+/// caller's storage or handed to the caller's sink, never returned in a container a plugin
+/// allocated.
 class TargetFunction {
  public:
   /// The step h of the default derivative(), metres.
@@ -51,15 +56,41 @@ class TargetFunction {
     derivative(std::span<const double>(&s, 1), std::span<double>(&value, 1));
     return value;
   }
-  /// Provenance of external data (e.g. "sha256:..." of a profile file); empty for closed forms.
-  virtual std::string data_provenance() const { return {}; }
-  /// Arc lengths in [0, L) where f is continuous but not smooth (e.g. the samples of a
-  /// piecewise-linear profile, or the seam of a closed profile). An adaptive integrator that
-  /// restarts at kinks (Integrator::restarts_at_kinks) also stops there. Default: none.
-  virtual std::vector<double> kink_points() const { return {}; }
-  /// Remarks on how the target read its data, said once when the study is loaded (e.g. the
-  /// columns of a CSV file it does not read). Default: none.
-  virtual std::vector<std::string> notes() const { return {}; }
+  /// Provenance of external data (e.g. "sha256:..." of a profile file): calls sink once with
+  /// it, or not at all for a closed form (the default). A sink, not a returned string: nothing
+  /// a plugin allocates is freed by the caller (plugin/module.hpp).
+  virtual void describe_provenance(const std::function<void(std::string_view)>& sink) const {
+    (void)sink;
+  }
+  /// Calls sink(s) for every arc length s in [0, L) where f is continuous but not smooth (e.g.
+  /// the samples of a piecewise-linear profile, or the seam of a closed profile), in increasing
+  /// order. An adaptive integrator that restarts at kinks (Integrator::restarts_at_kinks) also
+  /// stops there. Default: none.
+  virtual void list_kink_points(const std::function<void(double)>& sink) const { (void)sink; }
+  /// Calls sink once per remark on how the target read its data, said once when the study is
+  /// loaded (e.g. the columns of a CSV file it does not read). Default: none.
+  virtual void list_notes(const std::function<void(std::string_view)>& sink) const { (void)sink; }
+
+  // Conveniences on the caller's side of the boundary (they allocate here).
+
+  /// describe_provenance as a string; empty for closed forms.
+  std::string data_provenance() const {
+    std::string out;
+    describe_provenance([&](std::string_view text) { out = text; });
+    return out;
+  }
+  /// list_kink_points as a vector.
+  std::vector<double> kink_points() const {
+    std::vector<double> out;
+    list_kink_points([&](double s) { out.push_back(s); });
+    return out;
+  }
+  /// list_notes as a vector.
+  std::vector<std::string> notes() const {
+    std::vector<std::string> out;
+    list_notes([&](std::string_view note) { out.emplace_back(note); });
+    return out;
+  }
 };
 
 using TargetRegistry = Registry<TargetFunction, const Domain&>;

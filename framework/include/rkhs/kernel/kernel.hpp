@@ -20,6 +20,7 @@
 #include <Eigen/Dense>
 #include <concepts>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -124,6 +125,13 @@ class KernelBasis {
 
 /// A kernel instance behind a virtual interface: the registry boundary. Each method runs a
 /// whole loop on the concrete kernel type.
+///
+/// The boundary owns nothing across it (plugin/module.hpp): a kernel may live in a plugin
+/// module built by another compiler invocation, whose Eigen may allocate differently (alignment,
+/// vectorisation, sanitizers). So no virtual returns an Eigen object or a container: the
+/// virtuals write into storage the caller owns and has sized (`*_into`) or hand values to a
+/// caller's sink, and the non-virtual conveniences (gram(), cross(), diagonal(), kink_points())
+/// allocate on the caller's side.
 class AnyKernel {
  public:
   virtual ~AnyKernel() = default;
@@ -143,20 +151,55 @@ class AnyKernel {
   /// True when the kernel type gives its derivatives in closed form (DifferentiableKernel or
   /// DifferentiableFeatureMapKernel).
   virtual bool has_exact_derivative() const noexcept = 0;
-  /// G_ij = k(c_i, c_j), n x n, symmetric.
-  virtual Eigen::MatrixXd gram(std::span<const double> centres) const = 0;
-  /// K_mi = k(s_m, c_i), points.size() x centres.size().
-  virtual Eigen::MatrixXd cross(std::span<const double> points,
-                                std::span<const double> centres) const = 0;
-  /// k(s_m, s_m) for each point.
-  virtual Eigen::VectorXd diagonal(std::span<const double> points) const = 0;
+  /// out(i, j) = k(c_i, c_j): `out` is n x n (n = centres.size()), sized by the caller; the
+  /// result is symmetric. Throws std::invalid_argument when `out` has another size.
+  virtual void gram_into(std::span<const double> centres,
+                         Eigen::Ref<Eigen::MatrixXd> out) const = 0;
+  /// out(m, i) = k(s_m, c_i): `out` is points.size() x centres.size(), sized by the caller.
+  /// Throws std::invalid_argument when `out` has another size.
+  virtual void cross_into(std::span<const double> points, std::span<const double> centres,
+                          Eigen::Ref<Eigen::MatrixXd> out) const = 0;
+  /// out[m] = k(s_m, s_m); out.size() == points.size() (std::invalid_argument otherwise).
+  virtual void diagonal_into(std::span<const double> points, std::span<double> out) const = 0;
   /// Number of features of a finite feature map, 0 when the kernel has none.
   virtual std::size_t feature_count() const noexcept = 0;
-  /// The sections k(c_i, .) at `centres`, for evaluation along a path.
+  /// The sections k(c_i, .) at `centres`, for evaluation along a path. Made and destroyed by
+  /// the kernel's own code (the virtual destructor), so it may cross the boundary.
   virtual std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const = 0;
-  /// Points in [0, L) where kernel sections are not smooth (finest B-spline knots; the seam 0
-  /// for a kernel that is not periodic on a periodic domain), sorted. Empty when smooth.
-  virtual std::vector<double> kink_points() const = 0;
+  /// Calls sink(s) for every point s in [0, L) where kernel sections are not smooth (finest
+  /// B-spline knots; the seam 0 for a kernel that is not periodic on a periodic domain), in
+  /// increasing order, each once. No call when the sections are smooth.
+  virtual void list_kink_points(const std::function<void(double)>& sink) const = 0;
+
+  // Conveniences on the caller's side of the boundary: they allocate the result here and let
+  // the virtuals above fill it.
+
+  /// G_ij = k(c_i, c_j), n x n, symmetric.
+  Eigen::MatrixXd gram(std::span<const double> centres) const {
+    const auto n = static_cast<Eigen::Index>(centres.size());
+    Eigen::MatrixXd out(n, n);
+    gram_into(centres, out);
+    return out;
+  }
+  /// K_mi = k(s_m, c_i), points.size() x centres.size().
+  Eigen::MatrixXd cross(std::span<const double> points, std::span<const double> centres) const {
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(points.size()),
+                        static_cast<Eigen::Index>(centres.size()));
+    cross_into(points, centres, out);
+    return out;
+  }
+  /// k(s_m, s_m) for each point.
+  Eigen::VectorXd diagonal(std::span<const double> points) const {
+    Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
+    diagonal_into(points, std::span<double>(out.data(), points.size()));
+    return out;
+  }
+  /// The kink points of list_kink_points, sorted. Empty when smooth.
+  std::vector<double> kink_points() const {
+    std::vector<double> out;
+    list_kink_points([&](double s) { out.push_back(s); });
+    return out;
+  }
 };
 
 using KernelRegistry = Registry<AnyKernel, const Domain&>;

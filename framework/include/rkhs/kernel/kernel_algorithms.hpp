@@ -15,6 +15,8 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 #include "rkhs/kernel/kernel.hpp"
 
@@ -406,7 +408,8 @@ class KernelModel final : public AnyKernel {
         parameters_(parameters),
         domain_(domain),
         properties_(kernel_.properties()),
-        stencil_(domain, exact_derivative ? std::vector<double>{} : kink_points()) {}
+        kinks_(sorted_kinks(kernel_, domain, properties_)),
+        stencil_(domain, exact_derivative ? std::vector<double>{} : kinks_) {}
 
   /// True when K gives its derivatives in closed form.
   static constexpr bool exact_derivative =
@@ -438,18 +441,18 @@ class KernelModel final : public AnyKernel {
     }
   }
   bool has_exact_derivative() const noexcept override { return exact_derivative; }
-  Eigen::MatrixXd gram(std::span<const double> centres) const override {
-    return assemble_gram(kernel_, domain_, centres);
+  void gram_into(std::span<const double> centres, Eigen::Ref<Eigen::MatrixXd> out) const override {
+    require_size(out.rows(), out.cols(), centres.size(), centres.size(), "gram_into");
+    out = assemble_gram(kernel_, domain_, centres);
   }
-  Eigen::MatrixXd cross(std::span<const double> points,
-                        std::span<const double> centres) const override {
-    return assemble_cross(kernel_, domain_, points, centres);
+  void cross_into(std::span<const double> points, std::span<const double> centres,
+                  Eigen::Ref<Eigen::MatrixXd> out) const override {
+    require_size(out.rows(), out.cols(), points.size(), centres.size(), "cross_into");
+    out = assemble_cross(kernel_, domain_, points, centres);
   }
-  Eigen::VectorXd diagonal(std::span<const double> points) const override {
-    Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
-    for (std::size_t m = 0; m < points.size(); ++m)
-      out(static_cast<Eigen::Index>(m)) = kernel_(points[m], points[m]);
-    return out;
+  void diagonal_into(std::span<const double> points, std::span<double> out) const override {
+    require_size(static_cast<Eigen::Index>(out.size()), 1, points.size(), 1, "diagonal_into");
+    for (std::size_t m = 0; m < points.size(); ++m) out[m] = kernel_(points[m], points[m]);
   }
   std::size_t feature_count() const noexcept override {
     if constexpr (FeatureMapKernel<K>) return kernel_.feature_count();
@@ -461,13 +464,30 @@ class KernelModel final : public AnyKernel {
     else
       return std::make_unique<DirectBasis<K>>(kernel_, centres, stencil_);
   }
-  std::vector<double> kink_points() const override {
+  void list_kink_points(const std::function<void(double)>& sink) const override {
+    for (double s : kinks_) sink(s);
+  }
+
+ private:
+  // The kink points of K (if it names any) and the seam of a periodic domain when K is not
+  // periodic, sorted and unique.
+  static std::vector<double> sorted_kinks(const K& kernel, const Domain& domain,
+                                          const KernelProperties& properties) {
     std::vector<double> kinks;
-    if constexpr (requires { kernel_.kink_points(); }) kinks = kernel_.kink_points();
-    if (domain_.periodic && !properties_.periodic) kinks.push_back(0.0);
+    if constexpr (requires { kernel.kink_points(); }) kinks = kernel.kink_points();
+    if (domain.periodic && !properties.periodic) kinks.push_back(0.0);
     std::sort(kinks.begin(), kinks.end());
     kinks.erase(std::unique(kinks.begin(), kinks.end()), kinks.end());
     return kinks;
+  }
+  static void require_size(Eigen::Index rows, Eigen::Index cols, std::size_t expected_rows,
+                           std::size_t expected_cols, const char* method) {
+    if (rows != static_cast<Eigen::Index>(expected_rows) ||
+        cols != static_cast<Eigen::Index>(expected_cols))
+      throw std::invalid_argument(std::string("AnyKernel::") + method + ": output is " +
+                                  std::to_string(rows) + " x " + std::to_string(cols) +
+                                  ", expected " + std::to_string(expected_rows) + " x " +
+                                  std::to_string(expected_cols));
   }
 
  private:
@@ -476,7 +496,8 @@ class KernelModel final : public AnyKernel {
   ParameterSet parameters_;
   Domain domain_;
   KernelProperties properties_;
-  DerivativeStencil stencil_;  // used only without exact derivatives; holds kink_points() then
+  std::vector<double> kinks_;  // list_kink_points
+  DerivativeStencil stencil_;  // used only without exact derivatives; holds the kinks then
 };
 
 /// Registers kernel type K (its info() and a KernelModel<K> factory) into kernel_registry().

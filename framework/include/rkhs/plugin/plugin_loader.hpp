@@ -26,6 +26,9 @@ namespace rkhs {
 ///   "<path>: not an rkhs-study plugin (it exports no rkhs_plugin_abi_version; ...)"
 ///   "<path>: built against plugin ABI 7 (rkhs-study 0.0.1), this rkhs-study 0.1.0 has plugin ABI
 ///   1; ..."
+///   "<path>: built for gcc 12, Eigen 3.4.0 (alignment 32 bytes), AVX, no sanitizer, this
+///   rkhs-study is built for gcc 12, Eigen 3.4.0 (alignment 16 bytes), SSE2, no sanitizer
+///   (Eigen alignment ...; vectorisation AVX against SSE2); build the plugin with ..."
 ///   "<path>: duplicate plugin name 'x' (already loaded from <other path>)"
 ///   "<path>: kernel plugin 'gaussian': duplicate name"                       (a registry error)
 ///   "<path>: kernel plugin 'k': parameter 'c': default must be > 0"          (invalid metadata)
@@ -42,6 +45,9 @@ struct LoadedPlugin {
   std::string name;                ///< RKHS_PLUGIN_MODULE(name)
   std::string rkhs_study_version;  ///< the rkhs-study it was built against
   int abi_version = 0;
+  /// How it was compiled, in words (describe() of plugin/build_configuration.hpp): equal to this
+  /// rkhs-study's, or it would not have loaded.
+  std::string build_configuration;
   /// What it registered, sorted, per kind of plugin: keyed by the kind's singular name
   /// (plugin_kinds.hpp), every kind present.
   std::map<std::string, std::vector<std::string>, std::less<>> registered;
