@@ -131,38 +131,12 @@ class MultiscaleBSpline {
   }
 
   /// Clears `out` and appends the (p + 1)(J + 1) features of u, level by level.
-  void features(double u, SparseFeatures& out) const {
-    out.clear();
-    const double x0 = level0(u);
-    std::array<double, max_degree + 1> n{};
-    for (int j = 0; j <= levels_; ++j) {
-      const Cell c = cell_at(x0, j);
-      const std::int32_t cells = n0_ << j;
-      pieces(degree_, c.t, n.data());
-      for (int i = degree_; i >= 0; --i) {
-        const std::int32_t k = c.index - i;
-        const std::int32_t slot = periodic_ ? (k < 0 ? k + cells : k) : k + degree_;
-        out.push(offset_[j] + slot, weight_[j] * n[i]);
-      }
-    }
-  }
+  void features(double u, SparseFeatures& out) const { append_levels(u, out, pieces, weight_); }
 
   /// Clears `out` and appends d/du of the features of u, with the indices and in the order of
   /// features(u).
   void feature_derivatives(double u, SparseFeatures& out) const {
-    out.clear();
-    const double x0 = level0(u);
-    std::array<double, max_degree + 1> dn{};
-    for (int j = 0; j <= levels_; ++j) {
-      const Cell c = cell_at(x0, j);
-      const std::int32_t cells = n0_ << j;
-      piece_slopes(degree_, c.t, dn.data());
-      for (int i = degree_; i >= 0; --i) {
-        const std::int32_t k = c.index - i;
-        const std::int32_t slot = periodic_ ? (k < 0 ? k + cells : k) : k + degree_;
-        out.push(offset_[j] + slot, slope_weight_[j] * dn[i]);
-      }
-    }
+    append_levels(u, out, piece_slopes, slope_weight_);
   }
 
   std::size_t feature_count() const noexcept {
@@ -187,6 +161,27 @@ class MultiscaleBSpline {
   int levels() const noexcept { return levels_; }  ///< J
 
  private:
+  /// Clears `out` and appends, level by level, the p + 1 values `level_pieces` gives on the
+  /// cell of u, each times its level's entry of `level_weights`: features() with the pieces and
+  /// the weights, feature_derivatives() with their slopes and slope weights.
+  void append_levels(double u, SparseFeatures& out,
+                     void (*level_pieces)(int, double, double*) noexcept,
+                     const std::array<double, max_level + 1>& level_weights) const {
+    out.clear();
+    const double x0 = level0(u);
+    std::array<double, max_degree + 1> n{};
+    for (int j = 0; j <= levels_; ++j) {
+      const Cell c = cell_at(x0, j);
+      const std::int32_t cells = n0_ << j;
+      level_pieces(degree_, c.t, n.data());
+      for (int i = degree_; i >= 0; --i) {
+        const std::int32_t k = c.index - i;
+        const std::int32_t slot = periodic_ ? (k < 0 ? k + cells : k) : k + degree_;
+        out.push(offset_[j] + slot, level_weights[j] * n[i]);
+      }
+    }
+  }
+
   /// out[i] = N_p(t + i) for i = 0..p and t in [0, 1]: the polynomial pieces of N_p.
   static void pieces(int degree, double t, double* out) noexcept {
     const double s = 1.0 - t;
