@@ -170,7 +170,8 @@ TEST_CASE("the approximation metric table: output order and NaN rules", "[approx
       "fill_distance",        "separation_distance", "gram_condition_number",
       "gram_min_eigenvalue",  "gram_max_eigenvalue", "power_function_sup",
       "power_function_floor", "l2_error",            "sup_error",
-      "error_floor",          "interpolant_native_norm"};
+      "error_floor",          "interpolant_native_norm", "projection_norm_H_to_C",
+      "projection_operator_norm"};
   CHECK(approximation_metric_names() == expected);
   CHECK(metric_row(ApproximationMetric::l2_error).name == "l2_error");
   CHECK(metric_row(ApproximationMetric::sup_error).flag == "sup_error_at_floor");

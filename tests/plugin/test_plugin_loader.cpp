@@ -184,8 +184,8 @@ TEST_CASE("plugin error: a module that registers nothing, or registers inside dl
   const auto nothing = module("registers_nothing");
   CHECK(refusal(nothing) ==
         nothing.string() +
-            ": registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, _PLANT, "
-            "_LAW, _INTEGRATOR, in the module's sources)");
+            ": registered nothing (use RKHS_REGISTER_KERNEL(Type), or _CENTRES, _TARGET, "
+            "_PROJECTION, _PLANT, _LAW, _INTEGRATOR, in the module's sources)");
   const auto early = module("registers_early");
   CHECK(refusal(early) ==
         early.string() +

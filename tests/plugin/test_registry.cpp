@@ -36,12 +36,14 @@ TEST_CASE("the table of plugin kinds names every registry", "[registry]") {
     singular.emplace_back(Kind::singular);
   });
   CHECK(singular ==
-        std::vector<std::string>{"kernel", "centres", "target", "plant", "law", "integrator"});
+        std::vector<std::string>{"kernel", "centres", "target", "projection", "plant", "law",
+                                 "integrator"});
   const auto names = plugin_kind_names();
   REQUIRE(names.size() == plugin_kind_count);
   CHECK(names[0].plural == "kernels");
   CHECK(names[1].plural == "centres");
-  CHECK(names[5].plural == "integrators");
+  CHECK(names[3].plural == "projections");
+  CHECK(names[6].plural == "integrators");
 }
 
 TEST_CASE("a bad registration is recorded, not thrown", "[registry]") {

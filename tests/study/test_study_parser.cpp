@@ -138,8 +138,8 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   SECTION("unknown top-level key") {
     const auto e = error_of(std::string(minimal) + "[kernels]\nx = 1\n");
     CHECK(e == "s.toml:10:2: kernels: unknown key (known: study, domain, grid, kernel, target, "
-               "centres, solver, limits, adaptive, plant, law, integrator, plugins, expect; did you mean "
-               "'kernel'?)");
+               "centres, projection, solver, limits, adaptive, plant, law, integrator, plugins, "
+               "expect; did you mean 'kernel'?)");
   }
   SECTION("invalid TOML") {
     const auto e = error_of("[study\nname = 1\n");
@@ -166,7 +166,8 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
           "s.toml:4:12: study.metrics: unknown metric 'power_function_supp' (known: "
           "fill_distance, separation_distance, gram_condition_number, gram_min_eigenvalue, "
           "gram_max_eigenvalue, power_function_sup, power_function_floor, l2_error, sup_error, "
-          "error_floor, interpolant_native_norm; did you mean 'power_function_sup'?)");
+          "error_floor, interpolant_native_norm, projection_norm_H_to_C, projection_operator_norm; "
+          "did you mean 'power_function_sup'?)");
   }
   SECTION("a target that is not periodic on a closed track") {
     const auto e = error_of(std::string(minimal) + "[[target]]\nname = \"sine\"\ncycles = 1.5\n");

@@ -44,6 +44,18 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
         out << fmt::format("    [properties at the defaults] unavailable: {}\n", e.what());
       }
     }
+    if constexpr (std::is_same_v<RegistryType, ProjectionRegistry>) {
+      // What a projection declares (its contract test checks each claim).
+      try {
+        out << fmt::format(
+            "    [declares] {}\n",
+            describe_projection(registry.find(name)
+                                    ->factory(ParameterSet::resolve(info.parameters, {}))
+                                    ->properties()));
+      } catch (const std::exception& e) {
+        out << fmt::format("    [declares] unavailable: {}\n", e.what());
+      }
+    }
     for (const auto& [key, value] : info.traits) out << fmt::format("    [{}] {}\n", key, value);
   }
   out << "\n";

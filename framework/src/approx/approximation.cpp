@@ -140,4 +140,80 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   return out;
 }
 
+void measure_projection_norms(const AnyKernel& kernel, const ProjectionOperator& op,
+                              std::size_t evaluation_points, ApproximationMeasurement& out) {
+  using M = ApproximationMetric;
+  const auto points = kernel.domain().uniform_points(evaluation_points);
+  const Eigen::VectorXd residual = projection_residual_norms(kernel, op, points);
+  check_cancelled();
+  const double norm = residual.maxCoeff();
+  out.metrics[M::projection_norm_H_to_C] = norm;
+  out.metrics[M::projection_operator_norm] = projection_operator_norm(kernel, op);
+  // The squared norm is a difference of terms of size k(s, s); below |S| eps max k(s, s) it is
+  // round-off.
+  const double floor = std::sqrt(static_cast<double>(op.samples().size()) * eps *
+                                 kernel.diagonal(points).maxCoeff());
+  if (norm <= floor) out.flags.push_back("projection_norm_at_floor");
+}
+
+ApproximationMeasurement measure_projection(const AnyKernel& kernel, const TargetFunction& target,
+                                            const ProjectionOperator& op,
+                                            std::size_t evaluation_points,
+                                            const SolverOptions& solver_options) {
+  const Domain& domain = kernel.domain();
+  const auto points = domain.uniform_points(evaluation_points);
+  const auto dim = static_cast<Eigen::Index>(op.dimension());
+  ApproximationMeasurement out;
+  using M = ApproximationMetric;
+  auto& metrics = out.metrics;
+  metrics[M::fill_distance] = fill_distance(op.mesh(), domain);
+  metrics[M::separation_distance] = separation_distance(op.mesh(), domain);
+
+  // H_j through the H-Gram matrix of its basis.
+  const Eigen::MatrixXd gram = projection_basis_gram(kernel, op);
+  check_cancelled();
+  const GramSolver solver(gram, solver_options);
+  const auto& spectrum = solver.spectrum();
+  out.solve_method = op.solve_method() + "; basis: " + solver.method();
+  metrics[M::gram_condition_number] = spectrum.condition_number;
+  metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
+  metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+  if (spectrum.singular) out.flags.push_back("gram_singular");
+
+  // The power function of H_j: (b_i, k(s, .))_H = b_i(s).
+  const Eigen::MatrixXd values = projection_basis_values(kernel, op, points);  // M x dim
+  check_cancelled();
+  Eigen::VectorXd quadratic, solution_norm_squared;
+  solver.quadratic_forms(values.transpose(), quadratic, solution_norm_squared);
+  const Eigen::VectorXd power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+  const double round_off = static_cast<double>(dim) * eps * spectrum.lambda_max;
+  const double power_sup = std::sqrt(power_squared.maxCoeff());
+  const double power_floor = std::sqrt(round_off * solution_norm_squared.maxCoeff());
+  metrics[M::power_function_sup] = power_sup;
+  metrics[M::power_function_floor] = power_floor;
+  if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+
+  // Pi f = sum_i c_i b_i, c = W f(S).
+  const auto samples = op.samples();
+  Eigen::VectorXd at_samples(static_cast<Eigen::Index>(samples.size()));
+  Eigen::VectorXd at_points(static_cast<Eigen::Index>(points.size()));
+  target.evaluate(samples, std::span<double>(at_samples.data(), samples.size()));
+  target.evaluate(points, std::span<double>(at_points.data(), points.size()));
+  const Eigen::VectorXd coefficients = op.weights() * at_samples;
+  const Eigen::VectorXd residual = at_points - values * coefficients;
+  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), points.size()));
+  const double sup = residual.cwiseAbs().maxCoeff();
+  const double error_floor =
+      round_off * std::sqrt(solution_norm_squared.maxCoeff()) * coefficients.norm();
+  metrics[M::l2_error] = l2;
+  metrics[M::sup_error] = sup;
+  metrics[M::error_floor] = error_floor;
+  metrics[M::interpolant_native_norm] =
+      std::sqrt(std::max(0.0, coefficients.dot(gram * coefficients)));
+  if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
+  if (l2 <= error_floor * std::sqrt(domain.length)) out.flags.push_back("l2_error_at_floor");
+  measure_projection_norms(kernel, op, evaluation_points, out);
+  return out;
+}
+
 }  // namespace rkhs

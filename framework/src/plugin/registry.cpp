@@ -31,6 +31,9 @@ CentreRegistry& centre_registry() {
 TargetRegistry& target_registry() {
   return registry_of_kind<TargetKind>();
 }
+ProjectionRegistry& projection_registry() {
+  return registry_of_kind<ProjectionKind>();
+}
 PlantRegistry& plant_registry() {
   return registry_of_kind<PlantKind>();
 }

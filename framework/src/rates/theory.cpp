@@ -1,6 +1,7 @@
 #include "rkhs/rates/theory.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,8 +12,9 @@
 namespace rkhs {
 
 const std::vector<std::string>& theory_metrics() {
-  static const std::vector<std::string> names{"power_function_sup", "sup_error", "l2_error",
-                                              "gram_min_eigenvalue", "gram_condition_number"};
+  static const std::vector<std::string> names{"power_function_sup", "projection_norm_H_to_C",
+                                              "sup_error", "l2_error", "gram_min_eigenvalue",
+                                              "gram_condition_number"};
   return names;
 }
 
@@ -25,9 +27,8 @@ std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelPrope
   };
   const auto& known = theory_metrics();
   if (std::find(known.begin(), known.end(), metric) == known.end())
-    return none(fmt::format("no theory rate for metric '{}' (theory covers power_function_sup, "
-                            "sup_error, l2_error, gram_min_eigenvalue, gram_condition_number)",
-                            metric));
+    return none(fmt::format("no theory rate for metric '{}' (theory covers {})", metric,
+                            fmt::join(known, ", ")));
   TheoryRate theory;
   theory.dimension = dimension;
   if (properties.analytic) {
@@ -48,6 +49,13 @@ std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelPrope
     theory.sharp = metric == "power_function_sup";
     theory.statement = fmt::format("{} {} h^(tau - d/2) = h^{} ({})", metric,
                                    theory.sharp ? "~" : "<= C", format_real(theory.h_exponent), given);
+  } else if (metric == "projection_norm_H_to_C") {
+    // ||I - Pi||_{H -> C}: the power function for the H-orthogonal projection; within constants
+    // of it for a uniformly bounded local projection onto a space of mesh h (docs/projections.md).
+    theory.h_exponent = tau - d / 2;
+    theory.statement = fmt::format(
+        "{} ~ h^(tau - d/2) = h^{} ({}; a uniformly bounded projection onto a space of mesh h)",
+        metric, format_real(theory.h_exponent), given);
   } else if (metric == "l2_error") {
     theory.h_exponent = tau;
     theory.sharp = false;

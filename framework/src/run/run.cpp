@@ -109,8 +109,24 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
       result.snapshots = std::move(measured.snapshots);
       reference_seconds = measured.reference_seconds;
     } else {
-      auto measured =
-          measure_approximation(*kernel, *target, centres, study.evaluation_points, study.solver);
+      const std::string_view projection =
+          trial.projection.name.empty() ? default_projection : trial.projection.name;
+      const ProjectionRequest request{*kernel, trial.n, centres, study.solver};
+      ApproximationMeasurement measured;
+      if (projection == default_projection) {
+        // Interpolation at the centres: the Gram solve of measure_approximation, and its
+        // projection norms from the operator's own definition.
+        measured = measure_approximation(*kernel, *target, centres, study.evaluation_points,
+                                         study.solver);
+        const auto op = build_projection(projection, trial.projection.parameters, request);
+        check_cancelled();
+        measure_projection_norms(*kernel, op, study.evaluation_points, measured);
+      } else {
+        const auto op = build_projection(projection, trial.projection.parameters, request);
+        check_cancelled();
+        measured = measure_projection(*kernel, *target, op, study.evaluation_points,
+                                      study.solver);
+      }
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.flags = std::move(measured.flags);

@@ -84,6 +84,7 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
       {&study.kernels, "kernels", "each trial's kernel and its parameters are in its key"},
       {&study.targets, "targets", "each trial's target is in its key"},
       {&study.centres, "centres", "each trial's centre placement is in its key"},
+      {&study.projections, "projections", "each trial's projection is in its key"},
       {&study.plants, "plants", "each trial's plant is in its key"},
       {&study.laws, "laws", "each trial's learning law is in its key"},
       {&study.integrators, "integrators", "each trial's integrator is in its key"},

@@ -308,6 +308,7 @@ std::vector<TrialSpec> one_trial_per_choice(const StudyDefinition& study) {
   static constexpr Axis axes[] = {{&StudyDefinition::kernels, &TrialSpec::kernel},
                                   {&StudyDefinition::targets, &TrialSpec::target},
                                   {&StudyDefinition::centres, &TrialSpec::centres},
+                                  {&StudyDefinition::projections, &TrialSpec::projection},
                                   {&StudyDefinition::plants, &TrialSpec::plant},
                                   {&StudyDefinition::laws, &TrialSpec::law},
                                   {&StudyDefinition::integrators, &TrialSpec::integrator}};

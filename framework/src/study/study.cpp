@@ -62,6 +62,8 @@ std::vector<StudyDefinition::GridAxis> StudyDefinition::grid_axes() const {
   std::vector<GridAxis> axes{{"kernel", "kernels", kernels.size()},
                              {"target", "targets", targets.size()},
                              {"centre placement", "centre placements", centres.size()}};
+  if (!projections.empty())
+    axes.push_back({"projection", "projections", projections.size()});
   // The adaptive axes are there when the study has them (trials() nests them the same way).
   for (const auto& axis : {GridAxis{"plant", "plants", plants.size()},
                            GridAxis{"learning law", "learning laws", laws.size()},
@@ -85,35 +87,39 @@ std::vector<TrialSpec> StudyDefinition::trials() const {
   for (const auto& kernel : kernels)
     for (const auto& target : targets)
       for (const auto& placement : centres)
-        for (const auto& plant : or_none(plants))
-          for (const auto& law : or_none(laws))
-            for (const auto& integrator : or_none(integrators))
-              for (const auto& laps : lap_counts)
-                for (std::size_t n : n_values) {
-                  TrialSpec trial;
-                  trial.index = out.size();
-                  trial.kernel = kernel;
-                  trial.target = target;
-                  trial.centres = placement;
-                  trial.plant = plant;
-                  trial.law = law;
-                  trial.integrator = integrator;
-                  trial.n = n;
-                  trial.laps = laps;
-                  trial.group_key = fmt::format("kernel={} | target={} | centres={}",
-                                                kernel.label(), target.label(), placement.label());
-                  using Named = std::pair<const char*, const PluginChoice*>;
-                  for (const auto& [axis, choice] : {Named{"plant", &plant}, Named{"law", &law},
-                                                     Named{"integrator", &integrator}})
-                    if (!choice->name.empty())
-                      trial.group_key += fmt::format(" | {}={}", axis, choice->label());
-                  // The seed leaves laps out: every lap count of a series sees the same random
-                  // centres, so its trials differ in nothing but how long they learn.
-                  trial.seed = hash64(fmt::format("{} | n={}", trial.group_key, n));
-                  if (laps) trial.group_key += fmt::format(" | laps={}", laps_text(*laps));
-                  trial.key = fmt::format("{} | n={}", trial.group_key, n);
-                  out.push_back(std::move(trial));
-                }
+        for (const auto& projection : or_none(projections))
+          for (const auto& plant : or_none(plants))
+            for (const auto& law : or_none(laws))
+              for (const auto& integrator : or_none(integrators))
+                for (const auto& laps : lap_counts)
+                  for (std::size_t n : n_values) {
+                    TrialSpec trial;
+                    trial.index = out.size();
+                    trial.kernel = kernel;
+                    trial.target = target;
+                    trial.centres = placement;
+                    trial.projection = projection;
+                    trial.plant = plant;
+                    trial.law = law;
+                    trial.integrator = integrator;
+                    trial.n = n;
+                    trial.laps = laps;
+                    trial.group_key =
+                        fmt::format("kernel={} | target={} | centres={}", kernel.label(),
+                                    target.label(), placement.label());
+                    using Named = std::pair<const char*, const PluginChoice*>;
+                    for (const auto& [axis, choice] :
+                         {Named{"projection", &projection}, Named{"plant", &plant},
+                          Named{"law", &law}, Named{"integrator", &integrator}})
+                      if (!choice->name.empty())
+                        trial.group_key += fmt::format(" | {}={}", axis, choice->label());
+                    // The seed leaves laps out: every lap count of a series sees the same random
+                    // centres, so its trials differ in nothing but how long they learn.
+                    trial.seed = hash64(fmt::format("{} | n={}", trial.group_key, n));
+                    if (laps) trial.group_key += fmt::format(" | laps={}", laps_text(*laps));
+                    trial.key = fmt::format("{} | n={}", trial.group_key, n);
+                    out.push_back(std::move(trial));
+                  }
   return out;
 }
 

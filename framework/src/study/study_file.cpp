@@ -18,6 +18,7 @@
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
@@ -187,6 +188,8 @@ void check_grid_size(const Reporter& report, const toml::table& root, StudyKind 
                                   count_plugin_axis(root, "target", "target", "targets"),
                                   count_plugin_axis(root, "centres", "centre placement",
                                                     "centre placements")};
+  if (kind == StudyKind::approximation && root.get("projection"))
+    factors.push_back(count_plugin_axis(root, "projection", "projection", "projections"));
   if (kind == StudyKind::adaptive) {
     factors.push_back(count_plugin_axis(root, "plant", "plant", "plants"));
     factors.push_back(count_plugin_axis(root, "law", "learning law", "learning laws"));
@@ -714,8 +717,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     report.fail(error.source(), "", fmt::format("invalid TOML: {}", error.description()));
   }
   check_keys(report, root, "",
-             {"study", "domain", "grid", "kernel", "target", "centres", "solver", "limits",
-              "adaptive", "plant", "law", "integrator", "plugins", "expect"});
+             {"study", "domain", "grid", "kernel", "target", "centres", "projection", "solver",
+              "limits", "adaptive", "plant", "law", "integrator", "plugins", "expect"});
   load_study_plugins(report, root);
 
   StudyDefinition study;
@@ -741,6 +744,10 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       if (const auto* node = root.get(section))
         report.fail(node->source(), section,
                     "only for adaptive studies: add kind = \"adaptive\" to [study]");
+  if (study.kind == StudyKind::adaptive)
+    if (const auto* node = root.get("projection"))
+      report.fail(node->source(), "projection",
+                  "only for approximation studies (an adaptive study's space is its centres')");
   const auto abscissa = get_string(report, *header, "abscissa", "study.", std::string("n"));
   if (abscissa == "n") study.abscissa = Abscissa::n;
   else if (abscissa == "h" || abscissa == "fill_distance") study.abscissa = Abscissa::fill_distance;
@@ -830,6 +837,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     study.reference = std::move(adaptive.reference);
     if (study.adaptive.snapshot_points == 0) study.adaptive.snapshot_points = study.evaluation_points;
   }
+  // [[projection]]: an axis only when the file has the section (a study without one projects
+  // by interpolation at the centres, and its keys say nothing about projections).
+  std::optional<PluginAxis> projections;
+  if (study.kind == StudyKind::approximation && root.get("projection"))
+    projections = read_plugins(report, root, "projection", projection_registry(), std::nullopt);
 
   if (const auto* solver = optional_table(report, root, "solver")) {
     check_keys(report, *solver, "solver.", {"singular", "regularisation"});
@@ -853,9 +865,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   // the same axis columns), then the axes expanded.
   for (std::size_t a = 0; a < axes.size(); ++a)
     study.*axis_members[a] = first_choices(report, axes[a]);
+  if (projections) study.projections = first_choices(report, *projections);
   auto expectations = detail::read_expectations(root, study);
   for (std::size_t a = 0; a < axes.size(); ++a)
     study.*axis_members[a] = expand_plugins(report, axes[a]);
+  if (projections) study.projections = expand_plugins(report, *projections);
 
   // Build every kernel and target once: a combination that is invalid only for this domain
   // (e.g. a non-periodic sine on a closed track) is an input error, not a failed trial.
@@ -879,6 +893,26 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       study.warnings.push_back(report.locate(
           root.get("target") ? root.get("target")->source() : toml::source_region{}, "target",
           "note: " + note));
+  });
+  // Every kernel with every projection and n: a projection that cannot be built for one (a
+  // spline space of another kernel, an n that is not a level) is an input error.
+  check_instances(study.projections, "projection", [&](const PluginChoice& c) {
+    const auto projection = projection_registry().find(c.name)->factory(c.parameters);
+    const auto properties = projection->properties();
+    for (const auto& k : study.kernels) {
+      const auto kernel = kernel_registry().find(k.name)->factory(k.parameters, study.domain);
+      if (!properties.requires_kernel.empty() && kernel->name() != properties.requires_kernel)
+        throw std::invalid_argument(fmt::format(
+            "works with the {} kernel only, and the study pairs it with kernel '{}'",
+            properties.requires_kernel, k.label()));
+      for (const auto n : study.n_values) {
+        try {
+          projection->check(*kernel, n);
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument(fmt::format("kernel '{}': {}", k.label(), e.what()));
+        }
+      }
+    }
   });
   check_instances(study.plants, "plant", [&](const PluginChoice& c) {
     const auto plant = plant_registry().find(c.name)->factory(c.parameters);

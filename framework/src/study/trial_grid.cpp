@@ -8,8 +8,10 @@ namespace rkhs {
 namespace {
 // The plugin axes of a trial in column order; the kernel's parameters are not prefixed.
 std::vector<std::pair<std::string, const PluginChoice*>> plugin_axes(const TrialSpec& trial) {
-  return {{"kernel", &trial.kernel}, {"target", &trial.target}, {"centres", &trial.centres},
-          {"plant", &trial.plant},   {"law", &trial.law},       {"integrator", &trial.integrator}};
+  return {{"kernel", &trial.kernel},         {"target", &trial.target},
+          {"centres", &trial.centres},       {"projection", &trial.projection},
+          {"plant", &trial.plant},           {"law", &trial.law},
+          {"integrator", &trial.integrator}};
 }
 std::string parameter_column(const std::string& axis, const std::string& parameter) {
   if (axis == "kernel") return parameter;

@@ -9,6 +9,7 @@
 #include "rkhs/core/domain.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/approx/metrics.hpp"
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/approx/target.hpp"
 
@@ -33,6 +34,8 @@ double separation_distance(std::span<const double> centres, const Domain& domain
 ///  error_floor                           round-off level of Pi_n f on the grid: max_m
 ///                                        n eps lambda_max |G^-1 k_X(s_m)| |alpha|
 ///  interpolant_native_norm               ||Pi_n f||_H = sqrt(alpha^T G alpha)
+///  projection_norm_H_to_C                ||I - Pi||_{H -> C} = max_m ||(I - Pi)^* k(s_m, .)||_H
+///  projection_operator_norm              ||Pi||_{H -> H}
 const std::vector<std::string>& approximation_metric_names();
 
 struct ApproximationMeasurement {
@@ -59,6 +62,23 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const Eigen::MatrixXd& gram,
                                                const GramSolver& solver,
                                                Eigen::MatrixXd* cross = nullptr);
+
+/// Sets projection_norm_H_to_C and projection_operator_norm of `op` (projection.hpp's exact
+/// formulas, on `evaluation_points` uniform points); flags projection_norm_at_floor
+/// when the norm is below the round-off level sqrt(|S| eps max k(s, s)).
+void measure_projection_norms(const AnyKernel& kernel, const ProjectionOperator& op,
+                              std::size_t evaluation_points, ApproximationMeasurement& out);
+
+/// A trial of a projection whose space is not span{k(c_i, .)} (a level projection): every
+/// metric of the table for H_j = span{b_i} and Pi f = sum_i c_i b_i, c = W f(S):
+/// fill and separation distances of the mesh (the level's knots); Gram metrics and the power
+/// function of the basis' H-Gram matrix G_B (P_j is the norm of the H-orthogonal projection onto
+/// H_j, against which a projection that is not orthogonal can be compared); the errors of Pi f;
+/// ||Pi f||_H = sqrt(c^T G_B c); and the projection norms (measure_projection_norms).
+ApproximationMeasurement measure_projection(const AnyKernel& kernel, const TargetFunction& target,
+                                            const ProjectionOperator& op,
+                                            std::size_t evaluation_points,
+                                            const SolverOptions& solver);
 
 /// P_n(s) at each point, with the same solver (values below round-off clamped to 0).
 Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,

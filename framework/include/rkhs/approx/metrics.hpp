@@ -90,12 +90,14 @@ enum class ApproximationMetric : std::size_t {
   sup_error,
   error_floor,
   interpolant_native_norm,
+  projection_norm_H_to_C,
+  projection_operator_norm,
 };
 
 template <>
 struct MetricTable<ApproximationMetric> {
   using M = ApproximationMetric;
-  static constexpr std::array<MetricRow<M>, 11> rows{{
+  static constexpr std::array<MetricRow<M>, 13> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -116,6 +118,12 @@ struct MetricTable<ApproximationMetric> {
        "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, ""},
       {M::interpolant_native_norm, "interpolant_native_norm", "[f] / sqrt([k])",
        "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, ""},
+      {M::projection_norm_H_to_C, "projection_norm_H_to_C", "sqrt([k])",
+       "max_m ||(I - Pi)^* k(s_m, .)||_H = ||I - Pi||_{H -> C} on the grid, from the "
+       "projection's own definition (the power function for interpolation)",
+       false, "projection_norm_at_floor"},
+      {M::projection_operator_norm, "projection_operator_norm", "1",
+       "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, ""},
   }};
 };
 static_assert(table_in_enum_order<ApproximationMetric>());

@@ -31,6 +31,7 @@
 #include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
@@ -67,6 +68,16 @@ struct TargetKind {
   static Registry& registry() { return target_registry(); }
 };
 
+struct ProjectionKind {
+  using Product = Projection;
+  using Registry = ProjectionRegistry;
+  static constexpr std::string_view singular = "projection";
+  static constexpr std::string_view plural = "projections";
+  static constexpr std::string_view builtins[] = {"interpolation", "l2_projection", "mra_level",
+                                                  "quasi_interpolant"};
+  static Registry& registry() { return projection_registry(); }
+};
+
 struct PlantKind {
   using Product = Plant;
   using Registry = PlantRegistry;
@@ -99,8 +110,8 @@ struct IntegratorKind {
 };
 
 /// The table.
-using PluginKinds =
-    std::tuple<KernelKind, CentresKind, TargetKind, PlantKind, LawKind, IntegratorKind>;
+using PluginKinds = std::tuple<KernelKind, CentresKind, TargetKind, ProjectionKind, PlantKind,
+                               LawKind, IntegratorKind>;
 inline constexpr std::size_t plugin_kind_count = std::tuple_size_v<PluginKinds>;
 
 /// What a descriptor must declare (see the file comment).

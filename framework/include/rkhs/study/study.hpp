@@ -42,6 +42,9 @@ struct TrialSpec {
   PluginChoice kernel;
   PluginChoice target;
   PluginChoice centres;
+  /// Approximation trials of a study with a [[projection]] axis (empty name otherwise: the
+  /// projection is interpolation at the centres, and nothing about it is in the keys).
+  PluginChoice projection;
   PluginChoice plant;       ///< adaptive trials only (empty name otherwise)
   PluginChoice law;         ///< adaptive trials only
   PluginChoice integrator;  ///< adaptive trials only
@@ -93,6 +96,8 @@ struct StudyDefinition {
   std::vector<std::size_t> n_values;  ///< increasing, distinct
   std::size_t evaluation_points = 4096;
   std::vector<PluginChoice> kernels, targets, centres;
+  /// [[projection]] entries (approximation studies only; empty when the file has none).
+  std::vector<PluginChoice> projections;
   std::vector<PluginChoice> plants, laws, integrators;  ///< adaptive studies only
   std::vector<std::string> metrics;  ///< the metrics written and fitted, in output order
   Abscissa abscissa = Abscissa::n;
@@ -113,8 +118,8 @@ struct StudyDefinition {
   /// integration_error; its trials step through time. An empty name: no reference.
   PluginChoice reference;
 
-  /// The Cartesian product kernels x targets x centres [x plants x laws x integrators]
-  /// [x laps] x n, n varying fastest.
+  /// The Cartesian product kernels x targets x centres [x projections] [x plants x laws x
+  /// integrators] [x laps] x n, n varying fastest.
   std::vector<TrialSpec> trials() const;
 
   /// One axis of the trial grid: what it is called (singular and plural) and how many values

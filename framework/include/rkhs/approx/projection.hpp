@@ -1,0 +1,175 @@
+#pragma once
+// Projections Pi_j : H -> H_j (paper Sec. 4, docs/model.md section 14): the finite-dimensional
+// spaces of the approximations and how a function of H is mapped into them.
+//
+// Every projection is written in one form, which is what a plugin builds:
+//
+//   Pi f = sum_i c_i b_i,   c = W f(S),   b_i = sum_y E_yi k(y, .)
+//
+//   S  the sample points: Pi f depends on f only through its values there
+//   W  dimension x |S|: the coefficient functionals (interpolation: G^-1; a quasi-interpolant:
+//      local rows; an L2 projection: the mass-matrix solve times quadrature weights; the
+//      H-orthogonal projection onto a subspace: G_B^-1 E^T, since (f, k(y, .))_H = f(y))
+//   b_i the basis of H_j, as combinations of kernel sections at the basis points Y (exact for a
+//      subspace of span{k(y, .)}: kernel sections at centres, or splines of a level j <= J
+//      through the sections at the finest level's support centres, which span the B-spline
+//      kernel's whole space)
+//
+// From this form and the kernel alone, the framework computes exactly, for any projection
+// (projection_metrics.hpp): Pi f on a grid, ||Pi f||_H, the H-Gram matrix of the basis
+// G_B = E^T K_YY E, the operator norm ||Pi||_{H -> H}, and ||I - Pi||_{H -> C} =
+// sup_s ||(I - Pi)^* k(s, .)||_H, where (Pi^* k(s, .)) = sum_m (W^T E^T K_Y(s))_m k(S_m, .).
+//
+// A projection plugin is a class P with
+//   static PluginInfo info();
+//   explicit P(const ParameterSet&);
+//   ProjectionProperties properties() const;      what it declares (contract-tested)
+//   void build(const ProjectionRequest&, ProjectionOperator& out) const;
+// registered with RKHS_REGISTER_PROJECTION(P) (through the same boundary rules as every plugin:
+// the operator's storage is allocated on the caller's side by ProjectionOperator::resize).
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/core/domain.hpp"
+#include "rkhs/core/registry.hpp"
+#include "rkhs/kernel/kernel.hpp"
+
+namespace rkhs {
+
+/// What decides the space H_j of a projection.
+enum class ProjectionResolution {
+  centres,  ///< H_n = span{k(c_i, .)} at the trial's n centres (the centres axis)
+  level,    ///< H_j = the splines of level j; the trial's n is the number of level-j cells,
+            ///< n = n0 2^j (h = h0 2^-j), and the centres axis is not used
+};
+
+/// What a projection declares about itself; the contract test checks each claim.
+struct ProjectionProperties {
+  ProjectionResolution resolution = ProjectionResolution::centres;
+  /// Pi_j Pi_k = Pi_j for j <= k (for nested resolutions: levels, or centre sets that grow by
+  /// inclusion, such as uniform centres whose n doubles).
+  bool nested = false;
+  /// (f - Pi f, g)_H = 0 for every g in H_j: the H-orthogonal projection.
+  bool h_orthogonal = false;
+  /// sup_j ||Pi_j||_{H -> H} where it is known (1 for an H-orthogonal projection); empty
+  /// otherwise (then only the measured projection_operator_norm says it).
+  std::optional<double> operator_norm_bound;
+  /// The kernel the projection needs ("bspline" for the spline spaces), empty for any kernel
+  /// (a literal: nothing the plugin allocates crosses the boundary).
+  std::string_view requires_kernel;
+};
+
+/// The properties in words, for `rkhs-study list projection` and the docs: "resolution: level;
+/// nested; H-orthogonal; ||Pi_j|| <= 1; kernel: bspline".
+std::string describe_projection(const ProjectionProperties& properties);
+
+/// What a projection is built for: the kernel (its space H), the trial's n and, for a centre
+/// projection, its centres; the solver options for Gram solves.
+struct ProjectionRequest {
+  const AnyKernel& kernel;
+  std::size_t n = 0;                ///< the trial's n (level projections: cells n0 2^j)
+  std::span<const double> centres;  ///< the trial's centres (centre projections only)
+  SolverOptions solver;
+};
+
+/// The operator in the form of the file comment, in storage the caller owns. A plugin calls
+/// resize() once, then fills every entry through the accessors; resize(), set_mesh() and
+/// set_solve_method() are compiled into the framework, so every allocation happens on the
+/// caller's side of the plugin boundary.
+class ProjectionOperator {
+ public:
+  /// Sizes S, W, Y and E (entries zero) and clears the rest.
+  void resize(std::size_t dimension, std::size_t samples, std::size_t basis_points);
+
+  std::size_t dimension() const noexcept { return static_cast<std::size_t>(weights_.rows()); }
+  std::span<double> samples() noexcept { return samples_; }
+  std::span<const double> samples() const noexcept { return samples_; }
+  Eigen::Ref<Eigen::MatrixXd> weights() noexcept { return weights_; }  ///< W: dim x |S|
+  const Eigen::MatrixXd& weights() const noexcept { return weights_; }
+  std::span<double> basis_points() noexcept { return basis_points_; }
+  std::span<const double> basis_points() const noexcept { return basis_points_; }
+  /// E: |Y| x dim, b_i = sum_y E_yi k(y, .).
+  Eigen::Ref<Eigen::MatrixXd> basis_coefficients() noexcept { return basis_coefficients_; }
+  const Eigen::MatrixXd& basis_coefficients() const noexcept { return basis_coefficients_; }
+
+  /// The level j of a level projection (NaN for a centre projection).
+  double level = std::numeric_limits<double>::quiet_NaN();
+  /// The mesh of H_j: its centres, or the knots of level j (fill and separation distances).
+  void set_mesh(std::span<const double> points);
+  const std::vector<double>& mesh() const noexcept { return mesh_; }
+  /// How the plugin solved what it solved ("cholesky", "pseudo-inverse (...)"), for the record.
+  void set_solve_method(std::string_view method);
+  const std::string& solve_method() const noexcept { return solve_method_; }
+
+ private:
+  std::vector<double> samples_, basis_points_, mesh_;
+  Eigen::MatrixXd weights_, basis_coefficients_;
+  std::string solve_method_;
+};
+
+/// A projection family Pi_j (see the file comment).
+class Projection {
+ public:
+  virtual ~Projection() = default;
+  virtual ProjectionProperties properties() const = 0;
+  /// Throws std::invalid_argument, as build() would, when the projection cannot be built for
+  /// `kernel` and `n` (an n that is not a level, ...), without building anything: what a study
+  /// file is checked with. The kernel named by properties().requires_kernel is checked by the
+  /// caller.
+  virtual void check(const AnyKernel& kernel, std::size_t n) const = 0;
+  /// Builds Pi_j for `request` into `out`. Throws std::invalid_argument naming what does not
+  /// fit (a kernel it cannot work with, an n that is not n0 2^j with j <= J, ...).
+  virtual void build(const ProjectionRequest& request, ProjectionOperator& out) const = 0;
+};
+
+using ProjectionRegistry = Registry<Projection>;
+ProjectionRegistry& projection_registry();
+
+/// The name of the projection of studies that declare none: kernel interpolation at the
+/// centres, the H-orthogonal projection onto span{k(c_i, .)}.
+inline constexpr std::string_view default_projection = "interpolation";
+
+/// Registers projection type P (static info(), constructor from ParameterSet). Never throws; a
+/// failure is recorded in projection_registry().errors() (register_plugin).
+template <class P>
+bool register_projection() noexcept {
+  return register_plugin<P>(projection_registry());
+}
+
+/// Pi_j as a concrete operator: makes the plugin `name` and builds it for `request`.
+ProjectionOperator build_projection(std::string_view name, const ParameterSet& parameters,
+                                    const ProjectionRequest& request);
+
+// The exact quantities of a built operator for its kernel (the file comment's formulas). Each
+// costs a few kernel matrices on S and Y; nothing is approximated beyond round-off.
+
+/// b_i(s_m): points.size() x dimension, K(points, Y) E.
+Eigen::MatrixXd projection_basis_values(const AnyKernel& kernel, const ProjectionOperator& op,
+                                        std::span<const double> points);
+/// (Pi f)(s_m) from f's values at the sample points S (c = W f(S)).
+Eigen::VectorXd apply_projection(const AnyKernel& kernel, const ProjectionOperator& op,
+                                 const Eigen::VectorXd& at_samples, std::span<const double> points);
+/// G_B = E^T K_YY E: the H inner products (b_i, b_k)_H of the basis.
+Eigen::MatrixXd projection_basis_gram(const AnyKernel& kernel, const ProjectionOperator& op);
+/// ||(I - Pi)^* k(s, .)||_H at each point: sqrt(k(s, s) - 2 c^T K_S(s) + c^T K_SS c) with
+/// c = W^T E^T K_Y(s) (clamped at 0 before the root). Its sup is ||I - Pi||_{H -> C}; for the
+/// H-orthogonal projection onto span{k(c_i, .)} it is the power function.
+Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const ProjectionOperator& op,
+                                          std::span<const double> points);
+/// ||Pi||_{H -> H} = sqrt(lambda_max(R^T W K_SS W^T R)) with G_B = R R^T: the largest
+/// ||Pi f||_H over ||f||_H = 1 (f ranges over H, seen by Pi through f(S)).
+double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op);
+
+}  // namespace rkhs
+
+#define RKHS_REGISTER_PROJECTION(Type) \
+  RKHS_REGISTRAR(rkhs_projection_registered_, ::rkhs::register_projection<Type>())

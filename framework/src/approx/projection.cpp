@@ -1,0 +1,137 @@
+// The projection operator's storage, the registry's entry point and the exact quantities of
+// projection.hpp's form.
+#include "rkhs/approx/projection.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "rkhs/core/parameters.hpp"
+
+namespace rkhs {
+
+void ProjectionOperator::resize(std::size_t dimension, std::size_t samples,
+                                std::size_t basis_points) {
+  const auto dim = static_cast<Eigen::Index>(dimension);
+  samples_.assign(samples, 0.0);
+  basis_points_.assign(basis_points, 0.0);
+  weights_ = Eigen::MatrixXd::Zero(dim, static_cast<Eigen::Index>(samples));
+  basis_coefficients_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(basis_points), dim);
+  mesh_.clear();
+  solve_method_.clear();
+  level = std::numeric_limits<double>::quiet_NaN();
+}
+
+void ProjectionOperator::set_mesh(std::span<const double> points) {
+  mesh_.assign(points.begin(), points.end());
+}
+
+void ProjectionOperator::set_solve_method(std::string_view method) {
+  solve_method_.assign(method.begin(), method.end());
+}
+
+std::string describe_projection(const ProjectionProperties& properties) {
+  std::string out = properties.resolution == ProjectionResolution::level
+                        ? "resolution: level j (n = n0 2^j cells)"
+                        : "resolution: the n centres";
+  out += properties.nested ? ", nested" : ", not nested";
+  out += properties.h_orthogonal ? ", H-orthogonal" : ", not H-orthogonal";
+  if (properties.operator_norm_bound)
+    out += fmt::format(", ||Pi_j||_(H->H) <= {}", format_real(*properties.operator_norm_bound));
+  if (!properties.requires_kernel.empty())
+    out += fmt::format(", kernel: {}", properties.requires_kernel);
+  return out;
+}
+
+ProjectionOperator build_projection(std::string_view name, const ParameterSet& parameters,
+                                    const ProjectionRequest& request) {
+  const auto* entry = projection_registry().find(name);
+  if (!entry) throw std::invalid_argument(fmt::format("unknown projection '{}'", name));
+  const auto projection = entry->factory(parameters);
+  const auto properties = projection->properties();
+  if (!properties.requires_kernel.empty() && request.kernel.name() != properties.requires_kernel)
+    throw std::invalid_argument(fmt::format(
+        "projection '{}' works with the {} kernel only (its spaces are that kernel's levels), "
+        "not with '{}'",
+        name, properties.requires_kernel, request.kernel.name()));
+  ProjectionOperator out;
+  projection->build(request, out);
+  const auto dim = static_cast<Eigen::Index>(out.dimension());
+  if (dim == 0 || out.samples().empty() || out.basis_points().empty() ||
+      out.basis_coefficients().cols() != dim)
+    throw std::logic_error(
+        fmt::format("projection '{}' built an empty or inconsistent operator "
+                    "({} basis functions, {} samples, {} basis points)",
+                    name, dim, out.samples().size(), out.basis_points().size()));
+  if (!out.weights().allFinite() || !out.basis_coefficients().allFinite())
+    throw std::runtime_error(
+        fmt::format("projection '{}' built a non-finite operator (n = {})", name, request.n));
+  return out;
+}
+
+Eigen::MatrixXd projection_basis_values(const AnyKernel& kernel, const ProjectionOperator& op,
+                                        std::span<const double> points) {
+  return kernel.cross(points, op.basis_points()) * op.basis_coefficients();
+}
+
+Eigen::VectorXd apply_projection(const AnyKernel& kernel, const ProjectionOperator& op,
+                                 const Eigen::VectorXd& at_samples,
+                                 std::span<const double> points) {
+  if (at_samples.size() != static_cast<Eigen::Index>(op.samples().size()))
+    throw std::invalid_argument("apply_projection: one value per sample point is needed");
+  const Eigen::VectorXd coefficients = op.weights() * at_samples;
+  return kernel.cross(points, op.basis_points()) * (op.basis_coefficients() * coefficients);
+}
+
+Eigen::MatrixXd projection_basis_gram(const AnyKernel& kernel, const ProjectionOperator& op) {
+  const Eigen::MatrixXd& E = op.basis_coefficients();
+  Eigen::MatrixXd gram = E.transpose() * kernel.gram(op.basis_points()) * E;
+  return 0.5 * (gram + gram.transpose());
+}
+
+namespace {
+// A = W K_SS W^T (dim x dim): (A)_ik = (w_i, w_k) for the functionals w_i = sum_m W_im k(S_m, .)
+// (the H-Riesz representers of f -> c_i), formed once so that what follows costs O(dim) per
+// point instead of O(|S|).
+Eigen::MatrixXd functional_gram(const AnyKernel& kernel, const ProjectionOperator& op) {
+  Eigen::MatrixXd A = op.weights() * (kernel.gram(op.samples()) * op.weights().transpose());
+  return 0.5 * (A + A.transpose());
+}
+}  // namespace
+
+Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const ProjectionOperator& op,
+                                          std::span<const double> points) {
+  // With c = W^T D_m, D = E^T K_Y(points) (the basis at the points): c^T K_S(s_m) = (V)_m . D_m
+  // with V = W K_S(points), and c^T K_SS c = D_m^T A D_m.
+  const Eigen::MatrixXd D =
+      op.basis_coefficients().transpose() * kernel.cross(op.basis_points(), points);
+  const Eigen::MatrixXd V = op.weights() * kernel.cross(op.samples(), points);
+  const Eigen::MatrixXd AD = functional_gram(kernel, op) * D;
+  const Eigen::VectorXd diagonal = kernel.diagonal(points);
+  Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
+  for (Eigen::Index m = 0; m < out.size(); ++m) {
+    // k - 2 D.V + D.AD, summed as (k - D.V) + D.(AD - V): for an H-orthogonal projection
+    // AD = V, so the second term is round-off and the first is the power function's own
+    // k(s, s) - k_X^T G^-1 k_X, without the cancellation of two large terms.
+    const double squared =
+        (diagonal[m] - D.col(m).dot(V.col(m))) + D.col(m).dot(AD.col(m) - V.col(m));
+    out[m] = std::sqrt(std::max(0.0, squared));
+  }
+  return out;
+}
+
+double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op) {
+  // G_B = V diag(lambda) V^T, R = V diag(sqrt(lambda)) (round-off negatives clamped to 0);
+  // ||Pi||^2 = lambda_max(R^T A R).
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> basis(projection_basis_gram(kernel, op));
+  const Eigen::MatrixXd R =
+      basis.eigenvectors() * basis.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  Eigen::MatrixXd T = R.transpose() * functional_gram(kernel, op) * R;
+  T = 0.5 * (T + T.transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> norm(T, Eigen::EigenvaluesOnly);
+  return std::sqrt(std::max(0.0, norm.eigenvalues().maxCoeff()));
+}
+
+}  // namespace rkhs
