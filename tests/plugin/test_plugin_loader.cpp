@@ -11,6 +11,7 @@
 
 #include "plugin_test_support.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/plugin/build_configuration.hpp"
@@ -294,4 +295,43 @@ gamma = 0.125
   CHECK(unload_plugin(module("adaptive_parts")));
   CHECK(plant_registry().names() == plants);
   CHECK(law_registry().names() == laws);
+}
+
+TEST_CASE("a plugin module's projection runs in a study like the built-in one", "[plugin]") {
+  const auto projections = projection_registry().names();
+  const auto plugin = load_plugin(module("projection_part"));
+  CHECK(plugin.registered.at("projection") ==
+        std::vector<std::string>{"test_plain_interpolation"});
+  CHECK(plugin.kernels.empty());
+  const std::string common = R"(
+[study]
+name = "plugin_projection"
+evaluation_points = 512
+[domain]
+radius = 1.0
+[grid]
+n = [6, 12, 24]
+[[kernel]]
+name = "wendland"
+)";
+  const auto with_plugin =
+      test::run_study_text(common + "[[projection]]\nname = \"test_plain_interpolation\"\n");
+  const auto built_in = test::run_study_text(common + "[[projection]]\nname = \"interpolation\"\n");
+  REQUIRE(with_plugin.results.size() == 3);
+  // The generic measurement (G = G_B, P_n from the basis' Gram matrix, errors of W f(S)) and the
+  // interpolation path (Cholesky solves) compute the same numbers in other orders.
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto& a = with_plugin.results[i].metrics;
+    const auto& b = built_in.results[i].metrics;
+    REQUIRE(a.size() == b.size());
+    for (const auto* metric : {"fill_distance", "gram_condition_number", "power_function_sup",
+                               "l2_error", "sup_error", "interpolant_native_norm",
+                               "projection_norm_H_to_C", "projection_operator_norm"}) {
+      const auto m = with_plugin.study.metric_index(metric);
+      INFO(metric << " n = " << with_plugin.trials[i].n);
+      CHECK(a[m] == Approx(b[m]).epsilon(1e-8));
+    }
+  }
+  CHECK(unload_plugin(module("projection_part")));
+  CHECK(projection_registry().names() == projections);
 }
