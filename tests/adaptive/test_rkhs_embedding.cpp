@@ -239,7 +239,8 @@ kind = "adaptive"
 evaluation_points = 1024
 metrics = ["l2_error", "sup_error", "interpolant_l2_error", "gap_to_projection",
            "l2_projection_l2_error", "gap_to_l2_projection", "coefficient_error",
-           "final_state_error", "max_state_error", "lyapunov_max_increase", "lyapunov_ratio"]
+           "final_state_error", "max_state_error", "lyapunov_max_increase", "lyapunov_ratio",
+           "pe_level"]
 [domain]
 radius = 4.0
 [grid]
@@ -280,7 +281,7 @@ TEST_CASE("rkhs_embedding trials: the same estimate as the rkhs law on H_n = H",
     INFO("road = " << road);
     for (const char* metric :
          {"l2_error", "sup_error", "gap_to_projection", "final_state_error", "max_state_error",
-          "l2_projection_l2_error", "gap_to_l2_projection"}) {
+          "l2_projection_l2_error", "gap_to_l2_projection", "pe_level"}) {
       INFO(metric << ": rkhs " << out.metric(0, metric) << ", rkhs_embedding "
                   << out.metric(1, metric));
       CHECK(std::abs(out.metric(1, metric) - out.metric(0, metric)) <=

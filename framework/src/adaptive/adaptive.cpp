@@ -13,6 +13,7 @@
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/adaptive/averaged_limit.hpp"
+#include "rkhs/adaptive/excitation.hpp"
 #include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
@@ -477,7 +478,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : nan;
   }
   {  // P_L2 f, the averaged (v -> 0) limit of the law, on the same grid: onto H_n, or onto H
-     // itself in feature coordinates.
+     // itself in feature coordinates. Its E = Mbar gives the excitation of the same space.
     const auto limit = in_features ? averaged_limit_in_features(kernel, road, kinks)
                                    : averaged_limit(kernel, centres, road, kinks, solver_options);
     const Eigen::VectorXd l2_projection = on_grid(limit.coefficients);
@@ -486,6 +487,16 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
     metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
     if (!limit.quadrature_converged) out.flags.push_back("l2_projection_unconverged");
+    // pe_level (rkhs/adaptive/excitation.hpp): NaN with a singular G (the trial is flagged
+    // gram_singular already); flagged pe_level_unresolved when its round-off estimate exceeds 1%
+    // of it (NaN when it exceeds all of it), or in feature coordinates when the smallest nonzero
+    // eigenvalue of E is not separated from its zeros (NaN).
+    const auto excitation = in_features
+                                ? excitation_level_on_range(limit.averaged_gram_eigenvalues)
+                                : excitation_level(limit.averaged_gram, gram, solver.spectrum());
+    metrics[M::pe_level] = excitation.value;
+    if (!excitation.resolved && (in_features || !solver.spectrum().singular))
+      out.flags.push_back("pe_level_unresolved");
   }
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
