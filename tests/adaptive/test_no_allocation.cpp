@@ -137,6 +137,35 @@ TEST_CASE("no heap allocation in the right-hand side or the Jacobian", "[adaptiv
       CHECK(allocations == 0);
     }
   }
+  // rkhs_embedding: the feature coordinates of the B-spline kernel (F = 508 features at the
+  // defaults), the scalar map Gamma^-1 applied to phi(s) (as measure_adaptive does), and the
+  // feature basis's own mapped evaluation.
+  {
+    const auto* entry = kernel_registry().find("bspline");
+    const auto kernel = entry->factory(ParameterSet::resolve(entry->info.parameters, {}), track);
+    for (const auto signal :
+         {AdaptiveSystem::LearningSignal::from_phi, AdaptiveSystem::LearningSignal::by_basis}) {
+      const auto basis = kernel->feature_basis();
+      REQUIRE(basis);
+      const auto count = static_cast<Eigen::Index>(basis->size());
+      AdaptiveSystem system(plant->A(), plant->B(), P, *basis, LearningMap::scalar(count, 1e3),
+                            road, slope, track, 0.3, signal);
+      const auto m = system.dimension();
+      Eigen::VectorXd z = Eigen::VectorXd::Constant(m, 0.1), dz(m), dfdt(m);
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
+      system.rhs(z.data(), dz.data(), 1.0);
+      system.jacobian(z.data(), J.data(), 1.0, dfdt.data());
+      allocations = 0;
+      counting = true;
+      for (int k = 0; k < 50; ++k) {
+        system.rhs(z.data(), dz.data(), 1.0 + 1.7 * k);
+        system.jacobian(z.data(), J.data(), 1.0 + 1.7 * k, dfdt.data());
+      }
+      counting = false;
+      INFO("rkhs_embedding, signal " << static_cast<int>(signal));
+      CHECK(allocations == 0);
+    }
+  }
   // The counter works: an allocation while counting is seen.
   allocations = 0;
   counting = true;

@@ -65,6 +65,36 @@ void right_hand_side(benchmark::State& state, const std::string& kernel_name, bo
   state.SetComplexityN(state.range(0));
 }
 
+// One right-hand side of rkhs_embedding: the feature coordinates of the B-spline kernel
+// (degree 2, n0 = 4) with finest level J = range(0), F = 4 (2^(J+1) - 1) coordinates of which
+// (p + 1)(J + 1) change; the rest of the cost is the O(F) vector work on the state.
+void embedding_rhs(benchmark::State& state) {
+  const auto* entry = rkhs::kernel_registry().find("bspline");
+  const auto kernel = entry->factory(
+      rkhs::ParameterSet::resolve(entry->info.parameters,
+                                  {{"degree", std::int64_t{2}}, {"J", state.range(0)}}),
+      track);
+  const auto* plant_entry = rkhs::plant_registry().find("quarter_car");
+  const auto plant =
+      plant_entry->factory(rkhs::ParameterSet::resolve(plant_entry->info.parameters, {}));
+  const auto P = rkhs::solve_lyapunov(plant->A(), Eigen::MatrixXd::Identity(4, 4)).P;
+  const auto basis = kernel->feature_basis();
+  const auto count = static_cast<Eigen::Index>(basis->size());
+  const std::function<double(double)> road = [](double s) { return 2 * std::sin(s / 4); };
+  const std::function<double(double)> slope = [](double s) { return 0.5 * std::cos(s / 4); };
+  rkhs::AdaptiveSystem system(plant->A(), plant->B(), P, *basis,
+                              rkhs::LearningMap::scalar(count, 1 / 2e4), road, slope, track, 1e-4);
+  Eigen::VectorXd z = Eigen::VectorXd::Constant(system.dimension(), 0.1), dz(system.dimension());
+  double t = 1.0;
+  for (auto _ : state) {
+    system.rhs(z.data(), dz.data(), t);
+    t += 37.0;
+    benchmark::DoNotOptimize(dz.data());
+  }
+  state.counters["F"] = static_cast<double>(count);
+  state.SetComplexityN(count);
+}
+
 // A whole trial: one lap of the learning configuration.
 void one_lap_trial(benchmark::State& state, const std::string& kernel_name,
                    const std::string& law) {
@@ -131,6 +161,7 @@ BENCHMARK_CAPTURE(right_hand_side, bspline_rkhs_jacobian, std::string("bspline")
     ->RangeMultiplier(2)
     ->Range(16, 256)
     ->Complexity();
+BENCHMARK(embedding_rhs)->DenseRange(4, 10, 2)->Complexity();
 BENCHMARK_CAPTURE(one_lap_trial, gaussian_gradient, std::string("gaussian"), std::string("gradient"))
     ->Arg(10)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK_CAPTURE(one_lap_trial, gaussian_rkhs, std::string("gaussian"), std::string("rkhs"))

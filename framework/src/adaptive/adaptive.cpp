@@ -1,5 +1,6 @@
 #include "rkhs/adaptive/adaptive.hpp"
 
+#include <Eigen/Sparse>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/adaptive/averaged_limit.hpp"
+#include "rkhs/adaptive/excitation.hpp"
 #include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
@@ -167,6 +169,28 @@ Eigen::VectorXd reference_state(AdaptiveSystem& system, const Integrator& refere
 
 }  // namespace
 
+namespace {
+
+// The values of `basis` at `points`, one row per point, kept sparse (the feature basis is zero
+// but for the few features active at a point). O(points x basis size).
+Eigen::SparseMatrix<double, Eigen::RowMajor> basis_matrix(const KernelBasis& basis,
+                                                          std::span<const double> points) {
+  const std::size_t size = basis.size();
+  std::vector<double> row(size);
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    basis.evaluate(points[m], row.data());
+    for (std::size_t f = 0; f < size; ++f)
+      if (row[f] != 0.0) triplets.emplace_back(static_cast<int>(m), static_cast<int>(f), row[f]);
+  }
+  Eigen::SparseMatrix<double, Eigen::RowMajor> out(static_cast<Eigen::Index>(points.size()),
+                                                   static_cast<Eigen::Index>(size));
+  out.setFromTriplets(triplets.begin(), triplets.end());
+  return out;
+}
+
+}  // namespace
+
 AdaptiveSystem::LearningSignal learning_signal_for(const AnyKernel& kernel) {
   // A feature basis applies M to its precomputed features, cheaper than M phi for a full M.
   return kernel.feature_count() > 0 ? AdaptiveSystem::LearningSignal::by_basis
@@ -181,8 +205,13 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                      const SolverOptions& solver_options,
                                      const Integrator* reference, LapMapCache* lap_maps,
                                      const std::string& lap_map_key) {
+  law.require_kernel(kernel);  // before any work: the law refuses kernels it cannot use
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(centres.size());
+  // The law's coordinates: alpha over the n sections at the centres, or beta over the kernel's
+  // F features (rkhs_embedding: H itself; the centres then define only the static part, Pi_n f
+  // and the road = "projection").
+  const bool in_features = law.coordinates() == LawCoordinates::features;
   using M = AdaptiveMetric;
   using Static = ApproximationMetric;
   AdaptiveMeasurement out;
@@ -210,10 +239,18 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
   const Eigen::VectorXd alpha_star = solver.solve(at_centres);  // Pi_n f = sum alpha*_i phi_i
   const double gamma = law.gain();
-  // M in its cheapest exact form: Gamma^-1 as a scalar, G^+ of low rank as V diag(w) V^T.
-  const LearningMap learning_map = law.uses_gram_inverse()
-                                       ? LearningMap::gram_inverse(solver, gamma)
-                                       : LearningMap::scalar(n, 1.0 / gamma);
+  // The estimator's basis: the sections k(c_i, .) (n), or the features psi_f (F).
+  const auto basis = in_features ? kernel.feature_basis() : kernel.basis(centres);
+  if (!basis)
+    throw std::invalid_argument(fmt::format(
+        "the learning law works in feature coordinates, and kernel '{}' has no finite feature map",
+        kernel.name()));
+  const auto coefficients = static_cast<Eigen::Index>(basis->size());  // n, or F
+  // M in its cheapest exact form: Gamma^-1 as a scalar, G^+ of low rank as V diag(w) V^T. In
+  // feature coordinates Gamma^-1 I (the H inner product on the range of the features).
+  const bool gram_inverse = law.uses_gram_inverse() && !in_features;
+  const LearningMap learning_map = gram_inverse ? LearningMap::gram_inverse(solver, gamma)
+                                                : LearningMap::scalar(coefficients, 1.0 / gamma);
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
   const Eigen::Index d = A.rows();
@@ -225,7 +262,6 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   const Eigen::MatrixXd& P = lyapunov.P;
 
   // The road that drives the plant: f itself, or its projection Pi_n f (then f lies in H_n).
-  const auto basis = kernel.basis(centres);
   const auto road_basis = kernel.basis(centres);
   std::vector<double> road_phi(centres.size());
   const std::function<double(double)> road =
@@ -242,8 +278,11 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                               : std::function<double(double)>(
                                     [&](double s) { return target.slope(s); });
 
-  AdaptiveSystem system(A, B, P, *basis, learning_map, road, road_slope, domain, settings.speed,
-                        learning_signal_for(kernel));
+  // Feature coordinates apply their scalar map to phi itself (O(F)); a feature basis's
+  // set_map would form the F x F identity.
+  AdaptiveSystem system(
+      A, B, P, *basis, learning_map, road, road_slope, domain, settings.speed,
+      in_features ? AdaptiveSystem::LearningSignal::from_phi : learning_signal_for(kernel));
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)
   if (!settings.projected_road)
     for (double kink : target.kink_points()) kinks.push_back(kink);
@@ -255,24 +294,50 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     throw std::invalid_argument(
         "a reference integration needs time stepping (engine = \"time_stepping\")");
 
-  // V = 1/2 e^T P e + 1/2 Gamma (alpha* - alpha)^T W (alpha* - alpha), W = G (rkhs law) or I.
+  // The estimate on a grid from the coefficients: the cross matrix of the sections, or the
+  // features' values at the grid (sparse).
+  const auto grid = domain.uniform_points(evaluation_points);  // the rows of `cross`
   const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
-  const Eigen::MatrixXd snapshot_cross =
-      settings.snapshot_laps.empty() ? Eigen::MatrixXd() : kernel.cross(snapshot_grid, centres);
+  Eigen::SparseMatrix<double, Eigen::RowMajor> grid_features, snapshot_features;
+  Eigen::MatrixXd snapshot_cross;
+  if (in_features) {
+    const auto evaluation_basis = kernel.feature_basis();
+    grid_features = basis_matrix(*evaluation_basis, grid);
+    if (!settings.snapshot_laps.empty())
+      snapshot_features = basis_matrix(*evaluation_basis, snapshot_grid);
+  } else if (!settings.snapshot_laps.empty()) {
+    snapshot_cross = kernel.cross(snapshot_grid, centres);
+  }
+  auto on_grid = [&](const Eigen::VectorXd& c) -> Eigen::VectorXd {
+    if (in_features) return grid_features * c;
+    return cross * c;
+  };
+  // The coefficients of the road = "projection" in the law's coordinates: alpha*, or
+  // beta* = Phi_c^T alpha* = sum_i alpha*_i psi(c_i), the representation of Pi_n f of least
+  // norm (in the range of the features, where ||fhat - Pi_n f||_H = |beta - beta*|).
+  Eigen::VectorXd coefficients_star = alpha_star;
+  if (in_features) {
+    const auto centre_features = basis_matrix(*kernel.feature_basis(), centres);
+    coefficients_star = centre_features.transpose() * alpha_star;
+  }
+
+  // V = 1/2 e^T P e + 1/2 Gamma (c* - c)^T W (c* - c), W = G (rkhs law) or I (gradient law, and
+  // feature coordinates: there Gamma |beta* - beta|^2 = Gamma ||Pi_n f - fhat||_H^2).
   out.snapshots.resize(settings.snapshot_laps.size());
   for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
     out.snapshots[i].lap = settings.snapshot_laps[i];
   auto sample = [&](double t, const double* z) {
-    const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
+    const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, coefficients);
     const Eigen::VectorXd e = x - xhat;
-    const Eigen::VectorXd coefficient_gap = alpha_star - alpha;
-    const double weighted = law.uses_gram_inverse() ? coefficient_gap.dot(gram * coefficient_gap)
-                                                    : coefficient_gap.squaredNorm();
+    const Eigen::VectorXd coefficient_gap = coefficients_star - alpha;
+    const double weighted =
+        gram_inverse ? coefficient_gap.dot(gram * coefficient_gap) : coefficient_gap.squaredNorm();
     out.samples.push_back({t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
   };
   auto snapshot = [&](std::size_t index, const double* z) {
-    const Eigen::VectorXd estimate =
-        snapshot_cross * Eigen::Map<const Eigen::VectorXd>(z + 2 * d, n);
+    const Eigen::Map<const Eigen::VectorXd> alpha(z + 2 * d, coefficients);
+    const Eigen::VectorXd estimate = in_features ? Eigen::VectorXd(snapshot_features * alpha)
+                                                 : Eigen::VectorXd(snapshot_cross * alpha);
     out.snapshots[index].estimate.assign(estimate.data(), estimate.data() + estimate.size());
   };
   // Integrates from z at t = start through `points` (times from start on) with the study's
@@ -341,7 +406,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     // Laps until fhat is within 1% (in L2 on the evaluation grid) of its limit.
     auto distance_to_limit = [&](std::uint64_t laps) {
       const Eigen::VectorXd state = powers.advance(z0, laps);
-      const Eigen::VectorXd gap = cross * (state.tail(n) - limit.state.tail(n));
+      const Eigen::VectorXd gap =
+          on_grid(state.tail(coefficients) - limit.state.tail(coefficients));
       return domain.l2_norm(
           std::span<const double>(gap.data(), static_cast<std::size_t>(gap.size())));
     };
@@ -382,11 +448,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
 
   // Errors at T on the M-point grid.
-  const auto grid = domain.uniform_points(evaluation_points);  // the rows of `cross`
   Eigen::VectorXd f(static_cast<Eigen::Index>(grid.size()));
   for (std::size_t k = 0; k < grid.size(); ++k) f(static_cast<Eigen::Index>(k)) = road(grid[k]);
-  const Eigen::VectorXd alpha = z.tail(n);
-  const Eigen::VectorXd estimate = cross * alpha, projection = cross * alpha_star;
+  const Eigen::VectorXd alpha = z.tail(coefficients);
+  const Eigen::VectorXd estimate = on_grid(alpha), projection = cross * alpha_star;
   auto l2 = [&](const Eigen::VectorXd& v) {
     return domain.l2_norm(std::span<const double>(v.data(), static_cast<std::size_t>(v.size())));
   };
@@ -408,18 +473,30 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     // alpha* is the true coefficient vector only when the road lies in H_n.
     const double v0 = out.samples.front().lyapunov;
     metrics[M::coefficient_error] =
-        (alpha - alpha_star).norm() / std::max(alpha_star.norm(), 1e-300);
+        (alpha - coefficients_star).norm() / std::max(coefficients_star.norm(), 1e-300);
     metrics[M::lyapunov_max_increase] = v0 > 0 ? max_increase / v0 : max_increase;
     metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : nan;
   }
-  {  // P_L2 f, the averaged (v -> 0) limit of either law, on the same grid.
-    const auto limit = averaged_limit(kernel, centres, road, kinks, solver_options);
-    const Eigen::VectorXd l2_projection = cross * limit.coefficients;
+  {  // P_L2 f, the averaged (v -> 0) limit of the law, on the same grid: onto H_n, or onto H
+     // itself in feature coordinates. Its E = Mbar gives the excitation of the same space.
+    const auto limit = in_features ? averaged_limit_in_features(kernel, road, kinks)
+                                   : averaged_limit(kernel, centres, road, kinks, solver_options);
+    const Eigen::VectorXd l2_projection = on_grid(limit.coefficients);
     const Eigen::VectorXd l2_projection_residual = f - l2_projection;
     metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
     metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
     metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
     if (!limit.quadrature_converged) out.flags.push_back("l2_projection_unconverged");
+    // pe_level (rkhs/adaptive/excitation.hpp): NaN with a singular G (the trial is flagged
+    // gram_singular already); flagged pe_level_unresolved when its round-off estimate exceeds 1%
+    // of it (NaN when it exceeds all of it), or in feature coordinates when the smallest nonzero
+    // eigenvalue of E is not separated from its zeros (NaN).
+    const auto excitation = in_features
+                                ? excitation_level_on_range(limit.averaged_gram_eigenvalues)
+                                : excitation_level(limit.averaged_gram, gram, solver.spectrum());
+    metrics[M::pe_level] = excitation.value;
+    if (!excitation.resolved && (in_features || !solver.spectrum().singular))
+      out.flags.push_back("pe_level_unresolved");
   }
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
@@ -437,7 +514,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                     /*snapshots=*/true));
     out.reference_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const Eigen::VectorXd estimate_ref = cross * z_ref.tail(n);
+    const Eigen::VectorXd estimate_ref = on_grid(z_ref.tail(coefficients));
     const double norm_ref = l2(estimate_ref);
     metrics[M::integration_error] = l2(estimate - estimate_ref) / std::max(norm_ref, 1e-300);
   }

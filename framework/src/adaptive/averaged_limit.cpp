@@ -1,5 +1,7 @@
 #include "rkhs/adaptive/averaged_limit.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -65,21 +67,40 @@ struct Moments {
 };
 
 // The pieces [breakpoints[k], breakpoints[k + 1]] with panels_per_piece[k] << refinement equal
-// panels each, q Gauss-Legendre nodes per panel. Nodes are processed in blocks: phi at a block's
-// nodes, scaled by sqrt(w), updates Mbar by one rank-`block` product.
+// panels each, q Gauss-Legendre nodes per panel. Dense: nodes are processed in blocks, phi at a
+// block's nodes, scaled by sqrt(w), updates Mbar by one rank-`block` product. Sparse (features,
+// of which few are nonzero at a point): each node adds w phi_i phi_j for its nonzero pairs only,
+// O(nonzeros^2) instead of O(n^2).
 Moments integrate(KernelBasis& basis, Eigen::Index n, const std::function<double(double)>& road,
                   const std::vector<double>& breakpoints,
                   const std::vector<std::size_t>& panels_per_piece, std::size_t refinement,
-                  const GaussLegendreRule& rule, double length) {
+                  const GaussLegendreRule& rule, double length, bool sparse = false) {
   constexpr Eigen::Index block_size = 512;
   Moments out;
   out.gram = Eigen::MatrixXd::Zero(n, n);
   out.load = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd block(n, block_size);  // column c: sqrt(w_c) phi(s_c)
+  Eigen::MatrixXd block(n, sparse ? 1 : block_size);  // column c: sqrt(w_c) phi(s_c)
   Eigen::VectorXd scaled_road(block_size);
+  std::vector<Eigen::Index> nonzero;
   Eigen::Index filled = 0;
   auto flush = [&] {
     if (filled == 0) return;
+    if (sparse) {
+      const auto column = block.col(0);
+      nonzero.clear();
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (column(i) != 0.0) nonzero.push_back(i);
+      for (std::size_t a = 0; a < nonzero.size(); ++a) {
+        const Eigen::Index i = nonzero[a];
+        out.load(i) += column(i) * scaled_road(0);
+        for (std::size_t b = 0; b < nonzero.size(); ++b) {
+          const Eigen::Index j = nonzero[b];
+          if (j <= i) out.gram(i, j) += column(i) * column(j);
+        }
+      }
+      filled = 0;
+      return;
+    }
     out.gram.selfadjointView<Eigen::Lower>().rankUpdate(block.leftCols(filled));
     out.load.noalias() += block.leftCols(filled) * scaled_road.head(filled);
     filled = 0;
@@ -100,7 +121,7 @@ Moments integrate(KernelBasis& basis, Eigen::Index n, const std::function<double
         block.col(filled) *= root_w;
         scaled_road(filled) = root_w * f;
         out.mean_square += w * f * f;
-        if (++filled == block_size) flush();
+        if (++filled == block.cols()) flush();
       }
     }
     out.panels += panels;
@@ -131,11 +152,21 @@ double relative_change(const Moments& coarse, const Moments& fine) {
 
 }  // namespace
 
-AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> centres,
-                             const std::function<double(double)>& road,
-                             std::span<const double> road_kinks, const SolverOptions& solver,
-                             const AveragedLimitQuadrature& quadrature) {
-  if (centres.empty()) throw std::invalid_argument("the averaged limit needs at least one centre");
+namespace {
+
+// The composite rule's pieces: the breakpoints (the ends, the kernel's kinks, the centres of a
+// non-analytic stationary kernel and the road's kinks, sorted; points closer than 1e-13 L are
+// one: moving a kink by that much changes an integral by O((1e-13 L)^2)) and the initial panels
+// of each piece.
+struct Pieces {
+  std::vector<double> breakpoints;
+  std::vector<std::size_t> panels_per_piece;
+  std::size_t initial_panels = 0;
+};
+
+Pieces quadrature_pieces(const AnyKernel& kernel, std::span<const double> centres,
+                         std::span<const double> road_kinks,
+                         const AveragedLimitQuadrature& quadrature) {
   if (quadrature.nodes_per_panel == 0 || quadrature.initial_panels == 0 ||
       !(quadrature.tolerance > 0))
     throw std::invalid_argument(
@@ -143,10 +174,6 @@ AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> ce
         "positive tolerance");
   const Domain& domain = kernel.domain();
   const double length = domain.length;
-
-  // Breakpoints: the ends, the kernel's kinks, the centres of a non-analytic stationary kernel
-  // and the road's kinks, sorted; points closer than
-  // 1e-13 L are one (moving a kink by that much changes an integral by O((1e-13 L)^2)).
   std::vector<double> breakpoints{0.0, length};
   auto add = [&](double s) {
     if (domain.periodic) s = domain.wrap(s);
@@ -167,50 +194,131 @@ AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> ce
     }
   for (double s : road_kinks) add(s);
   std::sort(breakpoints.begin(), breakpoints.end());
-  std::vector<double> merged;
+  Pieces out;
   for (double s : breakpoints)
-    if (merged.empty() || s - merged.back() > 1e-13 * length) merged.push_back(s);
-  merged.back() = length;
-  if (merged.size() < 2) merged = {0.0, length};
+    if (out.breakpoints.empty() || s - out.breakpoints.back() > 1e-13 * length)
+      out.breakpoints.push_back(s);
+  out.breakpoints.back() = length;
+  if (out.breakpoints.size() < 2) out.breakpoints = {0.0, length};
 
   const double longest_panel = length / static_cast<double>(quadrature.initial_panels);
-  std::vector<std::size_t> panels_per_piece(merged.size() - 1);
-  std::size_t initial_panels = 0;
-  for (std::size_t k = 0; k + 1 < merged.size(); ++k) {
-    panels_per_piece[k] = static_cast<std::size_t>(
-        std::max(1.0, std::ceil((merged[k + 1] - merged[k]) / longest_panel * (1 - 1e-12))));
-    initial_panels += panels_per_piece[k];
+  out.panels_per_piece.resize(out.breakpoints.size() - 1);
+  for (std::size_t k = 0; k + 1 < out.breakpoints.size(); ++k) {
+    out.panels_per_piece[k] = static_cast<std::size_t>(std::max(
+        1.0,
+        std::ceil((out.breakpoints[k + 1] - out.breakpoints[k]) / longest_panel * (1 - 1e-12))));
+    out.initial_panels += out.panels_per_piece[k];
   }
+  return out;
+}
 
-  const auto n = static_cast<Eigen::Index>(centres.size());
-  const auto basis = kernel.basis(centres);
-  const auto rule = gauss_legendre(quadrature.nodes_per_panel);
-  const std::size_t q = quadrature.nodes_per_panel;
-
-  Moments previous = integrate(*basis, n, road, merged, panels_per_piece, 0, rule, length);
-  Moments current;
-  std::size_t refinement = 0;
+// Mbar and bbar under the composite rule, its panels doubled until they change by at most the
+// tolerance (or the node budget stops it): the accepted moments and how they were reached.
+struct ConvergedMoments {
+  Moments moments;
+  std::size_t refinements = 0;
   double change = std::numeric_limits<double>::infinity();
   bool converged = false;
+};
+
+ConvergedMoments converged_moments(KernelBasis& basis, Eigen::Index n,
+                                   const std::function<double(double)>& road, const Pieces& pieces,
+                                   double length, const AveragedLimitQuadrature& quadrature,
+                                   bool sparse) {
+  const auto rule = gauss_legendre(quadrature.nodes_per_panel);
+  const std::size_t q = quadrature.nodes_per_panel;
+  auto at = [&](std::size_t refinement) {
+    return integrate(basis, n, road, pieces.breakpoints, pieces.panels_per_piece, refinement, rule,
+                     length, sparse);
+  };
+  ConvergedMoments out;
+  Moments previous = at(0);
+  Moments current;
   while (true) {
-    if ((initial_panels << (refinement + 1)) * q > quadrature.max_nodes) break;
-    ++refinement;
-    current = integrate(*basis, n, road, merged, panels_per_piece, refinement, rule, length);
-    change = relative_change(previous, current);
-    if (change <= quadrature.tolerance && refinement >= quadrature.min_refinements) {
-      converged = true;
+    if ((pieces.initial_panels << (out.refinements + 1)) * q > quadrature.max_nodes) break;
+    ++out.refinements;
+    current = at(out.refinements);
+    out.change = relative_change(previous, current);
+    if (out.change <= quadrature.tolerance && out.refinements >= quadrature.min_refinements) {
+      out.converged = true;
       break;
     }
     previous = std::move(current);
     current = Moments{};
   }
-  if (!converged) current = std::move(previous);  // stopped by max_nodes: the finest rule tried
+  // Stopped by max_nodes: the finest rule tried.
+  out.moments = out.converged ? std::move(current) : std::move(previous);
+  return out;
+}
+
+}  // namespace
+
+AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> centres,
+                             const std::function<double(double)>& road,
+                             std::span<const double> road_kinks, const SolverOptions& solver,
+                             const AveragedLimitQuadrature& quadrature) {
+  if (centres.empty()) throw std::invalid_argument("the averaged limit needs at least one centre");
+  const Pieces pieces = quadrature_pieces(kernel, centres, road_kinks, quadrature);
+  const auto n = static_cast<Eigen::Index>(centres.size());
+  const auto basis = kernel.basis(centres);
+  auto [current, refinement, change, converged] = converged_moments(
+      *basis, n, road, pieces, kernel.domain().length, quadrature, /*sparse=*/false);
 
   AveragedLimit out;
   const GramSolver gram_solver(current.gram, solver);
   out.coefficients = gram_solver.solve(current.load);
   out.solve_method = gram_solver.method();
   out.spectrum = gram_solver.spectrum();
+  out.averaged_gram = std::move(current.gram);
+  out.averaged_load = std::move(current.load);
+  out.quadrature_nodes = current.nodes;
+  out.panels = current.panels;
+  out.refinements = refinement;
+  out.quadrature_change = change;
+  out.quadrature_converged = converged;
+  return out;
+}
+
+AveragedLimit averaged_limit_in_features(const AnyKernel& kernel,
+                                         const std::function<double(double)>& road,
+                                         std::span<const double> road_kinks,
+                                         const AveragedLimitQuadrature& quadrature) {
+  const auto basis = kernel.feature_basis();
+  if (!basis)
+    throw std::invalid_argument(fmt::format(
+        "the averaged limit in feature coordinates needs a kernel with a finite feature map; "
+        "kernel '{}' has none",
+        kernel.name()));
+  const Pieces pieces = quadrature_pieces(kernel, {}, road_kinks, quadrature);
+  const auto count = static_cast<Eigen::Index>(basis->size());
+  auto [current, refinement, change, converged] = converged_moments(
+      *basis, count, road, pieces, kernel.domain().length, quadrature, /*sparse=*/true);
+
+  // E is singular by design (the features are redundant): beta = E^+ bbar over the eigenvalues
+  // above F eps lambda_max, the minimum-norm solution, in the range of E.
+  AveragedLimit out;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(current.gram);
+  if (eigen.info() != Eigen::Success)
+    throw std::runtime_error(
+        "symmetric eigen-decomposition of the averaged feature Gram matrix did not converge");
+  const Eigen::VectorXd& values = eigen.eigenvalues();  // increasing
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  const double cutoff = static_cast<double>(count) * eps * values(count - 1);
+  Eigen::Index first = 0;
+  while (first < count && !(values(first) > cutoff)) ++first;
+  const Eigen::Index rank = count - first;
+  const auto kept = eigen.eigenvectors().rightCols(rank);
+  Eigen::VectorXd projected = kept.transpose() * current.load;
+  projected.array() /= values.tail(rank).array();
+  out.coefficients = kept * projected;
+  out.solve_method = fmt::format("pseudo-inverse (rank {} of {}, cutoff {:.3e} lambda_max)", rank,
+                                 count, static_cast<double>(count) * eps);
+  out.spectrum.lambda_min = values(0);
+  out.spectrum.lambda_max = values(count - 1);
+  out.spectrum.singular = rank < count;
+  out.spectrum.condition_number = out.spectrum.singular ? std::numeric_limits<double>::infinity()
+                                                        : values(count - 1) / values(0);
+  out.averaged_gram_eigenvalues = values;
   out.averaged_gram = std::move(current.gram);
   out.averaged_load = std::move(current.load);
   out.quadrature_nodes = current.nodes;

@@ -89,6 +89,8 @@ struct AveragedLimit {
   /// road with an undeclared kink, or a length scale far below L / max_nodes); the last rule is
   /// returned and its change says how far from converged it is.
   bool quadrature_converged = false;
+  /// The eigenvalues of Mbar, increasing (averaged_limit_in_features only; empty otherwise).
+  Eigen::VectorXd averaged_gram_eigenvalues;
 };
 
 /// The averaged (v -> 0) limit of the adaptive estimator on `kernel`'s domain: the coefficients
@@ -102,5 +104,21 @@ AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> ce
                              const std::function<double(double)>& road,
                              std::span<const double> road_kinks, const SolverOptions& solver,
                              const AveragedLimitQuadrature& quadrature = {});
+
+/// The averaged limit of the estimator in feature coordinates (the rkhs_embedding law,
+/// docs/model.md section 14): fhat = sum_f beta_f psi_f over the kernel's finite feature map
+/// (AnyKernel::feature_basis), so Mbar = E = (1/L) int psi psi^T ds (F x F) and bbar =
+/// (1/L) int psi f ds, and P_L2 f is the L2(Omega)-orthogonal projection of the road onto H
+/// itself. The features are redundant, E is singular by design: beta = E^+ bbar over the
+/// eigenvalues above F eps lambda_max (the minimum-norm solution, in the range of E, whatever
+/// the study's solver policy), and `solve_method` says so. The same composite rule as
+/// averaged_limit (the breakpoints of the kernel and the road; no centres), accumulated over
+/// the few features nonzero at each node; the eigen-decomposition of E costs O(F^3) and its
+/// eigenvalues are kept (averaged_gram_eigenvalues). Throws std::invalid_argument, naming the
+/// kernel, when it has no finite feature map.
+AveragedLimit averaged_limit_in_features(const AnyKernel& kernel,
+                                         const std::function<double(double)>& road,
+                                         std::span<const double> road_kinks,
+                                         const AveragedLimitQuadrature& quadrature = {});
 
 }  // namespace rkhs

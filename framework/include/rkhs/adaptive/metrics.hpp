@@ -3,7 +3,8 @@
 // The first four are the approximation trial's metrics of the same name; interpolant_* are its
 // l2_error and sup_error (of Pi_n f); l2_projection_* measure P_L2 f, the L2(Omega)-orthogonal
 // projection (the averaged limit, rkhs/adaptive/averaged_limit.hpp); the rest measure the learned
-// estimate and the integration.
+// estimate and the integration, and pe_level the excitation of the law's space by one lap
+// (rkhs/adaptive/excitation.hpp).
 
 #include "rkhs/approx/metrics.hpp"
 
@@ -38,12 +39,13 @@ enum class AdaptiveMetric : std::size_t {
   unexcited_directions,
   lap_map_residual,
   integration_error,
+  pe_level,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 28> rows{{
+  static constexpr std::array<MetricRow<M>, 29> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -103,6 +105,11 @@ struct MetricTable<AdaptiveMetric> {
        "||fhat(T) - fhat_ref(T)|| / ||fhat_ref(T)|| in L2(Omega), fhat_ref integrated with "
        "[adaptive] reference (time stepping, same breakpoints); NaN without a reference",
        true, ""},
+      {M::pe_level, "pe_level", "[k]",
+       "persistence of excitation over one lap: lambda_min of E a = lambda G a, "
+       "E = (1/L) int phi phi^T ds, G the Gram matrix (rkhs_embedding: the smallest nonzero "
+       "eigenvalue of E over the features); NaN when G is singular to working precision",
+       true, "pe_level_unresolved"},
   }};
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rkhs/core/registry.hpp"
+#include "rkhs/kernel/kernel.hpp"
 
 namespace rkhs {
 
@@ -23,15 +24,34 @@ class Plant {
 using PlantRegistry = Registry<Plant>;
 PlantRegistry& plant_registry();
 
+/// Where a learning law's coefficients live.
+enum class LawCoordinates {
+  /// alpha in R^n: fhat = sum_i alpha_i k(c_i, .) in H_n, the span of the sections at the
+  /// trial's centres (gradient, rkhs).
+  centres,
+  /// beta in R^F: fhat = sum_f beta_f psi_f in the native space H itself, psi the kernel's
+  /// finite feature map k(u, v) = sum_f psi_f(u) psi_f(v) (rkhs_embedding; docs/model.md
+  /// section 14). The learning map is Gamma^-1 I: on the range of the feature evaluations, where
+  /// the law keeps beta, ||fhat||_H^2 = beta^T beta.
+  features,
+};
+
 /// The update of the coefficients alpha of fhat = sum_i alpha_i phi_i:
 ///   gradient: alpha' = Gamma^-1 phi(s) B^T P (x - xhat)          (eq. a3)
 ///   rkhs:     alpha' = Gamma^-1 G^-1 phi(s) B^T P (x - xhat)     (eq. 4.2)
+/// and of the feature coordinates beta of fhat = sum_f beta_f psi_f:
+///   rkhs_embedding: beta' = Gamma^-1 psi(s) B^T P (x - xhat)    (fhat' = Gamma^-1 k(s, .) ...)
 /// with a scalar gain Gamma > 0.
 class LearningLaw {
  public:
   virtual ~LearningLaw() = default;
   virtual bool uses_gram_inverse() const noexcept = 0;
   virtual double gain() const noexcept = 0;  ///< Gamma
+  /// Where the coefficients live (centres unless the law says otherwise).
+  virtual LawCoordinates coordinates() const noexcept { return LawCoordinates::centres; }
+  /// Throws std::invalid_argument, naming the kernel, when the law cannot run with `kernel`
+  /// (rkhs_embedding: a kernel without a finite feature map). Called before a trial runs.
+  virtual void require_kernel(const AnyKernel& kernel) const { (void)kernel; }
 };
 
 using LawRegistry = Registry<LearningLaw>;

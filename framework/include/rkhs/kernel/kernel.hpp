@@ -166,6 +166,12 @@ class AnyKernel {
   /// The sections k(c_i, .) at `centres`, for evaluation along a path. Made and destroyed by
   /// the kernel's own code (the virtual destructor), so it may cross the boundary.
   virtual std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const = 0;
+  /// The features psi_f of a finite feature map themselves as a basis of size
+  /// feature_count(): evaluate(s, phi) writes phi[f] = psi_f(s), zero but for the few features
+  /// active at s (feature coordinates: fhat = sum_f beta_f psi_f spans the whole native space H,
+  /// docs/model.md section 14). Null when the kernel has no finite feature map. Made and
+  /// destroyed by the kernel's own code, like basis().
+  virtual std::unique_ptr<KernelBasis> feature_basis() const = 0;
   /// Calls sink(s) for every point s in [0, L) where kernel sections are not smooth (finest
   /// B-spline knots; the seam 0 for a kernel that is not periodic on a periodic domain), in
   /// increasing order, each once. No call when the sections are smooth.

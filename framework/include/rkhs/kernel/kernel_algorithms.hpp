@@ -398,6 +398,96 @@ class FeatureBasis final : public KernelBasis {
   mutable Eigen::VectorXd scratch_;
 };
 
+/// KernelBasis of the features themselves (feature coordinates, AnyKernel::feature_basis):
+/// size() = F = K::feature_count(), phi_f(s) = psi_f(s). Each evaluation writes all F values: the
+/// (p + 1)(J + 1) features active at s (for the B-spline kernel) and zeros, so it costs
+/// O(active) kernel work and O(F) stores. Derivatives: K::feature_derivatives
+/// (DifferentiableFeatureMapKernel), else `stencil` applied to the features. set_map(T) keeps a
+/// multiple of the identity as a scalar (applied to the active features) and any other T
+/// (rows x F) as the sum of its active columns. Nothing is allocated after construction.
+/// `kernel` and `stencil` must outlive the basis.
+template <FeatureMapKernel K>
+class FeatureCoordinateBasis final : public KernelBasis {
+ public:
+  FeatureCoordinateBasis(const K& kernel, const DerivativeStencil& stencil)
+      : kernel_(kernel),
+        stencil_(stencil),
+        count_(static_cast<Eigen::Index>(kernel.feature_count())),
+        scratch_(static_cast<std::size_t>(count_)) {
+    kernel_.features(0.0, active_);  // grows the scratch buffer once
+    if constexpr (DifferentiableFeatureMapKernel<K>) kernel_.feature_derivatives(0.0, active_);
+  }
+  std::size_t size() const noexcept override { return static_cast<std::size_t>(count_); }
+  void evaluate(double s, double* phi) const override {
+    kernel_.features(s, active_);
+    scatter(1.0, phi);
+  }
+  void set_map(const Eigen::MatrixXd& map) override {
+    const auto scalar = identity_multiple(map);
+    scale_ = scalar.value_or(0.0);
+    map_ = scalar ? Eigen::MatrixXd() : map;
+  }
+  void evaluate_mapped(double s, double* out) const override {
+    kernel_.features(s, active_);
+    mapped(out);
+  }
+  void evaluate_derivative(double s, double* dphi) const override {
+    if constexpr (DifferentiableFeatureMapKernel<K>) {
+      kernel_.feature_derivatives(s, active_);
+      scatter(1.0, dphi);
+    } else {
+      const auto stencil = stencil_.at(s);
+      std::fill(dphi, dphi + count_, 0.0);
+      for (int j = 0; j < stencil.size; ++j) {
+        kernel_.features(stencil.point[j], active_);
+        for (std::size_t f = 0; f < active_.size(); ++f)
+          dphi[active_.index[f]] += stencil.weight[j] * active_.value[f];
+      }
+    }
+  }
+  void evaluate_mapped_derivative(double s, double* out) const override {
+    if constexpr (DifferentiableFeatureMapKernel<K>) {
+      kernel_.feature_derivatives(s, active_);
+      mapped(out);
+    } else {
+      evaluate_derivative(s, scratch_.data());
+      if (map_.size() == 0) {
+        for (Eigen::Index f = 0; f < count_; ++f)
+          out[f] = scale_ * scratch_[static_cast<std::size_t>(f)];
+        return;
+      }
+      Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
+          map_ * Eigen::Map<const Eigen::VectorXd>(scratch_.data(), count_);
+    }
+  }
+
+ private:
+  // out = scale * (the active values at their indices), zero elsewhere (F entries).
+  void scatter(double scale, double* out) const {
+    std::fill(out, out + count_, 0.0);
+    for (std::size_t f = 0; f < active_.size(); ++f)
+      out[active_.index[f]] += scale * active_.value[f];
+  }
+  // out = T (the active values at their indices): c times them for T = c I.
+  void mapped(double* out) const {
+    if (map_.size() == 0) {
+      scatter(scale_, out);
+      return;
+    }
+    Eigen::Map<Eigen::VectorXd> result(out, map_.rows());
+    result.setZero();
+    for (std::size_t f = 0; f < active_.size(); ++f)
+      result.noalias() += active_.value[f] * map_.col(active_.index[f]);
+  }
+  const K& kernel_;
+  const DerivativeStencil& stencil_;
+  Eigen::Index count_;
+  mutable SparseFeatures active_;
+  mutable std::vector<double> scratch_;
+  Eigen::MatrixXd map_;  // empty when the map is scale_ times the identity
+  double scale_ = 1.0;
+};
+
 /// The AnyKernel adaptor of a concrete kernel type.
 template <KernelFunction K>
 class KernelModel final : public AnyKernel {
@@ -463,6 +553,12 @@ class KernelModel final : public AnyKernel {
       return std::make_unique<FeatureBasis<K>>(kernel_, centres, stencil_);
     else
       return std::make_unique<DirectBasis<K>>(kernel_, centres, stencil_);
+  }
+  std::unique_ptr<KernelBasis> feature_basis() const override {
+    if constexpr (FeatureMapKernel<K>)
+      return std::make_unique<FeatureCoordinateBasis<K>>(kernel_, stencil_);
+    else
+      return nullptr;
   }
   void list_kink_points(const std::function<void(double)>& sink) const override {
     for (double s : kinks_) sink(s);

@@ -67,7 +67,8 @@
 // 4: derivatives in KernelBasis, AnyKernel, TargetFunction
 // 5: nothing owned crosses the boundary (*_into, sinks, Integrator state by Eigen::Ref), and the
 //    build configuration entry point
-#define RKHS_PLUGIN_ABI_VERSION 5
+// 6: AnyKernel::feature_basis, LearningLaw::coordinates and LearningLaw::require_kernel
+#define RKHS_PLUGIN_ABI_VERSION 6
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

@@ -93,7 +93,7 @@ struct LawKind {
   using Registry = LawRegistry;
   static constexpr std::string_view singular = "law";
   static constexpr std::string_view plural = "laws";
-  static constexpr std::string_view builtins[] = {"gradient", "rkhs"};
+  static constexpr std::string_view builtins[] = {"gradient", "rkhs", "rkhs_embedding"};
   static constexpr auto loaded = &LoadedPlugin::laws;
   static Registry& registry() { return law_registry(); }
 };
