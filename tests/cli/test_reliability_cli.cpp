@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "cli_support.hpp"
+#include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/sha256.hpp"
 #include "rkhs/run/result_store.hpp"
 
@@ -128,13 +129,17 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   edit_record(store, old.hash,
               body_of(old.record).substr(body_of(old.record).find("rkhs-trial 1")));
 
-  // `store check` names every bad record by key and exits 1.
+  // `store check` names every bad record by key and exits 1 (the edited record holds one value
+  // more than an approximation trial has metrics).
+  const auto metrics = rkhs::approximation_metric_names().size();
+  const auto one_too_many =
+      std::to_string(metrics + 1) + " metric values for " + std::to_string(metrics) + " metric names";
   const auto check = rkhs_study("store check --store " + store.string());
   INFO(check.output);
   CHECK(check.exit_code == 1);
   CHECK_THAT(check.output, Catch::Contains(store.string() + ": trial " + too_many.key +
                                            " (study reliable, hash " + too_many.hash.substr(0, 12) +
-                                           "): 12 metric values for 11 metric names"));
+                                           "): " + one_too_many));
   CHECK_THAT(check.output, Catch::Contains(": trial " + rows[2].key + " (study reliable, hash " +
                                            rows[2].hash.substr(0, 12) + "): checksum mismatch"));
   CHECK_THAT(check.output,
@@ -150,7 +155,7 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   CHECK(again.exit_code == 0);
   CHECK_THAT(again.output,
              Catch::Contains("rkhs-study: warning: " + store.string() + ": trial " + too_many.key +
-                             ": 12 metric values for 11 metric names; run again"));
+                             ": " + one_too_many + "; run again"));
   CHECK_THAT(again.output, Catch::Contains(": trial " + rows[2].key + ": checksum mismatch"));
   CHECK_THAT(again.output,
              Catch::Contains(": trial " + rows[3].key + ": stored value 'x' is not a number"));
