@@ -1,7 +1,7 @@
 // The `csv` target: a measured road profile (arc length, elevation) read from a CSV file below
-// the data root (docs/roads.md; docs/model.md section 6). The file is read with
-// fast-cpp-csv-parser's line reader; fields are split here so that every error can name the
-// file's own line and column.
+// the data root (docs/roads.md; docs/model.md section 6). The file is read whole, then its text
+// is parsed (csv_road_from_text, rkhs/targets/csv_road.hpp) with fast-cpp-csv-parser's line
+// reader; fields are split here so that every error can name the file's own line and column.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 // fccp copies file names with strncpy into a fixed buffer (truncation is its documented intent).
@@ -11,14 +11,18 @@
 #pragma GCC diagnostic pop
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <string_view>
 
 #include "rkhs/core/data_root.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/approx/target.hpp"
+#include "rkhs/targets/csv_road.hpp"
 
 namespace rkhs {
 namespace {
@@ -147,7 +151,13 @@ class CsvRoad final : public TargetFunction {
         {{"provenance", "sha256 of the file, recorded with every trial"}}};
   }
 
-  CsvRoad(const ParameterSet& p, const Domain& domain)
+  // The file that `file` names below the data root.
+  CsvRoad(const ParameterSet& p, const Domain& domain) : CsvRoad(p, domain, std::nullopt, {}) {}
+
+  // `text` in place of the file, named `file_name` (csv_road_from_text); without `text`, the
+  // file. The parameters are checked before the file is looked for.
+  CsvRoad(const ParameterSet& p, const Domain& domain, std::optional<std::string_view> text,
+          const std::string& file_name)
       : length_(domain.length),
         periodic_(domain.periodic),
         cubic_(p.choice("interpolation") == "cubic") {
@@ -156,9 +166,16 @@ class CsvRoad final : public TargetFunction {
     const auto elevation = column_choice(p, "elevation_column", "elevation", header);
     const std::string& delimiter_name = p.choice("delimiter");
     const char delimiter = delimiter_name == "tab" ? '\t' : delimiter_name[0];
-    const auto path = resolve_data_file(p.text("file"));
-    file_ = path.string();
-    read(path, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
+    std::string contents;
+    if (text) {
+      file_ = file_name;
+    } else {
+      const auto path = resolve_data_file(p.text("file"));
+      file_ = path.string();
+      contents = read_file(path);
+      text = contents;
+    }
+    read(*text, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
          unit_scale(p.choice("elevation_units")),
          p.given("arc_length_column") && p.given("elevation_column"));
     if (cubic_) second_ = natural_spline(u_, z_);
@@ -201,7 +218,7 @@ class CsvRoad final : public TargetFunction {
     if (p.boolean("restart_at_samples") && !cubic_)
       for (double u : u_)
         if (const double s = u - origin_; s > 0 && s < length_) kinks_.push_back(s);
-    provenance_ = "sha256:" + sha256_file(path);
+    provenance_ = "sha256:" + sha256_hex(*text);
   }
 
   void evaluate(std::span<const double> points, std::span<double> out) const override {
@@ -242,11 +259,13 @@ class CsvRoad final : public TargetFunction {
   // more is refused (a decimal comma, "0,5", splits a number in two). A file with more columns
   // than the two it reads is refused unless `columns_given` (the study names both columns);
   // then the columns left out are noted once.
-  void read(const std::filesystem::path& path, const ColumnChoice& arc,
-            const ColumnChoice& elevation, bool header, char delimiter, double arc_scale,
-            double elevation_scale, bool columns_given) {
+  void read(std::string_view contents, const ColumnChoice& arc, const ColumnChoice& elevation,
+            bool header, char delimiter, double arc_scale, double elevation_scale,
+            bool columns_given) {
     try {
-      io::LineReader reader(path.string());
+      // Never a null pointer for the reader's memcpy, also for empty contents.
+      const char* bytes = contents.empty() ? "" : contents.data();
+      io::LineReader reader(file_, bytes, bytes + contents.size());
       std::size_t arc_index = arc.number ? *arc.number - 1 : 0;
       std::size_t elevation_index = elevation.number ? *elevation.number - 1 : 0;
       bool need_header = header;
@@ -372,6 +391,18 @@ class CsvRoad final : public TargetFunction {
     }
   }
 
+  // The bytes of the file at `path` (file_).
+  std::string read_file(const std::filesystem::path& path) const {
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+      throw std::invalid_argument(
+          fmt::format("{}: cannot open the file: {}", file_, std::strerror(errno)));
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    if (in.bad()) throw std::invalid_argument(fmt::format("{}: cannot read the file", file_));
+    return std::move(bytes).str();
+  }
+
   // The interpolant of the raw samples at arc length u (inside the profile).
   double raw(double u) const {
     const auto upper = std::upper_bound(u_.begin() + 1, u_.end() - 1, u);
@@ -427,6 +458,13 @@ class CsvRoad final : public TargetFunction {
 };
 
 }  // namespace
+
+std::unique_ptr<TargetFunction> csv_road_from_text(const ParameterSet& parameters,
+                                                   const Domain& domain, std::string_view text,
+                                                   const std::string& file_name) {
+  return std::make_unique<CsvRoad>(parameters, domain, text, file_name);
+}
+
 }  // namespace rkhs
 
 RKHS_REGISTER_TARGET(rkhs::CsvRoad)
