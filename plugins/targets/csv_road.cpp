@@ -72,7 +72,9 @@ ColumnChoice column_choice(const ParameterSet& p, const std::string& parameter,
                          fmt::format("{} is empty: give a column name or number", parameter));
   if (std::all_of(g.begin(), g.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     std::size_t number = 0;
-    std::from_chars(g.data(), g.data() + g.size(), number);
+    if (std::from_chars(g.data(), g.data() + g.size(), number).ec != std::errc())
+      throw ParameterError(parameter,
+                           fmt::format("{} = \"{}\": column number too large", parameter, g));
     if (number < 1)
       throw ParameterError(parameter,
                            fmt::format("{} = \"{}\": columns are numbered from 1", parameter, g));
@@ -183,7 +185,8 @@ class CsvRoad final : public TargetFunction {
     // The section of the profile on the track: [origin, origin + L].
     origin_ = u_.front() + p.real("start");
     const double end = origin_ + length_;
-    if (end > u_.back() + 1e-9 * std::max(1.0, std::abs(end))) {
+    // (An end beyond the largest double is infinite and would pass the comparison.)
+    if (!std::isfinite(end) || end > u_.back() + 1e-9 * std::max(1.0, std::abs(end))) {
       const std::string section =
           p.real("start") > 0
               ? fmt::format(" (start = {} m: the track runs from arc length {} m to {} m)",

@@ -198,6 +198,14 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
         long_enough +
             ":3:1: the profile is shorter than the track: it covers arc length 0 m to 12 m, "
             "the track needs 10 m (start = 2.5 m: the track runs from arc length 2.5 m to 12.5 m)");
+    // A section whose end is beyond the largest double (start + L infinite) was accepted: the
+    // comparison with the profile's end is false for an infinite end (found while writing
+    // the csv_road fuzz harness).
+    CHECK(error_of({{"file", std::string("long.csv")}, {"start", 1e308}}, {1e308, false}) ==
+          long_enough +
+              ":3:1: the profile is shorter than the track: it covers arc length 0 m to 12 m, "
+              "the track needs 1e+308 m (start = 1e+308 m: the track runs from arc length 1e+308 "
+              "m to inf m)");
   }
   SECTION("a closed track needs a profile that closes") {
     const auto file = data.write("open.csv", "u,z\n0,1\n10,1.5\n");
@@ -223,6 +231,13 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
             "arc_length_column = \"u\" is a column name, but header = false: give a column number "
             "(from 1)");
     }
+    // Column numbers: from 1, and within a size_t (one beyond was read as 0, found by
+    // the csv_road fuzz harness: "columns are numbered from 1").
+    CHECK(error_of({{"file", std::string("plain.csv")}, {named_columns, std::string("0")}}) ==
+          "arc_length_column = \"0\": columns are numbered from 1");
+    CHECK(error_of({{"file", std::string("plain.csv")},
+                    {named_columns, std::string("99999999999999999999")}}) ==
+          "arc_length_column = \"99999999999999999999\": column number too large");
   }
 }
 
