@@ -388,8 +388,7 @@ TEST_CASE("csv road: from text, as from the file with that text", "[csv_road]") 
   const auto from_text = csv_road_from_text(parameters, domain, text, "in memory");
   CHECK(from_text->data_provenance() == from_file->data_provenance());
   CHECK(from_text->kink_points() == from_file->kink_points());
-  for (double s : {0.0, 1.0, 2.5, 4.0, 7.5, 10.0})
-    CHECK((*from_text)(s) == (*from_file)(s));
+  for (double s : {0.0, 1.0, 2.5, 4.0, 7.5, 10.0}) CHECK((*from_text)(s) == (*from_file)(s));
   // Errors name the text as they name the file; an empty text is an empty file, and a line
   // with a NUL byte ends there (here: a blank line 3).
   auto text_error = [&](std::string_view csv) {
@@ -406,6 +405,21 @@ TEST_CASE("csv road: from text, as from the file with that text", "[csv_road]") 
   CHECK(text_error("") == "in memory:1:1: the file is empty (expected a header line)");
   CHECK(text_error(std::string_view("u;z\n0;0\n\0", 9)) ==
         "in memory:3:1: 1 sample: a profile needs at least 2");
+  // Lines as fast-cpp-csv-parser's reader split them: a byte-order mark and CRLF line ends are
+  // accepted, a line ends at a NUL byte, and has fewer than 2^24 bytes.
+  const auto windows = csv_road_from_text(
+      parameters, domain, "\xEF\xBB\xBF# profile\r\nu;z\r\n0;0\r\n2.5;1\r\n5;-1\r\n10;0.5",
+      "in memory");
+  const auto nul = csv_road_from_text(
+      parameters, domain, std::string_view("u;z\n0;0\n2.5;1\0;2\n5;-1\n10;0.5\n", 30), "in memory");
+  for (double s : {1.0, 4.0, 7.5}) {
+    CHECK((*windows)(s) == (*from_file)(s));
+    CHECK((*nul)(s) == (*from_file)(s));
+  }
+  CHECK(text_error("u;z\n0;0\n10;0" + std::string(std::size_t{1} << 24, ' ') + "\n") ==
+        "in memory:3:1: the line is longer than 16777215 bytes");
+  CHECK(text_error("u;z\n0;0\n10;0" + std::string((std::size_t{1} << 24) - 5, ' ') + "\n") ==
+        "(no error)");
 }
 
 TEST_CASE("data root: --data-dir, then RKHS_STUDY_DATA, then studies/data", "[csv_road]") {
