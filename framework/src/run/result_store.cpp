@@ -10,6 +10,7 @@
 #include <cmath>
 #include <ctime>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -160,10 +161,13 @@ TrialResult deserialize_result(std::string_view text) {
   if (!std::getline(in, line) || line != "rkhs-trial 1")
     throw std::invalid_argument("not a stored trial record (version line missing)");
   TrialResult r;
+  std::set<std::string> seen;  // each field once, but snapshot (one line per snapshot)
   while (std::getline(in, line)) {
     const auto space = line.find(' ');
     const std::string field = line.substr(0, space);
     const std::string value = space == std::string::npos ? "" : line.substr(space + 1);
+    if (field != "snapshot" && !seen.insert(field).second)
+      throw std::invalid_argument("field '" + field + "' twice in a stored trial");
     if (field == "ok") r.ok = value == "1";
     else if (field == "reason") r.reason = unescape(value);
     else if (field == "solve") r.solve_method = unescape(value);
