@@ -173,11 +173,13 @@ TrialResult deserialize_result(std::string_view text) {
     else if (field == "solve") r.solve_method = unescape(value);
     else if (field == "engine") r.engine = unescape(value);
     else if (field == "flags") {
+      // Names separated by ';'; an empty one ("a;;b") is no flag (kept, "a;;" read as ["a", ""]
+      // and was written back as "a;", which reads as ["a"]).
       const auto flags = unescape(value);
       std::size_t start = 0;
       while (start < flags.size()) {
         const auto stop = std::min(flags.find(';', start), flags.size());
-        r.flags.push_back(flags.substr(start, stop - start));
+        if (stop > start) r.flags.push_back(flags.substr(start, stop - start));
         start = stop + 1;
       }
     } else if (field == "seconds") r.seconds = parse_real(value);
