@@ -1,24 +1,23 @@
 // The `csv` target: a measured road profile (arc length, elevation) read from a CSV file below
-// the data root (docs/roads.md; docs/model.md section 6). The file is read with
-// fast-cpp-csv-parser's line reader; fields are split here so that every error can name the
-// file's own line and column.
+// the data root (docs/roads.md; docs/model.md section 6). The file is read whole, then its text
+// is parsed (csv_road_from_text, rkhs/targets/csv_road.hpp): lines and fields are split here, so
+// that every error can name the file's own line and column.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-// fccp copies file names with strncpy into a fixed buffer (truncation is its documented intent).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wstringop-truncation"
-#include <libfccp/csv.h>
-#pragma GCC diagnostic pop
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <string_view>
 
 #include "rkhs/core/data_root.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/approx/target.hpp"
+#include "rkhs/targets/csv_road.hpp"
 
 namespace rkhs {
 namespace {
@@ -46,6 +45,38 @@ std::vector<Field> split(std::string_view line, char delimiter) {
   return fields;
 }
 
+// The lines of a CSV text, split as fast-cpp-csv-parser's LineReader split a file (which read
+// the files before, with a buffer of 48 MB each time): a UTF-8 byte-order mark at the start is
+// skipped; a line ends at '\n' (the last one may lack it), less one '\r' before it, and at its
+// first NUL byte; at most 2^24 - 1 bytes.
+class Lines {
+ public:
+  Lines(std::string_view text, const std::string& file) : rest_(text), file_(file) {
+    if (rest_.starts_with("\xEF\xBB\xBF")) rest_.remove_prefix(3);
+  }
+  /// The next line, or std::nullopt after the last.
+  std::optional<std::string_view> next() {
+    if (rest_.empty()) return std::nullopt;
+    ++number_;
+    const std::size_t end = std::min(rest_.find('\n'), rest_.size());
+    if (end >= max_length)
+      throw std::invalid_argument(
+          fmt::format("{}:{}:1: the line is longer than {} bytes", file_, number_, max_length - 1));
+    auto line = rest_.substr(0, end);
+    rest_.remove_prefix(end == rest_.size() ? end : end + 1);
+    if (line.ends_with('\r')) line.remove_suffix(1);
+    return line.substr(0, line.find('\0'));
+  }
+  /// The number of the line next() returned last (1-based; 0 before the first).
+  unsigned number() const { return number_; }
+
+ private:
+  static constexpr std::size_t max_length = std::size_t{1} << 24;
+  std::string_view rest_;
+  const std::string& file_;
+  unsigned number_ = 0;
+};
+
 bool blank_or_comment(std::string_view line) {
   const auto first = line.find_first_not_of(" \t");
   return first == std::string_view::npos || line[first] == '#';
@@ -68,7 +99,9 @@ ColumnChoice column_choice(const ParameterSet& p, const std::string& parameter,
                          fmt::format("{} is empty: give a column name or number", parameter));
   if (std::all_of(g.begin(), g.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     std::size_t number = 0;
-    std::from_chars(g.data(), g.data() + g.size(), number);
+    if (std::from_chars(g.data(), g.data() + g.size(), number).ec != std::errc())
+      throw ParameterError(parameter,
+                           fmt::format("{} = \"{}\": column number too large", parameter, g));
     if (number < 1)
       throw ParameterError(parameter,
                            fmt::format("{} = \"{}\": columns are numbered from 1", parameter, g));
@@ -147,7 +180,13 @@ class CsvRoad final : public TargetFunction {
         {{"provenance", "sha256 of the file, recorded with every trial"}}};
   }
 
-  CsvRoad(const ParameterSet& p, const Domain& domain)
+  // The file that `file` names below the data root.
+  CsvRoad(const ParameterSet& p, const Domain& domain) : CsvRoad(p, domain, std::nullopt, {}) {}
+
+  // `text` in place of the file, named `file_name` (csv_road_from_text); without `text`, the
+  // file. The parameters are checked before the file is looked for.
+  CsvRoad(const ParameterSet& p, const Domain& domain, std::optional<std::string_view> text,
+          const std::string& file_name)
       : length_(domain.length),
         periodic_(domain.periodic),
         cubic_(p.choice("interpolation") == "cubic") {
@@ -156,9 +195,16 @@ class CsvRoad final : public TargetFunction {
     const auto elevation = column_choice(p, "elevation_column", "elevation", header);
     const std::string& delimiter_name = p.choice("delimiter");
     const char delimiter = delimiter_name == "tab" ? '\t' : delimiter_name[0];
-    const auto path = resolve_data_file(p.text("file"));
-    file_ = path.string();
-    read(path, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
+    std::string contents;
+    if (text) {
+      file_ = file_name;
+    } else {
+      const auto path = resolve_data_file(p.text("file"));
+      file_ = path.string();
+      contents = read_file(path);
+      text = contents;
+    }
+    read(*text, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
          unit_scale(p.choice("elevation_units")),
          p.given("arc_length_column") && p.given("elevation_column"));
     if (cubic_) second_ = natural_spline(u_, z_);
@@ -166,7 +212,8 @@ class CsvRoad final : public TargetFunction {
     // The section of the profile on the track: [origin, origin + L].
     origin_ = u_.front() + p.real("start");
     const double end = origin_ + length_;
-    if (end > u_.back() + 1e-9 * std::max(1.0, std::abs(end))) {
+    // (An end beyond the largest double is infinite and would pass the comparison.)
+    if (!std::isfinite(end) || end > u_.back() + 1e-9 * std::max(1.0, std::abs(end))) {
       const std::string section =
           p.real("start") > 0
               ? fmt::format(" (start = {} m: the track runs from arc length {} m to {} m)",
@@ -201,7 +248,7 @@ class CsvRoad final : public TargetFunction {
     if (p.boolean("restart_at_samples") && !cubic_)
       for (double u : u_)
         if (const double s = u - origin_; s > 0 && s < length_) kinks_.push_back(s);
-    provenance_ = "sha256:" + sha256_file(path);
+    provenance_ = "sha256:" + sha256_hex(*text);
   }
 
   void evaluate(std::span<const double> points, std::span<double> out) const override {
@@ -242,134 +289,142 @@ class CsvRoad final : public TargetFunction {
   // more is refused (a decimal comma, "0,5", splits a number in two). A file with more columns
   // than the two it reads is refused unless `columns_given` (the study names both columns);
   // then the columns left out are noted once.
-  void read(const std::filesystem::path& path, const ColumnChoice& arc,
-            const ColumnChoice& elevation, bool header, char delimiter, double arc_scale,
-            double elevation_scale, bool columns_given) {
-    try {
-      io::LineReader reader(path.string());
-      std::size_t arc_index = arc.number ? *arc.number - 1 : 0;
-      std::size_t elevation_index = elevation.number ? *elevation.number - 1 : 0;
-      bool need_header = header;
-      std::size_t width = 0;           // fields per line, from the first line
-      unsigned width_line = 0;         // the line that set it
-      std::vector<std::string> names;  // the header's column names (empty without a header)
-      const auto set_width = [&](std::size_t count, unsigned line_number) {
-        width = count;
-        width_line = line_number;
-        if (width <= 2) return;
-        std::vector<std::string> unread;
-        for (std::size_t k = 0; k < width; ++k)
-          if (k != arc_index && k != elevation_index)
-            unread.push_back(names.empty() ? fmt::format("{}", k + 1)
-                                           : fmt::format("{} ({})", k + 1, names[k]));
-        if (!columns_given)
-          throw std::invalid_argument(fmt::format(
-              "{}:{}:1: the {} has {} fields and the study reads two (arc length from column {}, "
-              "elevation from column {}, the defaults): name both in the [[target]] entry "
-              "(arc_length_column, elevation_column) to read this file",
-              file_, line_number, header ? "header" : "first line", width, arc_index + 1,
-              elevation_index + 1));
-        notes_.push_back(
-            fmt::format("{}: column{} {} not read (arc length: column {}, "
-                        "elevation: column {})",
-                        file_, unread.size() == 1 ? "" : "s", fmt::join(unread, ", "),
-                        arc_index + 1, elevation_index + 1));
-      };
-      while (const char* text = reader.next_line()) {
-        const std::string_view line(text);
-        const unsigned line_number = reader.get_file_line();
-        if (blank_or_comment(line)) continue;
-        const auto fields = split(line, delimiter);
-        if (need_header) {
-          need_header = false;
-          for (const auto& f : fields) names.emplace_back(f.text);
-          auto locate = [&](const ColumnChoice& choice, std::size_t& index) {
-            if (choice.number) {
-              if (*choice.number > fields.size())
-                throw std::invalid_argument(
-                    fmt::format("{}:{}:{}: no column {} ({}): the header has {} column{}", file_,
-                                line_number, line.size() + 1, *choice.number, choice.role,
-                                fields.size(), fields.size() == 1 ? "" : "s"));
-              return;
-            }
-            const auto it = std::find(names.begin(), names.end(), choice.given);
-            if (it == names.end()) {
-              std::string known;
-              for (const auto& name : names) known += (known.empty() ? "" : ", ") + name;
-              const auto guess = closest_name(choice.given, names);
+  void read(std::string_view contents, const ColumnChoice& arc, const ColumnChoice& elevation,
+            bool header, char delimiter, double arc_scale, double elevation_scale,
+            bool columns_given) {
+    Lines reader(contents, file_);
+    std::size_t arc_index = arc.number ? *arc.number - 1 : 0;
+    std::size_t elevation_index = elevation.number ? *elevation.number - 1 : 0;
+    bool need_header = header;
+    std::size_t width = 0;           // fields per line, from the first line
+    unsigned width_line = 0;         // the line that set it
+    std::vector<std::string> names;  // the header's column names (empty without a header)
+    const auto set_width = [&](std::size_t count, unsigned line_number) {
+      width = count;
+      width_line = line_number;
+      if (width <= 2) return;
+      std::vector<std::string> unread;
+      for (std::size_t k = 0; k < width; ++k)
+        if (k != arc_index && k != elevation_index)
+          unread.push_back(names.empty() ? fmt::format("{}", k + 1)
+                                         : fmt::format("{} ({})", k + 1, names[k]));
+      if (!columns_given)
+        throw std::invalid_argument(fmt::format(
+            "{}:{}:1: the {} has {} fields and the study reads two (arc length from column {}, "
+            "elevation from column {}, the defaults): name both in the [[target]] entry "
+            "(arc_length_column, elevation_column) to read this file",
+            file_, line_number, header ? "header" : "first line", width, arc_index + 1,
+            elevation_index + 1));
+      notes_.push_back(
+          fmt::format("{}: column{} {} not read (arc length: column {}, "
+                      "elevation: column {})",
+                      file_, unread.size() == 1 ? "" : "s", fmt::join(unread, ", "), arc_index + 1,
+                      elevation_index + 1));
+    };
+    while (const auto next = reader.next()) {
+      const std::string_view line = *next;
+      const unsigned line_number = reader.number();
+      if (blank_or_comment(line)) continue;
+      const auto fields = split(line, delimiter);
+      if (need_header) {
+        need_header = false;
+        for (const auto& f : fields) names.emplace_back(f.text);
+        auto locate = [&](const ColumnChoice& choice, std::size_t& index) {
+          if (choice.number) {
+            if (*choice.number > fields.size())
               throw std::invalid_argument(
-                  fmt::format("{}:{}:1: no column '{}' ({}) in the header (columns: {}{})", file_,
-                              line_number, choice.given, choice.role, known,
-                              guess.empty() ? "" : fmt::format("; did you mean '{}'?", guess)));
-            }
-            index = static_cast<std::size_t>(it - names.begin());
-          };
-          locate(arc, arc_index);
-          locate(elevation, elevation_index);
-          set_width(fields.size(), line_number);
-          continue;
-        }
-        if (width == 0) set_width(fields.size(), line_number);
-        if (fields.size() > width)
-          throw std::invalid_argument(fmt::format(
-              "{}:{}:{}: {} fields where line {} has {}{}: a decimal comma (0,5 for 0.5) or a "
-              "delimiter inside a number?",
-              file_, line_number, fields[width].column, fields.size(), width_line, width,
-              names.empty() ? "" : fmt::format(" ({})", fmt::join(names, ", "))));
-        auto number = [&](std::size_t index, const ColumnChoice& choice) {
-          if (index >= fields.size())
+                  fmt::format("{}:{}:{}: no column {} ({}): the header has {} column{}", file_,
+                              line_number, line.size() + 1, *choice.number, choice.role,
+                              fields.size(), fields.size() == 1 ? "" : "s"));
+            return;
+          }
+          const auto it = std::find(names.begin(), names.end(), choice.given);
+          if (it == names.end()) {
+            std::string known;
+            for (const auto& name : names) known += (known.empty() ? "" : ", ") + name;
+            const auto guess = closest_name(choice.given, names);
             throw std::invalid_argument(
-                fmt::format("{}:{}:{}: no {} (column {}): the line has {} field{}", file_,
-                            line_number, line.size() + 1, choice.role, index + 1, fields.size(),
-                            fields.size() == 1 ? "" : "s"));
-          const auto& field = fields[index];
-          auto fail = [&](const std::string& what) {
-            return std::invalid_argument(
-                fmt::format("{}:{}:{}: {}", file_, line_number, field.column, what));
-          };
-          if (field.text.empty())
-            throw fail(fmt::format("{}: empty field, expected a number", choice.role));
-          double value = 0;
-          const char* begin = field.text.data();
-          const char* end = begin + field.text.size();
-          if (*begin == '+') ++begin;  // from_chars does not take a leading '+'
-          const auto [stop, error] = std::from_chars(begin, end, value);
-          if (error != std::errc() || stop != end)
-            throw fail(fmt::format("{}: '{}' is not a number", choice.role, field.text));
-          if (std::isnan(value))
-            throw fail(fmt::format("{} is NaN (every sample needs a value)", choice.role));
-          if (std::isinf(value)) throw fail(fmt::format("{} is infinite", choice.role));
-          return std::pair{value, field.column};
+                fmt::format("{}:{}:1: no column '{}' ({}) in the header (columns: {}{})", file_,
+                            line_number, choice.given, choice.role, known,
+                            guess.empty() ? "" : fmt::format("; did you mean '{}'?", guess)));
+          }
+          index = static_cast<std::size_t>(it - names.begin());
         };
-        const auto [u, u_column] = number(arc_index, arc);
-        const auto [z, z_column] = number(elevation_index, elevation);
-        const double position = u * arc_scale;
-        if (!u_.empty() && !(position > u_.back())) {
-          // Captured by copy: a lambda may not capture a structured binding in C++20 (clang).
-          const auto fail = [&, column = u_column, given = u](const std::string& what) {
-            return std::invalid_argument(
-                fmt::format("{}:{}:{}: arc length {} {} (arc length must be strictly increasing)",
-                            file_, line_number, column, format_real(given), what));
-          };
-          if (position == u_.back()) throw fail(fmt::format("repeats line {}", lines_.back()));
-          throw fail(fmt::format("is less than {} on line {}", format_real(u_.back() / arc_scale),
-                                 lines_.back()));
-        }
-        u_.push_back(position);
-        z_.push_back(z * elevation_scale);
-        lines_.push_back(line_number);
-        arc_columns_.push_back(u_column);
+        locate(arc, arc_index);
+        locate(elevation, elevation_index);
+        set_width(fields.size(), line_number);
+        continue;
       }
-      if (need_header)
-        throw std::invalid_argument(
-            fmt::format("{}:1:1: the file is empty (expected a header line)", file_));
-      if (u_.size() < 2)
-        throw std::invalid_argument(fmt::format("{}:{}:1: {} sample{}: a profile needs at least 2",
-                                                file_, std::max(1u, reader.get_file_line()),
-                                                u_.size(), u_.size() == 1 ? "" : "s"));
-    } catch (const io::error::base& e) {
-      throw std::invalid_argument(fmt::format("{}: {}", file_, e.what()));
+      if (width == 0) set_width(fields.size(), line_number);
+      if (fields.size() > width)
+        throw std::invalid_argument(fmt::format(
+            "{}:{}:{}: {} fields where line {} has {}{}: a decimal comma (0,5 for 0.5) or a "
+            "delimiter inside a number?",
+            file_, line_number, fields[width].column, fields.size(), width_line, width,
+            names.empty() ? "" : fmt::format(" ({})", fmt::join(names, ", "))));
+      auto number = [&](std::size_t index, const ColumnChoice& choice) {
+        if (index >= fields.size())
+          throw std::invalid_argument(
+              fmt::format("{}:{}:{}: no {} (column {}): the line has {} field{}", file_,
+                          line_number, line.size() + 1, choice.role, index + 1, fields.size(),
+                          fields.size() == 1 ? "" : "s"));
+        const auto& field = fields[index];
+        auto fail = [&](const std::string& what) {
+          return std::invalid_argument(
+              fmt::format("{}:{}:{}: {}", file_, line_number, field.column, what));
+        };
+        if (field.text.empty())
+          throw fail(fmt::format("{}: empty field, expected a number", choice.role));
+        double value = 0;
+        const char* begin = field.text.data();
+        const char* end = begin + field.text.size();
+        if (*begin == '+') ++begin;  // from_chars does not take a leading '+'
+        const auto [stop, error] = std::from_chars(begin, end, value);
+        if (error != std::errc() || stop != end)
+          throw fail(fmt::format("{}: '{}' is not a number", choice.role, field.text));
+        if (std::isnan(value))
+          throw fail(fmt::format("{} is NaN (every sample needs a value)", choice.role));
+        if (std::isinf(value)) throw fail(fmt::format("{} is infinite", choice.role));
+        return std::pair{value, field.column};
+      };
+      const auto [u, u_column] = number(arc_index, arc);
+      const auto [z, z_column] = number(elevation_index, elevation);
+      const double position = u * arc_scale;
+      if (!u_.empty() && !(position > u_.back())) {
+        // Captured by copy: a lambda may not capture a structured binding in C++20 (clang).
+        const auto fail = [&, column = u_column, given = u](const std::string& what) {
+          return std::invalid_argument(
+              fmt::format("{}:{}:{}: arc length {} {} (arc length must be strictly increasing)",
+                          file_, line_number, column, format_real(given), what));
+        };
+        if (position == u_.back()) throw fail(fmt::format("repeats line {}", lines_.back()));
+        throw fail(fmt::format("is less than {} on line {}", format_real(u_.back() / arc_scale),
+                               lines_.back()));
+      }
+      u_.push_back(position);
+      z_.push_back(z * elevation_scale);
+      lines_.push_back(line_number);
+      arc_columns_.push_back(u_column);
     }
+    if (need_header)
+      throw std::invalid_argument(
+          fmt::format("{}:1:1: the file is empty (expected a header line)", file_));
+    if (u_.size() < 2)
+      throw std::invalid_argument(fmt::format("{}:{}:1: {} sample{}: a profile needs at least 2",
+                                              file_, std::max(1u, reader.number()), u_.size(),
+                                              u_.size() == 1 ? "" : "s"));
+  }
+
+  // The bytes of the file at `path` (file_).
+  std::string read_file(const std::filesystem::path& path) const {
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+      throw std::invalid_argument(
+          fmt::format("{}: cannot open the file: {}", file_, std::strerror(errno)));
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    if (in.bad()) throw std::invalid_argument(fmt::format("{}: cannot read the file", file_));
+    return std::move(bytes).str();
   }
 
   // The interpolant of the raw samples at arc length u (inside the profile).
@@ -427,6 +482,13 @@ class CsvRoad final : public TargetFunction {
 };
 
 }  // namespace
+
+std::unique_ptr<TargetFunction> csv_road_from_text(const ParameterSet& parameters,
+                                                   const Domain& domain, std::string_view text,
+                                                   const std::string& file_name) {
+  return std::make_unique<CsvRoad>(parameters, domain, text, file_name);
+}
+
 }  // namespace rkhs
 
 RKHS_REGISTER_TARGET(rkhs::CsvRoad)

@@ -77,6 +77,21 @@ TEST_CASE("a record that does not verify says what is wrong", "[store]") {
   // Garbage where a number belongs, resealed: the parser's reason.
   CHECK(problem(sealed(replaced(body_of(record), "metrics 0.5", "metrics x"))) ==
         "stored value 'x' is not a number");
+  // A field given twice, resealed: the second flags line was appended to the first and the
+  // second metrics line replaced it (found by fuzz_store_record: such a result did not read back
+  // as it was written). Snapshots are one line each.
+  CHECK(problem(sealed(replaced(body_of(record), "\nflags ", "\nflags a\nflags "))) ==
+        "field 'flags' twice in a stored trial");
+  CHECK(problem(sealed(body_of(record) + "metrics 1 2 3\n")) ==
+        "field 'metrics' twice in a stored trial");
+  CHECK(read_record(hash, sealed(body_of(record) + "snapshot 1 0.5\nsnapshot 2 0.25\n"), &names)
+            .result->snapshots.size() == 2);
+  // Empty flags are none: "a;;" read as ["a", ""] was written back as "a;", which read as ["a"]
+  // (found by fuzz_store_record: a result that did not read back as it was written).
+  const auto flagged =
+      deserialize_result("rkhs-trial 1\nok 1\nflags ;gram_singular;;l2_error_at_floor;;\n");
+  CHECK(flagged.flags == std::vector<std::string>{"gram_singular", "l2_error_at_floor"});
+  CHECK(deserialize_result(serialize_result(flagged)).flags == flagged.flags);
   // No checksum, not a record, the old format.
   CHECK(problem(body_of(record)) == "no checksum line");
   CHECK(problem("") == "not a stored record: first line '', expected 'rkhs-record 2'");

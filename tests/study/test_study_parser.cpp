@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <set>
 
 #include "rkhs/study/study.hpp"
@@ -158,6 +159,18 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
     std::string text = minimal;
     text.replace(text.find("radius = 4.0"), 12, "radius = 4.0\nlength = 3.0");
     CHECK_THAT(error_of(text), Catch::Contains("domain: give exactly one of 'length'"));
+  }
+  SECTION("a radius whose track is longer than the largest number") {
+    // 2 pi radius was an infinite domain length (found writing fuzz_study_file's checks of what a
+    // parsed study holds).
+    std::string text = minimal;
+    text.replace(text.find("radius = 4.0"), 12, "radius = 1e308");
+    CHECK(error_of(text) ==
+          "s.toml:5:10: domain.radius: must be at most 2.861117485757028e+307 (the track's "
+          "length, 2 pi radius, must be a finite number), found 1e+308");
+    text = minimal;
+    text.replace(text.find("radius = 4.0"), 12, "radius = 2.8e307");
+    CHECK(parse_study(text, "s.toml").domain.length == 2 * std::numbers::pi * 2.8e307);
   }
   SECTION("unknown metric") {
     std::string text = minimal;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <ctime>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -160,20 +161,25 @@ TrialResult deserialize_result(std::string_view text) {
   if (!std::getline(in, line) || line != "rkhs-trial 1")
     throw std::invalid_argument("not a stored trial record (version line missing)");
   TrialResult r;
+  std::set<std::string> seen;  // each field once, but snapshot (one line per snapshot)
   while (std::getline(in, line)) {
     const auto space = line.find(' ');
     const std::string field = line.substr(0, space);
     const std::string value = space == std::string::npos ? "" : line.substr(space + 1);
+    if (field != "snapshot" && !seen.insert(field).second)
+      throw std::invalid_argument("field '" + field + "' twice in a stored trial");
     if (field == "ok") r.ok = value == "1";
     else if (field == "reason") r.reason = unescape(value);
     else if (field == "solve") r.solve_method = unescape(value);
     else if (field == "engine") r.engine = unescape(value);
     else if (field == "flags") {
+      // Names separated by ';'; an empty one ("a;;b") is no flag (kept, "a;;" read as ["a", ""]
+      // and was written back as "a;", which reads as ["a"]).
       const auto flags = unescape(value);
       std::size_t start = 0;
       while (start < flags.size()) {
         const auto stop = std::min(flags.find(';', start), flags.size());
-        r.flags.push_back(flags.substr(start, stop - start));
+        if (stop > start) r.flags.push_back(flags.substr(start, stop - start));
         start = stop + 1;
       }
     } else if (field == "seconds") r.seconds = parse_real(value);

@@ -794,6 +794,12 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   study.domain.length = domain->contains("length")
                             ? get_number(report, *domain, "length", "domain.", 0, 0)
                             : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
+  if (!std::isfinite(study.domain.length))  // 2 pi radius beyond the largest double
+    report.fail(domain->get("radius")->source(), "domain.radius",
+                fmt::format("must be at most {} (the track's length, 2 pi radius, must be a finite "
+                            "number), found {}",
+                            format_real(std::numeric_limits<double>::max() / (2 * std::numbers::pi)),
+                            show(*domain->get("radius"))));
   study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
 
   const auto* grid = optional_table(report, root, "grid");

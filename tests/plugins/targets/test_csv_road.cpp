@@ -9,6 +9,7 @@
 #include "rkhs/core/data_root.hpp"
 #include "rkhs/core/sha256.hpp"
 #include "rkhs/approx/target.hpp"
+#include "rkhs/targets/csv_road.hpp"
 
 using namespace rkhs;
 namespace fs = std::filesystem;
@@ -197,6 +198,14 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
         long_enough +
             ":3:1: the profile is shorter than the track: it covers arc length 0 m to 12 m, "
             "the track needs 10 m (start = 2.5 m: the track runs from arc length 2.5 m to 12.5 m)");
+    // A section whose end is beyond the largest double (start + L infinite) was accepted: the
+    // comparison with the profile's end is false for an infinite end (found while writing
+    // the csv_road fuzz harness).
+    CHECK(error_of({{"file", std::string("long.csv")}, {"start", 1e308}}, {1e308, false}) ==
+          long_enough +
+              ":3:1: the profile is shorter than the track: it covers arc length 0 m to 12 m, "
+              "the track needs 1e+308 m (start = 1e+308 m: the track runs from arc length 1e+308 "
+              "m to inf m)");
   }
   SECTION("a closed track needs a profile that closes") {
     const auto file = data.write("open.csv", "u,z\n0,1\n10,1.5\n");
@@ -222,6 +231,13 @@ TEST_CASE("csv road: each malformed file is refused with file:line:column", "[cs
             "arc_length_column = \"u\" is a column name, but header = false: give a column number "
             "(from 1)");
     }
+    // Column numbers: from 1, and within a size_t (one beyond was read as 0, found by
+    // the csv_road fuzz harness: "columns are numbered from 1").
+    CHECK(error_of({{"file", std::string("plain.csv")}, {named_columns, std::string("0")}}) ==
+          "arc_length_column = \"0\": columns are numbered from 1");
+    CHECK(error_of({{"file", std::string("plain.csv")},
+                    {named_columns, std::string("99999999999999999999")}}) ==
+          "arc_length_column = \"99999999999999999999\": column number too large");
   }
 }
 
@@ -354,6 +370,56 @@ TEST_CASE("csv road: provenance is the file's SHA-256", "[csv_road]") {
   CHECK(f->data_provenance() == "sha256:" + sha256_hex("u,z\n0,0\n10,0\n"));
   data.write("p.csv", "u,z\n0,0\n10,1e-9\n");
   CHECK(road({{"file", std::string("p.csv")}})->data_provenance() != f->data_provenance());
+}
+
+TEST_CASE("csv road: from text, as from the file with that text", "[csv_road]") {
+  const DataDirectory data("from_text");
+  const std::string text = "# profile\nu;z\n0;0\n2.5;1\n5;-1\n10;0.5\n";
+  const auto file = data.write("t.csv", text);
+  const std::map<std::string, ParameterValue> given{{"file", std::string("t.csv")},
+                                                    {"delimiter", std::string(";")},
+                                                    {"interpolation", std::string("cubic")}};
+  const auto* entry = target_registry().find("csv");
+  REQUIRE(entry);
+  const auto parameters = ParameterSet::resolve(entry->info.parameters, given);
+  const Domain domain{10.0, false};
+  const auto from_file = road(given, domain);
+  // The file is not looked for: `file` names it, the text stands in for it.
+  const auto from_text = csv_road_from_text(parameters, domain, text, "in memory");
+  CHECK(from_text->data_provenance() == from_file->data_provenance());
+  CHECK(from_text->kink_points() == from_file->kink_points());
+  for (double s : {0.0, 1.0, 2.5, 4.0, 7.5, 10.0}) CHECK((*from_text)(s) == (*from_file)(s));
+  // Errors name the text as they name the file; an empty text is an empty file, and a line
+  // with a NUL byte ends there (here: a blank line 3).
+  auto text_error = [&](std::string_view csv) {
+    try {
+      csv_road_from_text(parameters, domain, csv, "in memory");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  CHECK(text_error("u;z\n0;0\n5;x\n") == "in memory:3:3: elevation: 'x' is not a number");
+  data.write("t.csv", "u;z\n0;0\n5;x\n");
+  CHECK(error_of(given, domain) == file + ":3:3: elevation: 'x' is not a number");
+  CHECK(text_error("") == "in memory:1:1: the file is empty (expected a header line)");
+  CHECK(text_error(std::string_view("u;z\n0;0\n\0", 9)) ==
+        "in memory:3:1: 1 sample: a profile needs at least 2");
+  // Lines as fast-cpp-csv-parser's reader split them: a byte-order mark and CRLF line ends are
+  // accepted, a line ends at a NUL byte, and has fewer than 2^24 bytes.
+  const auto windows = csv_road_from_text(
+      parameters, domain, "\xEF\xBB\xBF# profile\r\nu;z\r\n0;0\r\n2.5;1\r\n5;-1\r\n10;0.5",
+      "in memory");
+  const auto nul = csv_road_from_text(
+      parameters, domain, std::string_view("u;z\n0;0\n2.5;1\0;2\n5;-1\n10;0.5\n", 30), "in memory");
+  for (double s : {1.0, 4.0, 7.5}) {
+    CHECK((*windows)(s) == (*from_file)(s));
+    CHECK((*nul)(s) == (*from_file)(s));
+  }
+  CHECK(text_error("u;z\n0;0\n10;0" + std::string(std::size_t{1} << 24, ' ') + "\n") ==
+        "in memory:3:1: the line is longer than 16777215 bytes");
+  CHECK(text_error("u;z\n0;0\n10;0" + std::string((std::size_t{1} << 24) - 5, ' ') + "\n") ==
+        "(no error)");
 }
 
 TEST_CASE("data root: --data-dir, then RKHS_STUDY_DATA, then studies/data", "[csv_road]") {
