@@ -53,7 +53,7 @@ class Interpolation final : public Projection {
     // over the pseudo-inverse's kept eigenpairs. Then ||(I - Pi)^* k(s, .)||^2 comes out as
     // k(s, s) - |L^-1 k_X(s)|^2, the power function's backward-stable form, rather than as a
     // difference of quadratic forms in an explicit inverse (which loses cond(G) eps).
-    Eigen::MatrixXd E;
+    Eigen::MatrixXd E, W;  // W = E^T for the orthonormal bases
     if (const auto* vectors = solver.kept_vectors()) {
       E = *vectors * solver.kept_values()->cwiseSqrt().cwiseInverse().asDiagonal();
     } else if (solver.method() == "cholesky") {
@@ -65,15 +65,14 @@ class Interpolation final : public Projection {
     } else {  // regularised: G_mu^-1 through the solver, the basis k(c_i, .) itself
       const auto size = static_cast<Eigen::Index>(n);
       E = Eigen::MatrixXd::Identity(size, size);
+      W = solver.solve(E);
     }
+    if (W.size() == 0) W = E.transpose();
     out.resize(static_cast<std::size_t>(E.cols()), n, n);
     std::copy(request.centres.begin(), request.centres.end(), out.samples().begin());
     std::copy(request.centres.begin(), request.centres.end(), out.basis_points().begin());
     out.basis_coefficients() = E;
-    if (E.cols() == static_cast<Eigen::Index>(n) && E.isIdentity(0.0))
-      out.weights() = solver.solve(Eigen::MatrixXd(E));
-    else
-      out.weights() = E.transpose();
+    out.weights() = W;
     out.set_mesh(request.centres);
     out.set_solve_method(solver.method());
   }
