@@ -192,13 +192,22 @@ TEST_CASE("[[expect]] mistakes are errors with file:line:column", "[verification
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { min = 1, max = 0 }\n")),
              Catch::Contains("s.toml:18:8: expect.rate: min (1) is above max (0)"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { low = 1 }\n")),
-             Catch::Contains("expect.rate.low: unknown key (known: min, max)"));
+             Catch::Contains("expect.rate.low: unknown key (known: min, max, at_least)"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nrate = { at_least = \"power_function_sup\", "
+                           "max = 0 }\n")),
+             Catch::Contains("s.toml:18:8: expect.rate: at_least derives the interval") &&
+                 Catch::Contains("without min or max"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nrate = { at_least = \"sup_error\" }\n")),
+             Catch::Contains("expect.rate.at_least: 'sup_error' is the expectation's own metric"));
+  CHECK_THAT(error_of(with("metric = \"sup_error\"\nrate = { at_least = \"l2_error\" }\n")),
+             Catch::Contains("expect.rate.at_least: metric 'l2_error' is not measured"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nmodel = \"exponential\"\nrate = -0.3\n")),
              Catch::Contains("give tolerance = ..."));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nmodel = \"cubic\"\n")),
              Catch::Contains("expect.model: found \"cubic\""));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { max = 0 }\ntolerance = 0.2\n")),
-             Catch::Contains("expect.tolerance: only for theory = true or rate = <number>"));
+             Catch::Contains("expect.tolerance: only for theory = true, rate = <number> or rate = "
+                             "{ at_least = \"metric\" }"));
   CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = { by = \"l2_error\" }\n")),
              Catch::Contains("expect.bound.by: metric 'l2_error' is not measured"));
   CHECK_THAT(error_of(with("metric = \"sup_error\"\nbound = { times = \"power_function_sup\" }\n")),
@@ -434,6 +443,54 @@ bound = { constant = 3.0 }
   CHECK(outcomes[3].effectivity_max == Approx(10.0));
   CHECK_THAT(outcomes[3].reason, Catch::StartsWith("the bound is exceeded by a factor 10 at n = "));
   CHECK_THAT(outcomes[0].found, Catch::StartsWith("effectivity sup_error / bound from 0.00333 to 0.00333"));
+}
+
+TEST_CASE("verdicts: rate = { at_least = metric } derives the interval from that metric's fit",
+          "[verification]") {
+  // B-splines: power_function_sup ~ n^-(p - 1/2). sup_error decays like it (degree 1), faster
+  // (degree 2: n^-3) or, with `slow`, at n^-0.2 against degree 1's n^-0.5.
+  const std::string expectation = R"([[expect]]
+metric = "sup_error"
+kernel = "bspline"
+rate = { at_least = "power_function_sup" }
+)";
+  const auto made_up = [](bool slow) {
+    return [slow](const TrialSpec& t, const std::string& m) {
+      const double n = static_cast<double>(t.n);
+      if (m == "sup_error" && t.kernel.name == "bspline")
+        return degree_of(t) == 1 ? (slow ? std::pow(n, -0.2) : 0.01 * std::pow(n, -0.5))
+                                 : std::pow(n, -3.0);
+      return textbook(t, m);
+    };
+  };
+  const auto holds = Synthetic(expectation, made_up(false)).verify();
+  REQUIRE(holds.size() == 2);
+  for (const auto& o : holds) {
+    INFO(o.expected << " / " << o.found << " / " << o.reason);
+    CHECK(o.verdict == Verdict::pass);
+  }
+  // The accepted interval: at or below the reference's CI upper end plus the tolerance 0.1.
+  CHECK(holds[0].accepted_high == Approx(-0.5 + 0.1).margin(1e-9));
+  CHECK(std::isinf(holds[0].accepted_low));
+  CHECK_THAT(holds[0].expected,
+             Catch::StartsWith("at least as fast as power_function_sup against ln n "
+                               "(power_function_sup decreases at -0.500"));
+  CHECK(holds[1].accepted_high == Approx(-1.5 + 0.1).margin(1e-9));
+
+  const auto slow = Synthetic(expectation, made_up(true)).verify();
+  REQUIRE(slow.size() == 2);
+  CHECK(slow[0].verdict == Verdict::fail);
+  CHECK_THAT(slow[0].reason, Catch::Contains("CI lies entirely above -0.4"));
+  CHECK(slow[1].verdict == Verdict::pass);
+
+  // A reference without a usable fit (NaN everywhere): inconclusive, saying why.
+  const auto no_reference =
+      Synthetic(expectation, [](const TrialSpec& t, const std::string& m) {
+        return m == "power_function_sup" ? std::nan("") : textbook(t, m);
+      }).verify();
+  REQUIRE(no_reference.size() == 2);
+  CHECK(no_reference[0].verdict == Verdict::inconclusive);
+  CHECK_THAT(no_reference[0].reason, Catch::Contains("power_function_sup has no rate"));
 }
 
 TEST_CASE("JUnit XML: one test case per outcome, failures and skips with messages", "[verification]") {

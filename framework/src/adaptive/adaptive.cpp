@@ -13,6 +13,7 @@
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/adaptive/averaged_limit.hpp"
+#include "rkhs/adaptive/breakpoints.hpp"
 #include "rkhs/adaptive/excitation.hpp"
 #include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
@@ -29,21 +30,14 @@ namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 
-enum BreakpointRole : unsigned { sample_role = 1u, snapshot_role = 2u };
+bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps < 9.2e18; }
 
-struct Breakpoint {
-  double t;
-  unsigned roles = 0;
-  std::size_t snapshot_index = 0;
-};
+}  // namespace
 
-// From t = start to t = end: sample times (samples_per_lap per lap, evenly spaced, start and
-// end included), snapshot times (when `snapshots`) and, when the integrator restarts there,
-// the times at which s(t) = v t mod L crosses a kink, merged; times closer than 1e-12 end are
-// one breakpoint.
-std::vector<Breakpoint> breakpoints(const AdaptiveSettings& settings, const Domain& domain,
-                                    double start, double end, const std::vector<double>& kinks,
-                                    bool restart_at_kinks, bool snapshots = true) {
+std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings,
+                                             const Domain& domain, double start, double end,
+                                             const std::vector<double>& kinks,
+                                             bool restart_at_kinks, bool snapshots) {
   std::vector<Breakpoint> points{{start, sample_role, 0}};
   const double laps_total = (end - start) * settings.speed / domain.length;
   const auto samples = static_cast<std::size_t>(
@@ -78,10 +72,6 @@ std::vector<Breakpoint> breakpoints(const AdaptiveSettings& settings, const Doma
   }
   return merged;
 }
-
-bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps < 9.2e18; }
-
-}  // namespace
 
 AdaptiveEngine adaptive_engine_for(const AdaptiveSettings& settings, Eigen::Index dimension) {
   const bool applies = settings.final_time <= 0 &&
@@ -363,7 +353,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   if (engine == AdaptiveEngine::time_stepping) {
     const double final_time = settings.final_time_or_laps(domain.length);
     if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
-    integrate(z, breakpoints(settings, domain, 0.0, final_time, kinks,
+    integrate(z, adaptive_breakpoints(settings, domain, 0.0, final_time, kinks,
                              integrator.restarts_at_kinks()));
   } else {
     // One lap as an affine map, then N laps (or the limit) through its powers. Samples: the
@@ -414,7 +404,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     metrics[M::laps_to_limit] = static_cast<double>(laps_within(distance_to_limit, 0.01));
 
     Eigen::VectorXd first = z0;
-    integrate(first, breakpoints(settings, domain, 0.0, lap_time, kinks,
+    integrate(first, adaptive_breakpoints(settings, domain, 0.0, lap_time, kinks,
                                  integrator.restarts_at_kinks(), /*snapshots=*/false));
     const std::uint64_t laps = settings.limit()
                                    ? std::max<std::uint64_t>(
@@ -433,7 +423,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
         Eigen::VectorXd last = powers.advance(z0, laps - 1);
         const double start = static_cast<double>(laps - 1) * lap_time;
         const std::size_t first_sample = out.samples.size();
-        integrate(last, breakpoints(settings, domain, 0.0, lap_time, kinks,
+        integrate(last, adaptive_breakpoints(settings, domain, 0.0, lap_time, kinks,
                                     integrator.restarts_at_kinks(), /*snapshots=*/false));
         for (std::size_t k = first_sample; k < out.samples.size(); ++k) out.samples[k].t += start;
         metrics[M::lap_map_residual] = (last - z).norm() / std::max(z.norm(), 1e-300);
@@ -510,7 +500,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     const auto started = std::chrono::steady_clock::now();
     const Eigen::VectorXd z_ref = reference_state(
         system, *reference,
-        breakpoints(settings, domain, 0.0, final_time, kinks, reference->restarts_at_kinks(),
+        adaptive_breakpoints(settings, domain, 0.0, final_time, kinks, reference->restarts_at_kinks(),
                     /*snapshots=*/true));
     out.reference_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

@@ -12,6 +12,7 @@
 #include <optional>
 #include <thread>
 
+#include "rkhs/adaptive/finite_to_infinite.hpp"
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/approximation.hpp"
@@ -100,6 +101,18 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
                                        trial_adaptive_settings(study, trial),
                                        study.evaluation_points, study.solver, reference.get(),
                                        lap_maps, lap_maps ? lap_map_key(trial) : std::string());
+      if (!trial.projection.name.empty()) {
+        // Theorem 4.1: the finite estimator of the trial's projection beside the law's own
+        // (infinite-dimensional) one, on the same breakpoints.
+        const ProjectionRequest request{*kernel, trial.n, centres, study.solver};
+        const auto op =
+            build_projection(trial.projection.name, trial.projection.parameters, request);
+        check_cancelled();
+        const auto gaps = measure_estimate_gaps(*kernel, *target, op, *plant, *law, *integrator,
+                                                trial_adaptive_settings(study, trial),
+                                                study.evaluation_points);
+        record_estimate_gaps(gaps, measured);
+      }
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.engine = std::move(measured.engine);

@@ -158,10 +158,11 @@ class ExpectationReader {
       if (!(e.tolerance > 0))
         fail(src, tolerance->source(), "expect.tolerance",
              fmt::format("must be > 0, found {}", show(*tolerance)));
-      if (!theory && !(rate && rate->is_number()))
+      const bool derived = rate && rate->as_table() && rate->as_table()->contains("at_least");
+      if (!theory && !(rate && rate->is_number()) && !derived)
         fail(src, tolerance->source(), "expect.tolerance",
-             "only for theory = true or rate = <number> (an interval { min, max } or a bound "
-             "has no tolerance)");
+             "only for theory = true, rate = <number> or rate = { at_least = \"metric\" } (an "
+             "interval { min, max } or a bound has no tolerance)");
     }
 
     if (theory) {
@@ -196,9 +197,24 @@ class ExpectationReader {
       fail(src, rate.source(), "expect.rate",
            fmt::format("expected a number or {{ min = ..., max = ... }}, found {}", show(rate)));
     for (auto&& [key, value] : *interval)
-      if (key.str() != "min" && key.str() != "max")
+      if (key.str() != "min" && key.str() != "max" && key.str() != "at_least")
         fail(src, key.source(), fmt::format("expect.rate.{}", key.str()),
-             "unknown key (known: min, max)");
+             "unknown key (known: min, max, at_least)");
+    if (const auto* reference = interval->get("at_least")) {
+      if (interval->contains("min") || interval->contains("max"))
+        fail(src, rate.source(), "expect.rate",
+             "at_least derives the interval from another metric's rate: give it alone, without "
+             "min or max");
+      if (e.model != RateModel::power_law)
+        fail(src, rate.source(), "expect.rate.at_least",
+             "compares power-law rates: remove 'model'");
+      e.rate_reference = metric_at(*reference, "expect.rate.at_least");
+      if (e.rate_reference == e.metric)
+        fail(src, reference->source(), "expect.rate.at_least",
+             fmt::format("'{}' is the expectation's own metric: name another one", e.metric));
+      (void)has_tolerance;  // e.tolerance (default 0.1) is the slack on the reference's rate
+      return;
+    }
     if (const auto* low = interval->get("min")) e.interval.low = number_at(*low, "expect.rate.min");
     if (const auto* high = interval->get("max")) e.interval.high = number_at(*high, "expect.rate.max");
     if (!interval->contains("min") && !interval->contains("max"))

@@ -188,7 +188,7 @@ void check_grid_size(const Reporter& report, const toml::table& root, StudyKind 
                                   count_plugin_axis(root, "target", "target", "targets"),
                                   count_plugin_axis(root, "centres", "centre placement",
                                                     "centre placements")};
-  if (kind == StudyKind::approximation && root.get("projection"))
+  if (root.get("projection"))
     factors.push_back(count_plugin_axis(root, "projection", "projection", "projections"));
   if (kind == StudyKind::adaptive) {
     factors.push_back(count_plugin_axis(root, "plant", "plant", "plants"));
@@ -744,10 +744,6 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       if (const auto* node = root.get(section))
         report.fail(node->source(), section,
                     "only for adaptive studies: add kind = \"adaptive\" to [study]");
-  if (study.kind == StudyKind::adaptive)
-    if (const auto* node = root.get("projection"))
-      report.fail(node->source(), "projection",
-                  "only for approximation studies (an adaptive study's space is its centres')");
   const auto abscissa = get_string(report, *header, "abscissa", "study.", std::string("n"));
   if (abscissa == "n") study.abscissa = Abscissa::n;
   else if (abscissa == "h" || abscissa == "fill_distance") study.abscissa = Abscissa::fill_distance;
@@ -845,8 +841,10 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   }
   // [[projection]]: an axis only when the file has the section (a study without one projects
   // by interpolation at the centres, and its keys say nothing about projections).
+  // In an adaptive study each trial also runs the finite estimator of its projection beside the
+  // law's infinite-dimensional one (Theorem 4.1, rkhs/adaptive/finite_to_infinite.hpp).
   std::optional<PluginAxis> projections;
-  if (study.kind == StudyKind::approximation && root.get("projection"))
+  if (root.get("projection"))
     projections = read_plugins(report, root, "projection", projection_registry(), std::nullopt);
 
   if (const auto* solver = optional_table(report, root, "solver")) {
@@ -920,6 +918,28 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       }
     }
   });
+  // Theorem 4.1 trials: the law is the infinite-dimensional estimator, the road is f.
+  if (study.kind == StudyKind::adaptive && !study.projections.empty()) {
+    const auto* node = root.get("projection");
+    check_instances(study.laws, "law", [&](const PluginChoice& c) {
+      const auto law = law_registry().find(c.name)->factory(c.parameters);
+      if (law->coordinates() != LawCoordinates::features)
+        throw std::invalid_argument(fmt::format(
+            "with [[projection]] an adaptive study compares each projection's finite estimator "
+            "with the infinite-dimensional one, which the law must be: found law '{}', expected "
+            "\"rkhs_embedding\" (see docs/theorems.md)",
+            c.label()));
+    });
+    if (study.adaptive.projected_road)
+      report.fail(node->source(), "projection",
+                  "with [[projection]] the road must be the target f (adaptive.road = "
+                  "\"target\"): Theorem 4.1 compares two estimators of f");
+    if (study.adaptive.limit() || std::any_of(study.laps_values.begin(), study.laps_values.end(),
+                                              [](double laps) { return std::isinf(laps); }))
+      report.fail(node->source(), "projection",
+                  "with [[projection]] the gaps are taken along the integration: laps = "
+                  "\"limit\" has none");
+  }
   check_instances(study.plants, "plant", [&](const PluginChoice& c) {
     const auto plant = plant_registry().find(c.name)->factory(c.parameters);
     const auto d = plant->A().rows();

@@ -233,8 +233,56 @@ class Verifier {
     o.found = describe_fit(series, analysis) + exclusions(series, analysis);
   }
 
+  // rate = { at_least = "reference" }: the accepted interval is derived from the reference
+  // metric's power-law fit in the same group: "at least as fast" means beyond its CI's inner
+  // end (its upper end for a decreasing series, its lower end for an increasing one) less the
+  // tolerance. Empty with the reason when the reference has no usable fit.
+  std::optional<RateInterval> derived_interval(const Expectation& e, const MetricSeries& series,
+                                               std::string& why) const {
+    for (const auto& other : rates_) {
+      if (other.metric != e.rate_reference || other.group != series.group) continue;
+      const auto& fit = other.analysis.analysis(RateModel::power_law).fit;
+      if (!fit || fit->points < 3 || !std::isfinite(fit->ci_low) || !std::isfinite(fit->ci_high)) {
+        why = fmt::format("{} has no rate with a CI to compare with (fewer than 3 usable points)",
+                          e.rate_reference);
+        return std::nullopt;
+      }
+      if (fit->rate < 0) {
+        why = fmt::format("{} decreases at {} [{}, {}]", e.rate_reference, num(fit->rate),
+                          num(fit->ci_low), num(fit->ci_high));
+        return RateInterval{-std::numeric_limits<double>::infinity(), fit->ci_high + e.tolerance};
+      }
+      why = fmt::format("{} increases at {} [{}, {}]", e.rate_reference, num(fit->rate),
+                        num(fit->ci_low), num(fit->ci_high));
+      return RateInterval{fit->ci_low - e.tolerance, std::numeric_limits<double>::infinity()};
+    }
+    why = fmt::format("no series of {} in this group", e.rate_reference);
+    return std::nullopt;
+  }
+
   void judge_rate(const Expectation& e, const MetricSeries& series, ExpectationOutcome& o) const {
     const auto& analysis = series.analysis.analysis(e.model);
+    if (!e.rate_reference.empty()) {
+      std::string why;
+      const auto interval = derived_interval(e, series, why);
+      record_fit(series, analysis, o);
+      if (!interval) {
+        o.expected = fmt::format("a rate at least as fast as {}'s against {}", e.rate_reference,
+                                 axis_name());
+        o.verdict = Verdict::inconclusive;
+        o.reason = why;
+        return;
+      }
+      o.accepted_low = interval->low;
+      o.accepted_high = interval->high;
+      o.expected = fmt::format("at least as fast as {} against {} ({}; tolerance {}): {}",
+                               e.rate_reference, axis_name(), why, num(e.tolerance),
+                               interval_text(*interval));
+      auto [verdict, reason] = judge_interval(analysis.fit, *interval);
+      o.verdict = verdict;
+      o.reason = reason;
+      return;
+    }
     o.accepted_low = e.interval.low;
     o.accepted_high = e.interval.high;
     const auto against = e.model == RateModel::exponential ? std::string("n (exponential model)")

@@ -40,12 +40,21 @@ enum class AdaptiveMetric : std::size_t {
   lap_map_residual,
   integration_error,
   pe_level,
+  projection_norm_H_to_C,
+  projection_operator_norm,
+  projected_l2_error,
+  estimate_gap_H,
+  estimate_gap_C,
+  state_gap,
+  plant_gap,
+  gap_effectivity_H,
+  gap_effectivity_C,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 29> rows{{
+  static constexpr std::array<MetricRow<M>, 38> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -110,6 +119,39 @@ struct MetricTable<AdaptiveMetric> {
        "E = (1/L) int phi phi^T ds, G the Gram matrix (rkhs_embedding: the smallest nonzero "
        "eigenvalue of E over the features); NaN when G is singular to working precision",
        true, "pe_level_unresolved"},
+      // Theorem 4.1 ([[projection]] in an adaptive study; rkhs/adaptive/finite_to_infinite.hpp):
+      // the finite estimator of the trial's projection Pi_j beside the infinite one (the law,
+      // rkhs_embedding), sup over the breakpoints of [0, T].
+      {M::projection_norm_H_to_C, "projection_norm_H_to_C", "sqrt([k])",
+       "||I - Pi_j||_{H -> C} = max_m ||(I - Pi_j)^* k(s_m, .)||_H on the grid; NaN without "
+       "[[projection]]",
+       true, "projection_norm_at_floor"},
+      {M::projection_operator_norm, "projection_operator_norm", "1",
+       "||Pi_j||_{H -> H}, measured; NaN without [[projection]]", true, ""},
+      {M::projected_l2_error, "projected_l2_error", "[f] sqrt(m)",
+       "||f - Pi_j^* fhat_j(T)|| in L2(Omega), the finite estimator's error; NaN without "
+       "[[projection]]",
+       true, ""},
+      {M::estimate_gap_H, "estimate_gap_H", "[f] / sqrt([k])",
+       "sup_t ||fhat(t) - Pi_j^* fhat_j(t)||_H; NaN without [[projection]]", true,
+       "estimate_gap_at_integration_floor"},
+      {M::estimate_gap_C, "estimate_gap_C", "[f]",
+       "sup_t max_m |fhat(t)(s_m) - Pi_j^* fhat_j(t)(s_m)|; NaN without [[projection]]", true,
+       "estimate_gap_at_integration_floor"},
+      {M::state_gap, "state_gap", "[x]",
+       "sup_t |xhat(t) - xhat_j(t)|; NaN without [[projection]]", true,
+       "estimate_gap_at_integration_floor"},
+      {M::plant_gap, "plant_gap", "[x]",
+       "sup_t |x(t) - x_j(t)| between the two integrations of the plant (their integration "
+       "error); NaN without [[projection]]",
+       true, ""},
+      {M::gap_effectivity_H, "gap_effectivity_H", "[f] / [k]",
+       "estimate_gap_H / projection_norm_H_to_C (bounded in j by Theorem 4.1); NaN without "
+       "[[projection]]",
+       true, "projection_norm_at_floor"},
+      {M::gap_effectivity_C, "gap_effectivity_C", "[f] / sqrt([k])",
+       "estimate_gap_C / projection_norm_H_to_C; NaN without [[projection]]", true,
+       "projection_norm_at_floor"},
   }};
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

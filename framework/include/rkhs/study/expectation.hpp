@@ -58,6 +58,9 @@ struct Expectation {
   RateModel model = RateModel::power_law;
   RateInterval interval;            ///< rate: the accepted interval
   std::optional<double> expected;   ///< rate = x: x (the interval is x +- tolerance)
+  /// rate = { at_least = "metric" }: the interval is derived from that metric's fitted rate in
+  /// the same group (at least as fast, within the tolerance); "" otherwise.
+  std::string rate_reference;
   double tolerance = 0.1;           ///< rate = x and theory: half-width of the accepted interval
   BoundSpec bound;                  ///< bound only
   std::vector<std::string> tiers;   ///< empty: belongs to no named tier

@@ -1,0 +1,31 @@
+#pragma once
+// The times an adaptive trial's integration lands on (rkhs/adaptive/adaptive.hpp): its output
+// samples, its snapshots and the kinks it restarts at.
+
+#include <cstddef>
+#include <vector>
+
+#include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/core/domain.hpp"
+
+namespace rkhs {
+
+/// What happens at a breakpoint (bits of Breakpoint::roles; a kink alone has none).
+enum BreakpointRole : unsigned { sample_role = 1u, snapshot_role = 2u };
+
+struct Breakpoint {
+  double t;
+  unsigned roles = 0;
+  std::size_t snapshot_index = 0;  ///< into settings.snapshot_laps, when snapshot_role is set
+};
+
+/// From t = start to t = end: sample times (samples_per_lap per lap, evenly spaced, start and
+/// end included), snapshot times (when `snapshots`) and, when `restart_at_kinks`, the times at
+/// which s(t) = v t mod L crosses one of `kinks`, merged in increasing order; times closer than
+/// 1e-12 end are one breakpoint.
+std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings,
+                                             const Domain& domain, double start, double end,
+                                             const std::vector<double>& kinks,
+                                             bool restart_at_kinks, bool snapshots = true);
+
+}  // namespace rkhs

@@ -1,0 +1,201 @@
+#include "rkhs/adaptive/finite_to_infinite.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "rkhs/adaptive/breakpoints.hpp"
+#include "rkhs/adaptive/learning_map.hpp"
+#include "rkhs/adaptive/lyapunov.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/core/cancellation.hpp"
+
+namespace rkhs {
+
+namespace {
+
+// The coordinates r(s) = R k(S, s) of Pi_j k(s, .) in an orthonormal basis of H_j, as a basis
+// along the path: the kernel's sections at S mapped by R (KernelBasis::set_map), so a feature
+// kernel evaluates them from its few active features. Allocates nothing per evaluation.
+class ProjectedSections final : public KernelBasis {
+ public:
+  ProjectedSections(std::unique_ptr<KernelBasis> sections, const Eigen::MatrixXd& R)
+      : sections_(std::move(sections)), R_(R) {
+    sections_->set_map(R_);
+  }
+  std::size_t size() const noexcept override { return static_cast<std::size_t>(R_.rows()); }
+  void evaluate(double s, double* r) const override { sections_->evaluate_mapped(s, r); }
+  void evaluate_derivative(double s, double* dr) const override {
+    sections_->evaluate_mapped_derivative(s, dr);
+  }
+  // A map T on r is T R on the sections (evaluate and its derivative then use R again).
+  void set_map(const Eigen::MatrixXd& map) override {
+    mapped_ = map * R_;
+    sections_->set_map(mapped_);
+    mapped_is_set_ = true;
+  }
+  void evaluate_mapped(double s, double* out) const override {
+    require_map();
+    sections_->evaluate_mapped(s, out);
+  }
+  void evaluate_mapped_derivative(double s, double* out) const override {
+    require_map();
+    sections_->evaluate_mapped_derivative(s, out);
+  }
+
+ private:
+  void require_map() const {
+    if (!mapped_is_set_)
+      throw std::logic_error("ProjectedSections: evaluate_mapped before set_map");
+  }
+  std::unique_ptr<KernelBasis> sections_;
+  Eigen::MatrixXd R_, mapped_;
+  bool mapped_is_set_ = false;
+};
+
+// Features at points as a dense points x F matrix (F = feature_count()).
+Eigen::MatrixXd feature_values(const KernelBasis& features, std::span<const double> points) {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(points.size()),
+                      static_cast<Eigen::Index>(features.size()));
+  Eigen::VectorXd row(out.cols());
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    features.evaluate(points[m], row.data());
+    out.row(static_cast<Eigen::Index>(m)) = row.transpose();
+  }
+  return out;
+}
+
+}  // namespace
+
+EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction& target,
+                                   const ProjectionOperator& op, const Plant& plant,
+                                   const LearningLaw& law, const Integrator& integrator,
+                                   const AdaptiveSettings& settings,
+                                   std::size_t evaluation_points) {
+  if (kernel.feature_count() == 0)
+    throw std::invalid_argument(fmt::format(
+        "the infinite-dimensional estimator needs a kernel with a finite feature map; kernel '{}' "
+        "has none",
+        kernel.name()));
+  if (settings.limit())
+    throw std::invalid_argument(
+        "the estimate gaps are taken along the integration: laps = \"limit\" has none");
+  const Domain& domain = kernel.domain();
+  const double gamma = law.gain();
+  EstimateGaps out;
+
+  // The orthonormal basis of H_j: G_B = L L^T, R = L^T W.
+  const Eigen::MatrixXd basis_gram = projection_basis_gram(kernel, op);
+  const Eigen::LLT<Eigen::MatrixXd> cholesky(basis_gram);
+  const double largest = basis_gram.diagonal().cwiseAbs().maxCoeff();
+  if (cholesky.info() != Eigen::Success ||
+      cholesky.matrixL().toDenseMatrix().diagonal().minCoeff() <= 1e-7 * std::sqrt(largest))
+    throw std::invalid_argument(
+        "the projection's basis is linearly dependent in H (its Gram matrix G_B is singular to "
+        "working precision): no coordinates for H_j");
+  const Eigen::MatrixXd L = cholesky.matrixL();
+  const Eigen::MatrixXd R = L.transpose() * op.weights();  // dim x |S|
+  const auto dimension = R.rows();
+  out.dimension = static_cast<std::size_t>(dimension);
+
+  const auto features = kernel.feature_basis();
+  const auto F = static_cast<Eigen::Index>(features->size());
+  // Pi_j^* fhat_j in feature coordinates: T a, T = Phi_S^T R^T (F x dim).
+  const Eigen::MatrixXd T = feature_values(*features, op.samples()).transpose() * R.transpose();
+  const auto grid = domain.uniform_points(evaluation_points);
+  const Eigen::MatrixXd grid_features = feature_values(*features, grid);  // M x F
+
+  const Eigen::MatrixXd& A = plant.A();
+  const Eigen::VectorXd& B = plant.B();
+  const Eigen::Index d = A.rows();
+  const Eigen::MatrixXd P = solve_lyapunov(A, parse_matrix(settings.q, d)).P;
+  const std::function<double(double)> road = [&](double s) { return target(s); };
+  const std::function<double(double)> road_slope = [&](double s) { return target.slope(s); };
+
+  // The two systems: features with Gamma^-1 I (rkhs_embedding), r(s) with Gamma^-1 I.
+  const LearningMap infinite_map = LearningMap::scalar(F, 1.0 / gamma);
+  const LearningMap finite_map = LearningMap::scalar(dimension, 1.0 / gamma);
+  ProjectedSections sections(kernel.basis(op.samples()), R);
+  AdaptiveSystem infinite(A, B, P, *features, infinite_map, road, road_slope, domain,
+                          settings.speed, AdaptiveSystem::LearningSignal::from_phi);
+  AdaptiveSystem finite(A, B, P, sections, finite_map, road, road_slope, domain, settings.speed,
+                        AdaptiveSystem::LearningSignal::from_phi);
+
+  auto kinks = kernel.kink_points();
+  for (double kink : target.kink_points()) kinks.push_back(kink);
+  std::sort(kinks.begin(), kinks.end());
+  const double final_time = settings.final_time_or_laps(domain.length);
+  if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
+  const auto points =
+      adaptive_breakpoints(settings, domain, 0.0, final_time, kinks, integrator.restarts_at_kinks());
+  std::vector<double> times(points.size());
+  std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
+  out.breakpoints = times.size();
+
+  // The infinite estimator's state at every breakpoint, then the finite one against it.
+  Eigen::MatrixXd infinite_states(2 * d + F, static_cast<Eigen::Index>(times.size()));
+  {
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(infinite.dimension());
+    integrator.integrate(infinite, z, times, [&](std::size_t k, const double* state) {
+      check_cancelled();
+      infinite_states.col(static_cast<Eigen::Index>(k)) =
+          Eigen::Map<const Eigen::VectorXd>(state, infinite.dimension());
+    });
+  }
+  Eigen::VectorXd gap(F), gap_on_grid(grid_features.rows());
+  double largest_state = 0, largest_coefficients = 0;
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(finite.dimension());
+  integrator.integrate(finite, z, times, [&](std::size_t k, const double* state) {
+    check_cancelled();
+    const Eigen::Map<const Eigen::VectorXd> x_j(state, d), xhat_j(state + d, d),
+        a(state + 2 * d, dimension);
+    const auto reference = infinite_states.col(static_cast<Eigen::Index>(k));
+    gap.noalias() = reference.tail(F) - T * a;
+    gap_on_grid.noalias() = grid_features * gap;
+    out.estimate_gap_H = std::max(out.estimate_gap_H, gap.norm());
+    out.estimate_gap_C = std::max(out.estimate_gap_C, gap_on_grid.cwiseAbs().maxCoeff());
+    out.state_gap = std::max(out.state_gap, (reference.segment(d, d) - xhat_j).norm());
+    out.plant_gap = std::max(out.plant_gap, (reference.head(d) - x_j).norm());
+    largest_state = std::max(largest_state, reference.head(d).norm());
+    largest_coefficients = std::max(largest_coefficients, reference.tail(F).norm());
+  });
+  out.gaps_at_integration_floor =
+      out.estimate_gap_H <= 10 * largest_coefficients * out.plant_gap / std::max(largest_state, 1e-300);
+
+  // ||f - Pi_j^* fhat_j(T)|| in L2 on the grid, and the projection's norms there.
+  const Eigen::VectorXd estimate = grid_features * (T * z.tail(dimension));
+  Eigen::VectorXd residual(estimate.size());
+  for (Eigen::Index m = 0; m < residual.size(); ++m)
+    residual(m) = target(grid[static_cast<std::size_t>(m)]) - estimate(m);
+  out.projected_l2_error = domain.l2_norm(
+      std::span<const double>(residual.data(), static_cast<std::size_t>(residual.size())));
+  out.projection_norm_H_to_C = projection_residual_norms(kernel, op, grid).maxCoeff();
+  // As for approximation trials: the squared norm is a difference of terms of size k(s, s).
+  out.projection_norm_at_floor =
+      out.projection_norm_H_to_C <=
+      std::sqrt(static_cast<double>(op.samples().size()) * std::numeric_limits<double>::epsilon() *
+                kernel.diagonal(grid).maxCoeff());
+  out.projection_operator_norm = projection_operator_norm(kernel, op);
+  return out;
+}
+
+void record_estimate_gaps(const EstimateGaps& gaps, AdaptiveMeasurement& out) {
+  using M = AdaptiveMetric;
+  auto& metrics = out.metrics;
+  metrics[M::projection_norm_H_to_C] = gaps.projection_norm_H_to_C;
+  metrics[M::projection_operator_norm] = gaps.projection_operator_norm;
+  metrics[M::projected_l2_error] = gaps.projected_l2_error;
+  metrics[M::estimate_gap_H] = gaps.estimate_gap_H;
+  metrics[M::estimate_gap_C] = gaps.estimate_gap_C;
+  metrics[M::state_gap] = gaps.state_gap;
+  metrics[M::plant_gap] = gaps.plant_gap;
+  metrics[M::gap_effectivity_H] = gaps.estimate_gap_H / gaps.projection_norm_H_to_C;
+  metrics[M::gap_effectivity_C] = gaps.estimate_gap_C / gaps.projection_norm_H_to_C;
+  if (gaps.projection_norm_at_floor) out.flags.push_back("projection_norm_at_floor");
+  if (gaps.gaps_at_integration_floor) out.flags.push_back("estimate_gap_at_integration_floor");
+}
+
+}  // namespace rkhs
