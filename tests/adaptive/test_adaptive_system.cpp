@@ -103,7 +103,17 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                                           "unexcited_directions",
                                           "lap_map_residual",
                                           "integration_error",
-                                          "pe_level"};
+                                          "pe_level",
+                                          // Theorem 4.1 ([[projection]] in adaptive studies)
+                                          "projection_norm_H_to_C",
+                                          "projection_operator_norm",
+                                          "projected_l2_error",
+                                          "estimate_gap_H",
+                                          "estimate_gap_C",
+                                          "state_gap",
+                                          "plant_gap",
+                                          "gap_effectivity_H",
+                                          "gap_effectivity_C"};
   CHECK(adaptive_metric_names() == expected);
   std::vector<std::string> may_be_nan;
   for (const auto& row : MetricTable<AdaptiveMetric>::rows)
@@ -112,5 +122,9 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                           "separation_distance", "coefficient_error", "lyapunov_max_increase",
                           "lyapunov_ratio", "learning_spectral_radius",
                           "slowest_time_constant_laps", "laps_to_limit", "unexcited_directions",
-                          "lap_map_residual", "integration_error", "pe_level"});
+                          "lap_map_residual", "integration_error", "pe_level",
+                          // NaN without [[projection]]
+                          "projection_norm_H_to_C", "projection_operator_norm",
+                          "projected_l2_error", "estimate_gap_H", "estimate_gap_C", "state_gap",
+                          "plant_gap", "gap_effectivity_H", "gap_effectivity_C"});
 }
