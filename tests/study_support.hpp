@@ -22,6 +22,14 @@ struct StudyOutcome {
   }
 };
 
+/// The TOML of the small adaptive trials of tests: the sine road of amplitude 2, the scalar
+/// plant x' = -x + f (time constant 1 s) and radau5 at the tolerances given ("1e-11").
+inline std::string scalar_plant_sections(const std::string& rtol, const std::string& atol) {
+  return "[[target]]\nname = \"sine\"\namplitude = 2.0\n"
+         "[[plant]]\nname = \"linear\"\nA = \"-1\"\nB = \"1\"\n"
+         "[[integrator]]\nname = \"radau5\"\nrtol = " + rtol + "\natol = " + atol + "\n";
+}
+
 /// Parses `text` (named `source` in error messages) and runs every trial on 2 threads; each
 /// trial must succeed (its reason is shown when one does not).
 inline StudyOutcome run_study_text(const std::string& text,

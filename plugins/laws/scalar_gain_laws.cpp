@@ -44,25 +44,34 @@ class RkhsEmbeddingLaw final : public LearningLaw {
     return {"rkhs_embedding",
             "beta' = Gamma^-1 psi(s) B^T P (x - xhat): the estimator in H itself, "
             "fhat = sum_f beta_f psi_f over the kernel's features",
-            {positive_parameter("gamma", 1e-3, "the gain Gamma")},
-            {{"kernels", "with a finite feature map (bspline); others are refused"},
+            {positive_parameter("gamma", 1e-3, "the gain Gamma"),
+             integer_parameter("resolution", 0,
+                               "for a kernel without a finite feature map: N uniform centres "
+                               "whose span H_N stands in for H (its own error is reported as "
+                               "reference_norm_H_to_C); 0: such kernels are refused",
+                               0, 1 << 16)},
+            {{"kernels", "with a finite feature map (bspline), exactly; others through a "
+                         "reference resolution"},
              {"state", "2 d + F (F = the kernel's feature count), not 2 d + n"}}};
   }
-  explicit RkhsEmbeddingLaw(const ParameterSet& p) : gain_(p.real("gamma")) {}
+  explicit RkhsEmbeddingLaw(const ParameterSet& p)
+      : gain_(p.real("gamma")), resolution_(static_cast<std::size_t>(p.integer("resolution"))) {}
+  std::size_t reference_resolution() const noexcept override { return resolution_; }
   bool uses_gram_inverse() const noexcept override { return false; }
   double gain() const noexcept override { return gain_; }
   LawCoordinates coordinates() const noexcept override { return LawCoordinates::features; }
   void require_kernel(const AnyKernel& kernel) const override {
-    if (kernel.feature_count() == 0)
+    if (kernel.feature_count() == 0 && resolution_ == 0)
       throw std::invalid_argument(fmt::format(
           "learning law 'rkhs_embedding' needs a kernel with a finite feature map "
-          "(k(u, v) = sum_f psi_f(u) psi_f(v)); kernel '{}' has none (use 'bspline', or the "
-          "'rkhs' law on H_n)",
+          "(k(u, v) = sum_f psi_f(u) psi_f(v)); kernel '{}' has none (use 'bspline', declare a "
+          "reference resolution, resolution = N, or use the 'rkhs' law on H_n)",
           kernel.name()));
   }
 
  private:
   double gain_;
+  std::size_t resolution_;
 };
 
 }  // namespace

@@ -113,7 +113,12 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                                           "state_gap",
                                           "plant_gap",
                                           "gap_effectivity_H",
-                                          "gap_effectivity_C"};
+                                          "gap_effectivity_C",
+                                          // persistence of excitation along the path
+                                          "unexcited_dimension",
+                                          "path_l2_error",
+                                          "off_path_l2_error",
+                                          "reference_norm_H_to_C"};
   CHECK(adaptive_metric_names() == expected);
   std::vector<std::string> may_be_nan;
   for (const auto& row : MetricTable<AdaptiveMetric>::rows)
@@ -126,5 +131,7 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                           // NaN without [[projection]]
                           "projection_norm_H_to_C", "projection_operator_norm",
                           "projected_l2_error", "estimate_gap_H", "estimate_gap_C", "state_gap",
-                          "plant_gap", "gap_effectivity_H", "gap_effectivity_C"});
+                          "plant_gap", "gap_effectivity_H", "gap_effectivity_C",
+                          "unexcited_dimension", "path_l2_error", "off_path_l2_error",
+                          "reference_norm_H_to_C"});
 }

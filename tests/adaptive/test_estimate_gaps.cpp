@@ -32,30 +32,25 @@ evaluation_points = 1024
 [domain]
 radius = 4.0
 [grid]
-n = )" + n + R"(
+n = )" + n +
+         R"(
 [[kernel]]
 name = "bspline"
-degree = )" + std::to_string(degree) + R"(
+degree = )" +
+         std::to_string(degree) + R"(
 n0 = 4
-J = )" + std::to_string(levels) + R"(
+J = )" + std::to_string(levels) +
+         R"(
 [[centres]]
 name = "uniform"
-offset = )" + std::to_string(offset) + R"(
-[[target]]
-name = "sine"
-amplitude = 2.0
-)" + projections + R"(
-[[plant]]
-name = "linear"
-A = "-1"
-B = "1"
+offset = )" +
+         std::to_string(offset) + R"(
+)" + test::scalar_plant_sections("1e-11", "1e-12") +
+         projections + R"(
 [[law]]
-name = ")" + law + R"("
+name = ")" +
+         law + R"("
 gamma = 0.1
-[[integrator]]
-name = "radau5"
-rtol = 1e-11
-atol = 1e-12
 [adaptive]
 speed = 1.0
 laps = 2
@@ -122,12 +117,13 @@ TEST_CASE("Theorem 4.1 trials: the interpolation projection's estimator is the r
   }
 }
 
-TEST_CASE("Theorem 4.1 trials: the gaps shrink with j, and no faster than ||I - Pi_j|| does "
-          "their ratio grow",
-          "[adaptive][theorem_4_1]") {
+TEST_CASE(
+    "Theorem 4.1 trials: the gaps shrink with j, and no faster than ||I - Pi_j|| does "
+    "their ratio grow",
+    "[adaptive][theorem_4_1]") {
   // J = 6 (256 finest cells), j = 0 .. 3: far from H_j = H, where ||I - Pi_j|| drops to 0.
-  const auto out = test::run_study_text(
-      gap_study(1, "[4, 8, 16, 32]", all_projections, "rkhs_embedding", 6));
+  const auto out =
+      test::run_study_text(gap_study(1, "[4, 8, 16, 32]", all_projections, "rkhs_embedding", 6));
   REQUIRE(out.trials.size() == 16);
   for (const auto& projection : out.study.projections) {
     std::vector<std::size_t> levels;

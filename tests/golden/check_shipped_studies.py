@@ -32,14 +32,19 @@ WALL_TIME = re.compile(r" in [0-9.e+-]+ s$")
 
 def shortened(text):
     """The study with adaptive horizons cut to one lap (a laps list to [1], or to [1, "limit"]
-    when it has the limit; approximation studies unchanged)."""
+    when it has the limit; laps = "limit" alone kept; approximation studies unchanged)."""
     if not re.search(r'^kind = "adaptive"', text, re.M):
         return text
     def one_lap(match):
+        if match.group(1) == '"limit"':
+            return 'laps = "limit"'  # the lap map's fixed point: no horizon to shorten
         if match.group(1)[0] != "[":
             return "laps = 1"
         return 'laps = [1, "limit"]' if '"limit"' in match.group(1) else "laps = [1]"
-    text, laps = re.subn(r"^laps = (\d+|\[.*\])", one_lap, text, flags=re.M)
+    # The [adaptive] table's laps, not an [[expect]] selector (`laps = "limit"`) after it.
+    head, separator, expectations = text.partition("\n[[expect]]")
+    head, laps = re.subn(r'^laps = (\d+|\[.*\]|"limit")', one_lap, head, flags=re.M)
+    text = head + separator + expectations
     text, snapshots = re.subn(r"^snapshot_laps = \[.*\]", "snapshot_laps = [1]", text, flags=re.M)
     if laps != 1 or snapshots > 1:
         raise SystemExit(f"cannot shorten the horizon: {laps} 'laps =' lines, {snapshots} "

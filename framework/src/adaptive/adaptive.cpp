@@ -34,12 +34,39 @@ bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps <
 
 }  // namespace
 
+std::vector<double> path_kink_times(const AdaptiveSettings& settings, const Domain& domain,
+                                    const std::vector<double>& kinks) {
+  std::vector<double> out;
+  const double v = settings.speed;
+  if (!settings.shuttle()) {
+    for (double kink : kinks) out.push_back(kink / v);
+  } else {
+    // Out at (k - from) / v and back at (2l - (k - from)) / v; the turning point l / v, where
+    // s'(t) jumps, is one too (t = 0 starts every lap anyway).
+    const double from = settings.shuttle_from, l = settings.shuttle_length;
+    out.push_back(l / v);
+    for (double kink : kinks) {
+      for (double shift : {0.0, domain.length, -domain.length}) {  // a periodic track's images
+        const double u = kink + shift - from;
+        if (u > 0 && u < l) {
+          out.push_back(u / v);
+          out.push_back((2 * l - u) / v);
+        }
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings,
                                              const Domain& domain, double start, double end,
                                              const std::vector<double>& kinks,
                                              bool restart_at_kinks, bool snapshots) {
   std::vector<Breakpoint> points{{start, sample_role, 0}};
-  const double laps_total = (end - start) * settings.speed / domain.length;
+  const double lap_time = settings.lap_time(domain.length);
+  const double laps_total = (end - start) / lap_time;
   const auto samples = static_cast<std::size_t>(
       std::max(1.0, std::ceil(laps_total * static_cast<double>(settings.samples_per_lap))));
   for (std::size_t k = 1; k <= samples; ++k)
@@ -48,14 +75,14 @@ std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings,
          sample_role, 0});
   if (snapshots)
     for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i) {
-      const double t = settings.snapshot_laps[i] * domain.length / settings.speed;
+      const double t = settings.snapshot_laps[i] * lap_time;
       if (t <= end * (1 + 1e-12)) points.push_back({std::min(t, end), snapshot_role, i});
     }
   if (restart_at_kinks) {
-    const double lap_time = domain.length / settings.speed;
+    const auto in_lap = path_kink_times(settings, domain, kinks);
     for (double lap = std::floor(start / lap_time); lap * lap_time < end; ++lap)
-      for (double kink : kinks) {
-        const double t = (lap * domain.length + kink) / settings.speed;
+      for (double kink_time : in_lap) {
+        const double t = lap * lap_time + kink_time;
         if (t > start && t < end) points.push_back({t, 0, 0});
       }
   }
@@ -273,11 +300,12 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   AdaptiveSystem system(
       A, B, P, *basis, learning_map, road, road_slope, domain, settings.speed,
       in_features ? AdaptiveSystem::LearningSignal::from_phi : learning_signal_for(kernel));
+  system.set_shuttle(settings.shuttle_from, settings.shuttle_length);
   auto kinks = kernel.kink_points();  // of phi(s), and of f (a sampled road)
   if (!settings.projected_road)
     for (double kink : target.kink_points()) kinks.push_back(kink);
   const Eigen::Index m = system.dimension();
-  const double lap_time = domain.length / settings.speed;
+  const double lap_time = settings.lap_time(domain.length);
   const AdaptiveEngine engine = adaptive_engine_for(settings, m);
   out.engine = engine == AdaptiveEngine::lap_map ? "lap_map" : "time_stepping";
   if (reference && engine != AdaptiveEngine::time_stepping)
@@ -360,8 +388,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     // first lap and, for N laps, the last lap integrated with the study's integrator from the
     // state the map gives (the last lap's end checks the map: lap_map_residual), and the lap
     // boundaries in between from the map.
-    std::vector<double> kink_times;
-    for (double kink : kinks) kink_times.push_back(kink / settings.speed);
+    const auto kink_times = path_kink_times(settings, domain, kinks);
     auto compute = [&] {
       return compute_lap_map(system, lap_time, kink_times, settings.lap_map_atol,
                              settings.lap_map_rtol, std::numeric_limits<std::int64_t>::max());
@@ -451,6 +478,19 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   metrics[M::l2_error] = l2(residual);
   metrics[M::sup_error] = residual.cwiseAbs().maxCoeff();
   metrics[M::gap_to_projection] = l2(estimate - projection);
+  if (settings.shuttle()) {
+    // The error on and off the path's part of the track, on the grid points there (weights
+    // L / M: the rectangle rule of the periodic grid, the trapezoid's interior on an interval).
+    const double from = settings.shuttle_from, to = from + settings.shuttle_length;
+    double on = 0, off = 0;
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      const double r = residual(static_cast<Eigen::Index>(k));
+      (grid[k] >= from && grid[k] <= to ? on : off) += r * r;
+    }
+    const double weight = domain.length / static_cast<double>(grid.size());
+    metrics[M::path_l2_error] = std::sqrt(weight * on);
+    metrics[M::off_path_l2_error] = std::sqrt(weight * off);
+  }
   metrics[M::final_state_error] = (z.head(d) - z.segment(d, d)).norm();
   double max_state_error = 0, max_increase = 0;
   for (std::size_t k = 0; k < out.samples.size(); ++k) {
@@ -469,8 +509,13 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   }
   {  // P_L2 f, the averaged (v -> 0) limit of the law, on the same grid: onto H_n, or onto H
      // itself in feature coordinates. Its E = Mbar gives the excitation of the same space.
-    const auto limit = in_features ? averaged_limit_in_features(kernel, road, kinks)
-                                   : averaged_limit(kernel, centres, road, kinks, solver_options);
+    // Over the path's part of the track: the shuttle's time average is uniform there.
+    AveragedLimitQuadrature on_path;
+    on_path.range_from = settings.shuttle_from;
+    on_path.range_length = settings.shuttle_length;
+    const auto limit =
+        in_features ? averaged_limit_in_features(kernel, road, kinks, on_path)
+                    : averaged_limit(kernel, centres, road, kinks, solver_options, on_path);
     const Eigen::VectorXd l2_projection = on_grid(limit.coefficients);
     const Eigen::VectorXd l2_projection_residual = f - l2_projection;
     metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
@@ -485,8 +530,28 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                 ? excitation_level_on_range(limit.averaged_gram_eigenvalues)
                                 : excitation_level(limit.averaged_gram, gram, solver.spectrum());
     metrics[M::pe_level] = excitation.value;
-    if (!excitation.resolved && (in_features || !solver.spectrum().singular))
+    // Directions a shuttle leaves unexcited (on laps around the track there are none: E is
+    // positive definite with G): in H_n the pencil's eigenvalues at their round-off, NaN with a
+    // singular G; in H the rank E lacks against the whole track's E.
+    double unexcited = 0;
+    if (settings.shuttle()) {
+      if (in_features)
+        unexcited = static_cast<double>(
+            excitation_level_on_range(
+                averaged_limit_in_features(kernel, road, kinks).averaged_gram_eigenvalues)
+                .dimension -
+            excitation.dimension);
+      else
+        unexcited = solver.spectrum().singular ? nan : static_cast<double>(excitation.unexcited);
+    }
+    metrics[M::unexcited_dimension] = unexcited;
+    if (unexcited > 0) {
+      // Def. 3.1 fails: the infimum over the space is 0 to working precision.
+      metrics[M::pe_level] = 0.0;
+      out.flags.push_back("not_persistently_excited");
+    } else if (!excitation.resolved && (in_features || !solver.spectrum().singular)) {
       out.flags.push_back("pe_level_unresolved");
+    }
   }
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);

@@ -103,9 +103,13 @@ void AdaptiveSystem::time_derivative(const double* z, double t, double* dfdt) co
   const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
   Eigen::Map<Eigen::VectorXd> dx(dfdt, d_), dxhat(dfdt + d_, d_), dalpha(dfdt + 2 * d_, n_);
   const double error = b_.dot(x - xhat);
-  dx = B_ * (speed_ * road_slope_(s));
-  dxhat = B_ * (speed_ * dphi.dot(alpha));
-  dalpha = (speed_ * error) * Vector(dpsi_.data(), n_);
+  // d/dt of phi(s(t)) is s'(t) phi'(s); on a shuttle's way back phi' at a kink is the right-hand
+  // derivative in s where the step needs the left-hand one: only dF/dt of a step that starts on
+  // a kink point is affected (Rosenbrock methods), and restarts keep kinks at segment ends.
+  const double velocity = path_velocity(t);
+  dx = B_ * (velocity * road_slope_(s));
+  dxhat = B_ * (velocity * dphi.dot(alpha));
+  dalpha = (velocity * error) * Vector(dpsi_.data(), n_);
 }
 
 void AdaptiveSystem::linearize(double t, CoupledLinearization& out) const {

@@ -158,6 +158,11 @@ namespace {
 // non-analytic stationary kernel and the road's kinks, sorted; points closer than 1e-13 L are
 // one: moving a kink by that much changes an integral by O((1e-13 L)^2)) and the initial panels
 // of each piece.
+// The length of the averaging range: the domain's, or the path's part of it.
+double range_length(const AnyKernel& kernel, const AveragedLimitQuadrature& quadrature) {
+  return quadrature.range_length > 0 ? quadrature.range_length : kernel.domain().length;
+}
+
 struct Pieces {
   std::vector<double> breakpoints;
   std::vector<std::size_t> panels_per_piece;
@@ -173,11 +178,13 @@ Pieces quadrature_pieces(const AnyKernel& kernel, std::span<const double> centre
         "the averaged limit's quadrature needs nodes_per_panel >= 1, initial_panels >= 1 and a "
         "positive tolerance");
   const Domain& domain = kernel.domain();
-  const double length = domain.length;
-  std::vector<double> breakpoints{0.0, length};
+  const double begin = quadrature.range_from;
+  const double end = begin + range_length(kernel, quadrature);
+  const double length = end - begin;
+  std::vector<double> breakpoints{begin, end};
   auto add = [&](double s) {
     if (domain.periodic) s = domain.wrap(s);
-    if (s > 0 && s < length) breakpoints.push_back(s);
+    if (s > begin && s < end) breakpoints.push_back(s);
   };
   for (double s : kernel.kink_points()) add(s);
   // A stationary kernel k0(x - y) that is not analytic is not smooth at 0 (Wendland, Matern),
@@ -198,8 +205,8 @@ Pieces quadrature_pieces(const AnyKernel& kernel, std::span<const double> centre
   for (double s : breakpoints)
     if (out.breakpoints.empty() || s - out.breakpoints.back() > 1e-13 * length)
       out.breakpoints.push_back(s);
-  out.breakpoints.back() = length;
-  if (out.breakpoints.size() < 2) out.breakpoints = {0.0, length};
+  out.breakpoints.back() = end;
+  if (out.breakpoints.size() < 2) out.breakpoints = {begin, end};
 
   const double longest_panel = length / static_cast<double>(quadrature.initial_panels);
   out.panels_per_piece.resize(out.breakpoints.size() - 1);
@@ -262,7 +269,7 @@ AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> ce
   const auto n = static_cast<Eigen::Index>(centres.size());
   const auto basis = kernel.basis(centres);
   auto [current, refinement, change, converged] = converged_moments(
-      *basis, n, road, pieces, kernel.domain().length, quadrature, /*sparse=*/false);
+      *basis, n, road, pieces, range_length(kernel, quadrature), quadrature, /*sparse=*/false);
 
   AveragedLimit out;
   const GramSolver gram_solver(current.gram, solver);
@@ -292,7 +299,7 @@ AveragedLimit averaged_limit_in_features(const AnyKernel& kernel,
   const Pieces pieces = quadrature_pieces(kernel, {}, road_kinks, quadrature);
   const auto count = static_cast<Eigen::Index>(basis->size());
   auto [current, refinement, change, converged] = converged_moments(
-      *basis, count, road, pieces, kernel.domain().length, quadrature, /*sparse=*/true);
+      *basis, count, road, pieces, range_length(kernel, quadrature), quadrature, /*sparse=*/true);
 
   // E is singular by design (the features are redundant): beta = E^+ bbar over the eigenvalues
   // above F eps lambda_max, the minimum-norm solution, in the range of E.

@@ -27,6 +27,12 @@ ExcitationLevel excitation_level(const Eigen::MatrixXd& excitation, const Eigen:
   out.error_bound =
       eps * (excitation_max + std::abs(out.value) * spectrum.lambda_max) / spectrum.lambda_min;
   out.resolved = out.error_bound <= resolution * out.value;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double lambda = pencil.eigenvalues()(i);
+    const double bound =
+        eps * (excitation_max + std::abs(lambda) * spectrum.lambda_max) / spectrum.lambda_min;
+    if (!(lambda > bound)) ++out.unexcited;
+  }
   // No significant digit (a negative value among them): not a number to report.
   if (!(out.value > out.error_bound)) out.value = std::numeric_limits<double>::quiet_NaN();
   return out;

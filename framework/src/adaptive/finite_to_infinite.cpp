@@ -11,50 +11,13 @@
 #include "rkhs/adaptive/learning_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/adaptive/reference_resolution.hpp"
 #include "rkhs/core/cancellation.hpp"
+#include "rkhs/kernel/mapped_basis.hpp"
 
 namespace rkhs {
 
 namespace {
-
-// The coordinates r(s) = R k(S, s) of Pi_j k(s, .) in an orthonormal basis of H_j, as a basis
-// along the path: the kernel's sections at S mapped by R (KernelBasis::set_map), so a feature
-// kernel evaluates them from its few active features. Allocates nothing per evaluation.
-class ProjectedSections final : public KernelBasis {
- public:
-  ProjectedSections(std::unique_ptr<KernelBasis> sections, const Eigen::MatrixXd& R)
-      : sections_(std::move(sections)), R_(R) {
-    sections_->set_map(R_);
-  }
-  std::size_t size() const noexcept override { return static_cast<std::size_t>(R_.rows()); }
-  void evaluate(double s, double* r) const override { sections_->evaluate_mapped(s, r); }
-  void evaluate_derivative(double s, double* dr) const override {
-    sections_->evaluate_mapped_derivative(s, dr);
-  }
-  // A map T on r is T R on the sections (evaluate and its derivative then use R again).
-  void set_map(const Eigen::MatrixXd& map) override {
-    mapped_ = map * R_;
-    sections_->set_map(mapped_);
-    mapped_is_set_ = true;
-  }
-  void evaluate_mapped(double s, double* out) const override {
-    require_map();
-    sections_->evaluate_mapped(s, out);
-  }
-  void evaluate_mapped_derivative(double s, double* out) const override {
-    require_map();
-    sections_->evaluate_mapped_derivative(s, out);
-  }
-
- private:
-  void require_map() const {
-    if (!mapped_is_set_)
-      throw std::logic_error("ProjectedSections: evaluate_mapped before set_map");
-  }
-  std::unique_ptr<KernelBasis> sections_;
-  Eigen::MatrixXd R_, mapped_;
-  bool mapped_is_set_ = false;
-};
 
 // Features at points as a dense points x F matrix (F = feature_count()).
 Eigen::MatrixXd feature_values(const KernelBasis& features, std::span<const double> points) {
@@ -103,10 +66,30 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
 
   const auto features = kernel.feature_basis();
   const auto F = static_cast<Eigen::Index>(features->size());
-  // Pi_j^* fhat_j in feature coordinates: T a, T = Phi_S^T R^T (F x dim).
-  const Eigen::MatrixXd T = feature_values(*features, op.samples()).transpose() * R.transpose();
   const auto grid = domain.uniform_points(evaluation_points);
-  const Eigen::MatrixXd grid_features = feature_values(*features, grid);  // M x F
+  // The difference fhat - Pi_j^* fhat_j as coefficients c = U beta - V a over functions whose
+  // H-Gram matrix is `metric` and whose values on the grid are the rows of `on_grid`:
+  //   exact features: the features themselves, U = I, V = Phi_S^T R^T, metric I (both in the
+  //     range of the features);
+  //   a reference resolution H_N: the sections at C and at S, U = [L^-T; 0], V = [0; R^T],
+  //     metric the Gram matrix of C and S together.
+  const auto* resolved = dynamic_cast<const ReferenceResolvedKernel*>(&kernel);
+  Eigen::MatrixXd U, V, metric, on_grid;
+  if (resolved) {
+    std::vector<double> points = resolved->centres();
+    const auto N = static_cast<Eigen::Index>(points.size());
+    points.insert(points.end(), op.samples().begin(), op.samples().end());
+    const auto all = static_cast<Eigen::Index>(points.size());
+    U = Eigen::MatrixXd::Zero(all, F);
+    U.topRows(N) = resolved->inverse_factor().transpose();
+    V = Eigen::MatrixXd::Zero(all, dimension);
+    V.bottomRows(all - N) = R.transpose();
+    metric = resolved->kernel().gram(points);
+    on_grid = resolved->kernel().cross(grid, points);
+  } else {
+    V = feature_values(*features, op.samples()).transpose() * R.transpose();  // F x dim
+    on_grid = feature_values(*features, grid);                                // M x F
+  }
 
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
@@ -118,19 +101,22 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
   // The two systems: features with Gamma^-1 I (rkhs_embedding), r(s) with Gamma^-1 I.
   const LearningMap infinite_map = LearningMap::scalar(F, 1.0 / gamma);
   const LearningMap finite_map = LearningMap::scalar(dimension, 1.0 / gamma);
-  ProjectedSections sections(kernel.basis(op.samples()), R);
+  // r(s) = R k(S, s): the coordinates of Pi_j k(s, .) in the orthonormal basis of H_j.
+  MappedBasis sections([&] { return kernel.basis(op.samples()); }, R);
   AdaptiveSystem infinite(A, B, P, *features, infinite_map, road, road_slope, domain,
                           settings.speed, AdaptiveSystem::LearningSignal::from_phi);
   AdaptiveSystem finite(A, B, P, sections, finite_map, road, road_slope, domain, settings.speed,
                         AdaptiveSystem::LearningSignal::from_phi);
+  infinite.set_shuttle(settings.shuttle_from, settings.shuttle_length);
+  finite.set_shuttle(settings.shuttle_from, settings.shuttle_length);
 
   auto kinks = kernel.kink_points();
   for (double kink : target.kink_points()) kinks.push_back(kink);
   std::sort(kinks.begin(), kinks.end());
   const double final_time = settings.final_time_or_laps(domain.length);
   if (!(final_time > 0)) throw std::invalid_argument("the final time must be positive");
-  const auto points =
-      adaptive_breakpoints(settings, domain, 0.0, final_time, kinks, integrator.restarts_at_kinks());
+  const auto points = adaptive_breakpoints(settings, domain, 0.0, final_time, kinks,
+                                           integrator.restarts_at_kinks());
   std::vector<double> times(points.size());
   std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
   out.breakpoints = times.size();
@@ -145,7 +131,7 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
           Eigen::Map<const Eigen::VectorXd>(state, infinite.dimension());
     });
   }
-  Eigen::VectorXd gap(F), gap_on_grid(grid_features.rows());
+  Eigen::VectorXd gap(V.rows()), gap_on_grid(on_grid.rows());
   double largest_state = 0, largest_coefficients = 0;
   Eigen::VectorXd z = Eigen::VectorXd::Zero(finite.dimension());
   integrator.integrate(finite, z, times, [&](std::size_t k, const double* state) {
@@ -153,20 +139,25 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
     const Eigen::Map<const Eigen::VectorXd> x_j(state, d), xhat_j(state + d, d),
         a(state + 2 * d, dimension);
     const auto reference = infinite_states.col(static_cast<Eigen::Index>(k));
-    gap.noalias() = reference.tail(F) - T * a;
-    gap_on_grid.noalias() = grid_features * gap;
-    out.estimate_gap_H = std::max(out.estimate_gap_H, gap.norm());
+    if (resolved)
+      gap.noalias() = U * reference.tail(F);
+    else
+      gap = reference.tail(F);
+    gap.noalias() -= V * a;
+    gap_on_grid.noalias() = on_grid * gap;
+    const double gap_H = resolved ? std::sqrt(std::max(0.0, gap.dot(metric * gap))) : gap.norm();
+    out.estimate_gap_H = std::max(out.estimate_gap_H, gap_H);
     out.estimate_gap_C = std::max(out.estimate_gap_C, gap_on_grid.cwiseAbs().maxCoeff());
     out.state_gap = std::max(out.state_gap, (reference.segment(d, d) - xhat_j).norm());
     out.plant_gap = std::max(out.plant_gap, (reference.head(d) - x_j).norm());
     largest_state = std::max(largest_state, reference.head(d).norm());
     largest_coefficients = std::max(largest_coefficients, reference.tail(F).norm());
   });
-  out.gaps_at_integration_floor =
-      out.estimate_gap_H <= 10 * largest_coefficients * out.plant_gap / std::max(largest_state, 1e-300);
+  out.gaps_at_integration_floor = out.estimate_gap_H <= 10 * largest_coefficients * out.plant_gap /
+                                                            std::max(largest_state, 1e-300);
 
   // ||f - Pi_j^* fhat_j(T)|| in L2 on the grid, and the projection's norms there.
-  const Eigen::VectorXd estimate = grid_features * (T * z.tail(dimension));
+  const Eigen::VectorXd estimate = on_grid * (V * z.tail(dimension));
   Eigen::VectorXd residual(estimate.size());
   for (Eigen::Index m = 0; m < residual.size(); ++m)
     residual(m) = target(grid[static_cast<std::size_t>(m)]) - estimate(m);

@@ -344,7 +344,7 @@ std::string timeseries_csv(const RunRecord& run) {
   std::vector<std::string> header = columns;
   for (const char* extra : {"n", "t", "lap", "state_error", "lyapunov"}) header.push_back(extra);
   std::string out = csv_row(header);
-  const double lap_time = run.study.domain.length / run.study.adaptive.speed;
+  const double lap_time = run.study.adaptive.lap_time(run.study.domain.length);
   for (const auto& trial : run.trials) {
     const auto& result = run.results[trial.index];
     const auto axes = axis_values(columns, trial);

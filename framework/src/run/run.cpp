@@ -14,6 +14,7 @@
 
 #include "rkhs/adaptive/finite_to_infinite.hpp"
 #include "rkhs/adaptive/metrics.hpp"
+#include "rkhs/adaptive/reference_resolution.hpp"
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/centres.hpp"
@@ -96,8 +97,15 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
       if (!study.reference.name.empty())
         reference = integrator_registry().find(study.reference.name)->factory(
             study.reference.parameters);
+      // rkhs_embedding with a kernel without features: H_N at the law's reference resolution
+      // stands in for H (rkhs/adaptive/reference_resolution.hpp).
+      std::unique_ptr<ReferenceResolvedKernel> resolved;
+      if (law->coordinates() == LawCoordinates::features && kernel->feature_count() == 0 &&
+          law->reference_resolution() > 0)
+        resolved = std::make_unique<ReferenceResolvedKernel>(*kernel, law->reference_resolution());
+      const AnyKernel& law_kernel = resolved ? *resolved : *kernel;
       // The study's settings with this trial's lap count (a laps axis).
-      auto measured = measure_adaptive(*kernel, *target, centres, *plant, *law, *integrator,
+      auto measured = measure_adaptive(law_kernel, *target, centres, *plant, *law, *integrator,
                                        trial_adaptive_settings(study, trial),
                                        study.evaluation_points, study.solver, reference.get(),
                                        lap_maps, lap_maps ? lap_map_key(trial) : std::string());
@@ -108,11 +116,14 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
         const auto op =
             build_projection(trial.projection.name, trial.projection.parameters, request);
         check_cancelled();
-        const auto gaps = measure_estimate_gaps(*kernel, *target, op, *plant, *law, *integrator,
+        const auto gaps = measure_estimate_gaps(law_kernel, *target, op, *plant, *law, *integrator,
                                                 trial_adaptive_settings(study, trial),
                                                 study.evaluation_points);
         record_estimate_gaps(gaps, measured);
       }
+      if (resolved)
+        measured.metrics[AdaptiveMetric::reference_norm_H_to_C] =
+            resolved->norm_H_to_C(study.domain.uniform_points(study.evaluation_points));
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
       result.engine = std::move(measured.engine);

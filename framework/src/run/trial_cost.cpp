@@ -88,8 +88,8 @@ AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const Tria
     shape.lap_map = false;  // the trial fails at once
   }
   shape.laps = settings.limit() ? 0.0
-                                : settings.final_time_or_laps(study.domain.length) *
-                                      settings.speed / study.domain.length;
+                                : settings.final_time_or_laps(study.domain.length) /
+                                      settings.lap_time(study.domain.length);
   return shape;
 }
 

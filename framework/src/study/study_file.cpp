@@ -492,8 +492,33 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
     report.fail({}, "adaptive", "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
   check_keys(report, *table, "adaptive.",
              {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
-              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol", "reference"});
+              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol", "reference", "path"});
   settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
+
+  // path = { from = a, to = b }: a shuttle back and forth between a and b (a lap is one round
+  // trip); absent: laps around the track.
+  if (const auto* path = table->get("path")) {
+    const auto* range = path->as_table();
+    if (!range)
+      report.fail(path->source(), "adaptive.path",
+                  fmt::format("expected {{ from = ..., to = ... }} (a shuttle between two points "
+                              "of the track), found {}",
+                              show(*path)));
+    check_keys(report, *range, "adaptive.path.", {"from", "to"});
+    for (const char* key : {"from", "to"})
+      if (!range->contains(key))
+        report.fail(path->source(), fmt::format("adaptive.path.{}", key),
+                    "missing: a shuttle path needs both ends, { from = ..., to = ... }");
+    const double from = get_number(report, *range, "from", "adaptive.path.", 0, -1e-300);
+    const double to = get_number(report, *range, "to", "adaptive.path.", 0, 0);
+    if (!(to > from) || to > track_length * (1 + 1e-12))
+      report.fail(range->get("to")->source(), "adaptive.path.to",
+                  fmt::format("found {}, expected a point after from = {} and at most the track's "
+                              "length {}",
+                              format_real(to), format_real(from), format_real(track_length)));
+    settings.shuttle_from = from;
+    settings.shuttle_length = std::min(to, track_length) - from;
+  }
 
   const std::vector<std::string> engines{"automatic", "lap_map", "time_stepping"};
   const auto engine = get_string(report, *table, "engine", "adaptive.", std::string("automatic"));
@@ -588,7 +613,7 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   std::optional<double> last_lap;
   std::string last_lap_text;
   if (settings.final_time > 0) {
-    last_lap = settings.final_time * settings.speed / track_length;
+    last_lap = settings.final_time / settings.lap_time(track_length);
     last_lap_text = fmt::format("final_time = {} s, {} laps", format_real(settings.final_time),
                                 format_real(*last_lap));
   } else {

@@ -213,7 +213,30 @@ class Verifier {
       case ExpectationKind::model: judge_model_expectation(e, series, o); break;
       case ExpectationKind::bound: judge_bound(e, series, o); break;
     }
+    note_missing_excitation(series, o);
     return o;
+  }
+
+  // Theorem 3.3 needs persistence of excitation: a verdict on a series whose trials the path
+  // does not excite (flag not_persistently_excited) says so, and that fhat need not converge.
+  void note_missing_excitation(const MetricSeries& series, ExpectationOutcome& o) const {
+    std::size_t unexcited = 0;
+    double directions = 0;
+    for (auto t : series.trials) {
+      const auto& flags = results_[t].flags;
+      if (std::find(flags.begin(), flags.end(), "not_persistently_excited") == flags.end())
+        continue;
+      ++unexcited;
+      // The flag is an adaptive trial's, whose table has unexcited_dimension.
+      directions =
+          std::max(directions, results_[t].metrics[study_.metric_index("unexcited_dimension")]);
+    }
+    if (unexcited == 0) return;
+    o.reason += fmt::format(
+        "; persistence of excitation fails in {} of {} trials (the path leaves up to {} "
+        "directions of the law's space unexcited, pe_level = 0): Theorem 3.3 does not apply, and "
+        "fhat need not converge to f where the path does not go",
+        unexcited, series.trials.size(), format_real(directions));
   }
 
   std::string axis_name() const { return study_.abscissa == Abscissa::n ? "ln n" : "ln h"; }

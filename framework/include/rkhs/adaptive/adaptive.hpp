@@ -64,7 +64,23 @@ class AdaptiveSystem {
 
   Eigen::Index dimension() const noexcept { return 2 * d_ + n_; }
   Eigen::Index plant_dimension() const noexcept { return d_; }
-  double arc_length(double t) const noexcept { return domain_.wrap(speed_ * t); }
+  /// Makes the path a shuttle between `from` and `from + length` (AdaptiveSettings::shuttle_from)
+  /// instead of laps around the track; length 0 restores the laps.
+  void set_shuttle(double from, double length) noexcept {
+    shuttle_from_ = from;
+    shuttle_length_ = length;
+  }
+  /// s(t) on the path.
+  double arc_length(double t) const noexcept {
+    if (shuttle_length_ <= 0) return domain_.wrap(speed_ * t);
+    const double u = std::fmod(speed_ * t, 2 * shuttle_length_);
+    return shuttle_from_ + (u < shuttle_length_ ? u : 2 * shuttle_length_ - u);
+  }
+  /// s'(t): v, or -v on a shuttle's way back (the right-hand value at a turning point).
+  double path_velocity(double t) const noexcept {
+    if (shuttle_length_ <= 0) return speed_;
+    return std::fmod(speed_ * t, 2 * shuttle_length_) < shuttle_length_ ? speed_ : -speed_;
+  }
 
   /// dz = F(z, t). Pointers to dimension() doubles.
   void rhs(const double* z, double* dz, double t) const;
@@ -100,6 +116,7 @@ class AdaptiveSystem {
   const std::function<double(double)>& road_slope_;
   Domain domain_;
   double speed_;
+  double shuttle_from_ = 0, shuttle_length_ = 0;
   Eigen::Index d_, n_;
   LearningSignal signal_;
   LearningMap map_;  // from_phi: M
@@ -175,9 +192,23 @@ struct AdaptiveSettings {
   /// velocities (computed from forces of 1e5 that cancel): Newton iterations then stall.
   double lap_map_rtol = 1e-10;
   double lap_map_atol = 1e-10;
+  /// The path s(t): every lap around the track (shuttle_length = 0, s = v t mod L), or a shuttle
+  /// back and forth between shuttle_from and shuttle_from + shuttle_length (`[adaptive] path`):
+  /// s = from + u for u = v t mod 2l below l, from + 2l - u above, so that a "lap" is one round
+  /// trip of length 2l. A shuttle over part of the track leaves the rest unexcited.
+  double shuttle_from = 0;
+  double shuttle_length = 0;
   bool limit() const noexcept { return std::isinf(laps); }
+  bool shuttle() const noexcept { return shuttle_length > 0; }
+  /// The distance travelled in one lap: L, or 2l for a shuttle.
+  double lap_length(double track_length) const noexcept {
+    return shuttle() ? 2 * shuttle_length : track_length;
+  }
+  double lap_time(double track_length) const noexcept {
+    return lap_length(track_length) / speed;
+  }
   double final_time_or_laps(double length) const {
-    return final_time > 0 ? final_time : laps * length / speed;
+    return final_time > 0 ? final_time : laps * lap_time(length);
   }
 };
 

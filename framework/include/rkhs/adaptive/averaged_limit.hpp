@@ -71,6 +71,11 @@ struct AveragedLimitQuadrature {
   double tolerance = 1e-14;          ///< accepted relative change under panel doubling
   std::size_t min_refinements = 1;   ///< at least this many doublings (>= 1: one comparison)
   std::size_t max_nodes = std::size_t{1} << 21;  ///< no rule with more nodes is tried
+  /// The part of the domain the path covers, [range_from, range_from + range_length] (a
+  /// shuttle: AdaptiveSettings::shuttle_from), over which the averages are taken (1/l int_a^b);
+  /// range_length = 0 for the whole domain.
+  double range_from = 0;
+  double range_length = 0;
 };
 
 /// The averaged limit at fixed centres and road.

@@ -19,12 +19,18 @@ struct Breakpoint {
   std::size_t snapshot_index = 0;  ///< into settings.snapshot_laps, when snapshot_role is set
 };
 
-/// From t = start to t = end: sample times (samples_per_lap per lap, evenly spaced, start and
-/// end included), snapshot times (when `snapshots`) and, when `restart_at_kinks`, the times at
-/// which s(t) = v t mod L crosses one of `kinks`, merged in increasing order; times closer than
-/// 1e-12 end are one breakpoint.
-std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings,
-                                             const Domain& domain, double start, double end,
+/// The times in [0, lap_time) at which phi(s(t)) or f(s(t)) has a kink on the path of
+/// `settings` (the spatial `kinks` crossed, in [0, L)), and for a shuttle its turning point,
+/// where s'(t) jumps; sorted, each once.
+std::vector<double> path_kink_times(const AdaptiveSettings& settings, const Domain& domain,
+                                    const std::vector<double>& kinks);
+
+/// From t = start to t = end (laps of settings.lap_time): sample times (samples_per_lap per lap,
+/// evenly spaced, start and end included), snapshot times (when `snapshots`) and, when
+/// `restart_at_kinks`, the times at which s(t) = v t mod L crosses one of `kinks`, merged in
+/// increasing order; times closer than 1e-12 end are one breakpoint.
+std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings, const Domain& domain,
+                                             double start, double end,
                                              const std::vector<double>& kinks,
                                              bool restart_at_kinks, bool snapshots = true);
 

@@ -42,6 +42,10 @@ struct ExcitationLevel {
   /// The dimension of the space measured (n for H_n; for feature coordinates the rank of E
   /// found, dim H).
   Eigen::Index dimension = 0;
+  /// Directions of the space the path leaves unexcited to working precision: eigenvalues not
+  /// above their own round-off estimate (excitation_level), or the rank E lacks (on_range, given
+  /// the rank over the whole track). 0 on a closed lap around the track.
+  Eigen::Index unexcited = 0;
 };
 
 /// pe_level on H_n: lambda_min of E a = lambda G a (`excitation` E and `gram` G, n x n, with

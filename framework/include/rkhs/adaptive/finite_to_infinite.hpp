@@ -48,21 +48,22 @@ struct EstimateGaps {
   /// The gaps are within 10x the integration's own discrepancy: estimate_gap_H / sup_t |beta|
   /// <= 10 plant_gap / sup_t |x| (the two plant copies drift apart by the integration error).
   bool gaps_at_integration_floor = false;
-  std::size_t dimension = 0;            ///< dim H_j
-  std::size_t breakpoints = 0;          ///< times at which the gaps were taken
+  std::size_t dimension = 0;    ///< dim H_j
+  std::size_t breakpoints = 0;  ///< times at which the gaps were taken
 };
 
 /// Runs both estimators of the file comment for `op` (built for `kernel`) from z = 0 and
 /// measures their gaps. `kernel` must have a finite feature map (H is then finite-dimensional
-/// and the infinite estimator exact); the road is `target` (f); the time stepping is that of
-/// `settings` (its laps or final time, samples_per_lap and snapshot laps; laps = "limit" is
-/// refused). Throws std::invalid_argument for a kernel without features, a singular basis Gram
-/// G_B, or the limit; std::runtime_error when an integration fails.
+/// and the infinite estimator exact), or be a ReferenceResolvedKernel (H_N standing in for H:
+/// the H gap is then taken over the sections at its centres and at S, with their Gram matrix); the
+/// road is `target` (f); the time stepping is that of `settings` (its laps or final time,
+/// samples_per_lap and snapshot laps; laps = "limit" is refused). Throws std::invalid_argument for
+/// a kernel without features, a singular basis Gram G_B, or the limit; std::runtime_error when an
+/// integration fails.
 EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction& target,
                                    const ProjectionOperator& op, const class Plant& plant,
                                    const class LearningLaw& law, const Integrator& integrator,
-                                   const AdaptiveSettings& settings,
-                                   std::size_t evaluation_points);
+                                   const AdaptiveSettings& settings, std::size_t evaluation_points);
 
 /// Writes the gaps into the trial's metrics (the Theorem 4.1 rows of the adaptive table, with
 /// gap_effectivity_* = gap / projection_norm_H_to_C) and its flags: projection_norm_at_floor,

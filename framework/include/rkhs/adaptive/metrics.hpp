@@ -49,12 +49,16 @@ enum class AdaptiveMetric : std::size_t {
   plant_gap,
   gap_effectivity_H,
   gap_effectivity_C,
+  unexcited_dimension,
+  path_l2_error,
+  off_path_l2_error,
+  reference_norm_H_to_C,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 38> rows{{
+  static constexpr std::array<MetricRow<M>, 42> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -152,6 +156,21 @@ struct MetricTable<AdaptiveMetric> {
       {M::gap_effectivity_C, "gap_effectivity_C", "[f] / sqrt([k])",
        "estimate_gap_C / projection_norm_H_to_C; NaN without [[projection]]", true,
        "projection_norm_at_floor"},
+      // Persistence of excitation along the path ([adaptive] path; docs/theorems.md).
+      {M::unexcited_dimension, "unexcited_dimension", "count",
+       "directions of the law's space the path leaves unexcited to working precision (0 on laps "
+       "around the track; flag not_persistently_excited when > 0); NaN when G is singular",
+       true, ""},
+      {M::path_l2_error, "path_l2_error", "[f] sqrt(m)",
+       "||f - fhat(T)|| in L2 over the part of the track the path covers; NaN on laps around it",
+       true, ""},
+      {M::off_path_l2_error, "off_path_l2_error", "[f] sqrt(m)",
+       "||f - fhat(T)|| in L2 over the rest of the track; NaN on laps around it", true, ""},
+      {M::reference_norm_H_to_C, "reference_norm_H_to_C", "sqrt([k])",
+       "rkhs_embedding with a reference resolution H_N standing in for H: ||I - Pi_N||_{H -> C} "
+       "on the grid, the rate of its own distance from the estimator in H (Theorem 4.1); NaN "
+       "otherwise",
+       true, ""},
   }};
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

@@ -52,6 +52,10 @@ class LearningLaw {
   /// Throws std::invalid_argument, naming the kernel, when the law cannot run with `kernel`
   /// (rkhs_embedding: a kernel without a finite feature map). Called before a trial runs.
   virtual void require_kernel(const AnyKernel& kernel) const { (void)kernel; }
+  /// For feature coordinates with a kernel that has no finite feature map: the N of the
+  /// reference resolution H_N that stands in for H (rkhs/adaptive/reference_resolution.hpp);
+  /// 0 for none.
+  virtual std::size_t reference_resolution() const noexcept { return 0; }
 };
 
 using LawRegistry = Registry<LearningLaw>;

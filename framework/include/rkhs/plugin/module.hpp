@@ -68,7 +68,8 @@
 // 5: nothing owned crosses the boundary (*_into, sinks, Integrator state by Eigen::Ref), and the
 //    build configuration entry point
 // 6: AnyKernel::feature_basis, LearningLaw::coordinates and LearningLaw::require_kernel
-#define RKHS_PLUGIN_ABI_VERSION 6
+// 7: LearningLaw::reference_resolution
+#define RKHS_PLUGIN_ABI_VERSION 7
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 
