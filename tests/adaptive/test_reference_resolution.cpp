@@ -14,13 +14,14 @@
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/study/study.hpp"
+#include "paper_track_support.hpp"
 #include "study_support.hpp"
 
 using namespace rkhs;
 
 namespace {
 
-const Domain track{test::track_length, true};
+const Domain& track = test::paper_track;
 
 Eigen::VectorXd features_at(const KernelBasis& basis, double s) {
   Eigen::VectorXd out(static_cast<Eigen::Index>(basis.size()));

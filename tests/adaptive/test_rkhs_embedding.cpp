@@ -14,6 +14,7 @@
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/gram_solver.hpp"
+#include "paper_track_support.hpp"
 #include "study_support.hpp"
 
 using namespace rkhs;
@@ -21,25 +22,10 @@ using test::Given;
 
 namespace {
 
-const Domain track{test::track_length, true};  // the paper's track, radius 4 m
-
-// The finest knots of a periodic B-spline kernel, s = k L / (n0 2^J), shifted by `offset` cells.
-std::vector<double> finest_points(std::int64_t n0, std::int64_t levels, double offset = 0.0) {
-  const std::int64_t cells = n0 << levels;
-  std::vector<double> out(static_cast<std::size_t>(cells));
-  for (std::int64_t k = 0; k < cells; ++k)
-    out[static_cast<std::size_t>(k)] =
-        track.length * (static_cast<double>(k) + offset) / static_cast<double>(cells);
-  return out;
-}
-
-double road(double s) {
-  return 2.0 * std::sin(2 * std::numbers::pi * s / track.length);
-}
-double road_slope(double s) {
-  const double w = 2 * std::numbers::pi / track.length;
-  return 2.0 * w * std::cos(w * s);
-}
+const Domain& track = test::paper_track;  // the paper's track, radius 4 m
+using test::finest_points;
+constexpr auto road = test::sine_road;
+constexpr auto road_slope = test::sine_road_slope;
 
 // fhat = sum_j c_j basis_j at `points`.
 Eigen::VectorXd values_at(const KernelBasis& basis, const Eigen::VectorXd& c,

@@ -258,6 +258,17 @@ ConvergedMoments converged_moments(KernelBasis& basis, Eigen::Index n,
   return out;
 }
 
+// The accepted moments and their quadrature's record into `out`.
+void record_moments(ConvergedMoments&& moments, AveragedLimit& out) {
+  out.averaged_gram = std::move(moments.moments.gram);
+  out.averaged_load = std::move(moments.moments.load);
+  out.quadrature_nodes = moments.moments.nodes;
+  out.panels = moments.moments.panels;
+  out.refinements = moments.refinements;
+  out.quadrature_change = moments.change;
+  out.quadrature_converged = moments.converged;
+}
+
 }  // namespace
 
 AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> centres,
@@ -268,21 +279,16 @@ AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> ce
   const Pieces pieces = quadrature_pieces(kernel, centres, road_kinks, quadrature);
   const auto n = static_cast<Eigen::Index>(centres.size());
   const auto basis = kernel.basis(centres);
-  auto [current, refinement, change, converged] = converged_moments(
+  ConvergedMoments moments = converged_moments(
       *basis, n, road, pieces, range_length(kernel, quadrature), quadrature, /*sparse=*/false);
+  const Moments& current = moments.moments;
 
   AveragedLimit out;
   const GramSolver gram_solver(current.gram, solver);
   out.coefficients = gram_solver.solve(current.load);
   out.solve_method = gram_solver.method();
   out.spectrum = gram_solver.spectrum();
-  out.averaged_gram = std::move(current.gram);
-  out.averaged_load = std::move(current.load);
-  out.quadrature_nodes = current.nodes;
-  out.panels = current.panels;
-  out.refinements = refinement;
-  out.quadrature_change = change;
-  out.quadrature_converged = converged;
+  record_moments(std::move(moments), out);
   return out;
 }
 
@@ -298,8 +304,9 @@ AveragedLimit averaged_limit_in_features(const AnyKernel& kernel,
         kernel.name()));
   const Pieces pieces = quadrature_pieces(kernel, {}, road_kinks, quadrature);
   const auto count = static_cast<Eigen::Index>(basis->size());
-  auto [current, refinement, change, converged] = converged_moments(
+  ConvergedMoments moments = converged_moments(
       *basis, count, road, pieces, range_length(kernel, quadrature), quadrature, /*sparse=*/true);
+  const Moments& current = moments.moments;
 
   // E is singular by design (the features are redundant): beta = E^+ bbar over the eigenvalues
   // above F eps lambda_max, the minimum-norm solution, in the range of E.
@@ -326,13 +333,7 @@ AveragedLimit averaged_limit_in_features(const AnyKernel& kernel,
   out.spectrum.condition_number = out.spectrum.singular ? std::numeric_limits<double>::infinity()
                                                         : values(count - 1) / values(0);
   out.averaged_gram_eigenvalues = values;
-  out.averaged_gram = std::move(current.gram);
-  out.averaged_load = std::move(current.load);
-  out.quadrature_nodes = current.nodes;
-  out.panels = current.panels;
-  out.refinements = refinement;
-  out.quadrature_change = change;
-  out.quadrature_converged = converged;
+  record_moments(std::move(moments), out);
   return out;
 }
 

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include "rkhs/adaptive/breakpoints.hpp"
@@ -164,11 +163,8 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
   out.projected_l2_error = domain.l2_norm(
       std::span<const double>(residual.data(), static_cast<std::size_t>(residual.size())));
   out.projection_norm_H_to_C = projection_residual_norms(kernel, op, grid).maxCoeff();
-  // As for approximation trials: the squared norm is a difference of terms of size k(s, s).
   out.projection_norm_at_floor =
-      out.projection_norm_H_to_C <=
-      std::sqrt(static_cast<double>(op.samples().size()) * std::numeric_limits<double>::epsilon() *
-                kernel.diagonal(grid).maxCoeff());
+      out.projection_norm_H_to_C <= projection_norm_floor(kernel, op, grid);
   out.projection_operator_norm = projection_operator_norm(kernel, op);
   return out;
 }

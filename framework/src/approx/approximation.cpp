@@ -149,11 +149,8 @@ void measure_projection_norms(const AnyKernel& kernel, const ProjectionOperator&
   const double norm = residual.maxCoeff();
   out.metrics[M::projection_norm_H_to_C] = norm;
   out.metrics[M::projection_operator_norm] = projection_operator_norm(kernel, op);
-  // The squared norm is a difference of terms of size k(s, s); below |S| eps max k(s, s) it is
-  // round-off.
-  const double floor = std::sqrt(static_cast<double>(op.samples().size()) * eps *
-                                 kernel.diagonal(points).maxCoeff());
-  if (norm <= floor) out.flags.push_back("projection_norm_at_floor");
+  if (norm <= projection_norm_floor(kernel, op, points))
+    out.flags.push_back("projection_norm_at_floor");
 }
 
 ApproximationMeasurement measure_projection(const AnyKernel& kernel, const TargetFunction& target,

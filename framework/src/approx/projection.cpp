@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "rkhs/core/parameters.hpp"
@@ -120,6 +121,12 @@ Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const Project
     out[m] = std::sqrt(std::max(0.0, squared));
   }
   return out;
+}
+
+double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& op,
+                             std::span<const double> points) {
+  return std::sqrt(static_cast<double>(op.samples().size()) *
+                   std::numeric_limits<double>::epsilon() * kernel.diagonal(points).maxCoeff());
 }
 
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op) {

@@ -165,6 +165,11 @@ Eigen::MatrixXd projection_basis_gram(const AnyKernel& kernel, const ProjectionO
 /// H-orthogonal projection onto span{k(c_i, .)} it is the power function.
 Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const ProjectionOperator& op,
                                           std::span<const double> points);
+/// The round-off level of projection_residual_norms on `points`: the squared norm is a
+/// difference of terms of size k(s, s), so below sqrt(|S| eps max_m k(s_m, s_m)) it is round-off
+/// (the flag projection_norm_at_floor).
+double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& op,
+                             std::span<const double> points);
 /// ||Pi||_{H -> H} = sqrt(lambda_max(R^T W K_SS W^T R)) with G_B = R R^T: the largest
 /// ||Pi f||_H over ||f||_H = 1 (f ranges over H, seen by Pi through f(S)).
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op);
