@@ -4,13 +4,32 @@
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
+
+#include "rkhs/plugin/build_configuration.hpp"
 
 namespace rkhs::test {
+
+/// How many times longer than in a plain build a test waits for a command to reach a point (a
+/// trial stored, a rank started): a sanitizer build runs every program several times slower
+/// (docs/sanitizers.md), so a wait that is generous in a release build is not one there.
+inline constexpr int patience = RKHS_DETAIL_SANITIZER == rkhs::SanitizerKind::none ? 1 : 10;
+
+/// Polls `reached` every 50 ms for up to `seconds` x `patience`; true once it held.
+template <class Predicate>
+bool wait_until(Predicate reached, int seconds) {
+  for (int i = 0; i < 20 * seconds * patience; ++i) {
+    if (reached()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return reached();
+}
 
 struct CommandOutcome {
   int exit_code;       ///< -1 when the command did not exit normally

@@ -201,18 +201,21 @@ int run_and_kill_rank_1(const std::string& mpirun_options, const std::string& ru
   }
   // Rank 1 is the launcher's child whose environment says so.
   pid_t rank1 = 0;
-  for (int i = 0; i < 600 && !rank1; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    REQUIRE(waitpid(launcher, nullptr, WNOHANG) == 0);
-    if (!fs::exists(store) || rkhs::ResultStore(store).size() < 2) continue;
-    for (const auto& entry : fs::directory_iterator("/proc")) {
-      const auto status = read_text(entry.path() / "status");
-      if (status.find("\nPPid:\t" + std::to_string(launcher) + "\n") == std::string::npos) continue;
-      const auto variables = read_text(entry.path() / "environ");
-      if (variables.find(std::string("OMPI_COMM_WORLD_RANK=1") + '\0') != std::string::npos)
-        rank1 = static_cast<pid_t>(std::stol(entry.path().filename().string()));
-    }
-  }
+  rkhs::test::wait_until(
+      [&] {
+        REQUIRE(waitpid(launcher, nullptr, WNOHANG) == 0);
+        if (!fs::exists(store) || rkhs::ResultStore(store).size() < 2) return false;
+        for (const auto& entry : fs::directory_iterator("/proc")) {
+          const auto status = read_text(entry.path() / "status");
+          if (status.find("\nPPid:\t" + std::to_string(launcher) + "\n") == std::string::npos)
+            continue;
+          const auto variables = read_text(entry.path() / "environ");
+          if (variables.find(std::string("OMPI_COMM_WORLD_RANK=1") + '\0') != std::string::npos)
+            rank1 = static_cast<pid_t>(std::stol(entry.path().filename().string()));
+        }
+        return rank1 > 0;
+      },
+      30);
   REQUIRE(rank1 > 0);
   kill(rank1, SIGKILL);
   int status = 0;
@@ -302,11 +305,12 @@ TEST_CASE("Ctrl-C to mpirun: finished trials are stored, rank 0 says how to resu
         static_cast<char*>(nullptr));
     _exit(127);
   }
-  for (int i = 0; i < 600; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    REQUIRE(waitpid(launcher, nullptr, WNOHANG) == 0);
-    if (fs::exists(store) && rkhs::ResultStore(store).size() >= 1) break;
-  }
+  REQUIRE(rkhs::test::wait_until(
+      [&] {
+        REQUIRE(waitpid(launcher, nullptr, WNOHANG) == 0);
+        return fs::exists(store) && rkhs::ResultStore(store).size() >= 1;
+      },
+      30));
   kill(launcher, SIGINT);
   int status = 0;
   waitpid(launcher, &status, 0);

@@ -312,10 +312,12 @@ nu = 2.5
     _exit(127);
   }
   // Until both trials are running (the progress line says so), then 2 s more inside them.
-  for (int i = 0; i < 600 && read_text(log).find("running 2: ") == std::string::npos; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
-  }
+  REQUIRE(rkhs::test::wait_until(
+      [&] {
+        REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
+        return read_text(log).find("running 2: ") != std::string::npos;
+      },
+      30));
   std::this_thread::sleep_for(std::chrono::seconds(2));
   const auto signalled = std::chrono::steady_clock::now();
   kill(pid, SIGTERM);

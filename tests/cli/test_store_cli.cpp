@@ -44,12 +44,15 @@ pid_t start(const std::vector<std::string>& args, const fs::path& log = "/dev/nu
 
 // Waits until the store holds at least `count` trials (or the process ended).
 void wait_for_stored(const fs::path& store, std::size_t count, pid_t pid) {
-  for (int i = 0; i < 600; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (waitpid(pid, nullptr, WNOHANG) == pid) FAIL("the run ended before it could be interrupted");
-    if (fs::exists(store) && rkhs::ResultStore(store).size() >= count) return;
-  }
-  FAIL("no trial was stored within 30 s");
+  bool ended = false;
+  const bool stored = rkhs::test::wait_until(
+      [&] {
+        ended = ended || waitpid(pid, nullptr, WNOHANG) == pid;
+        return ended || (fs::exists(store) && rkhs::ResultStore(store).size() >= count);
+      },
+      30);
+  if (ended) FAIL("the run ended before it could be interrupted");
+  if (!stored) FAIL("no trial was stored within " << 30 * rkhs::test::patience << " s");
 }
 
 }  // namespace
@@ -178,12 +181,18 @@ namespace {
 
 // Waits until `log` contains `text` (fails if the process ends or `seconds` pass first).
 void wait_for_text(const fs::path& log, const std::string& text, pid_t pid, int seconds) {
-  for (int i = 0; i < seconds * 20; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (read_text(log).find(text) != std::string::npos) return;
-    if (waitpid(pid, nullptr, WNOHANG) == pid) FAIL("the run ended first:\n" << read_text(log));
-  }
-  FAIL("'" << text << "' did not appear within " << seconds << " s:\n" << read_text(log));
+  bool ended = false;
+  const bool appeared = rkhs::test::wait_until(
+      [&] {
+        ended = ended || waitpid(pid, nullptr, WNOHANG) == pid;
+        return ended || read_text(log).find(text) != std::string::npos;
+      },
+      seconds);
+  if (read_text(log).find(text) != std::string::npos) return;
+  if (ended) FAIL("the run ended first:\n" << read_text(log));
+  if (!appeared)
+    FAIL("'" << text << "' did not appear within " << seconds * rkhs::test::patience << " s:\n"
+             << read_text(log));
 }
 
 }  // namespace
@@ -240,12 +249,14 @@ TEST_CASE("an interrupted --no-store run says that nothing was stored, and where
   const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
                            "--no-store", "--out", (dir / "out").string()},
                           log);
-  for (int i = 0; i < 600; ++i) {  // until the journal holds a finished trial (header + 1 line)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    const auto text = read_text(journal);
-    if (std::count(text.begin(), text.end(), '\n') >= 2) break;
-    REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
-  }
+  // Until the journal holds a finished trial (header + 1 line).
+  REQUIRE(rkhs::test::wait_until(
+      [&] {
+        REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
+        const auto text = read_text(journal);
+        return std::count(text.begin(), text.end(), '\n') >= 2;
+      },
+      30));
   kill(pid, SIGINT);
   int status = 0;
   waitpid(pid, &status, 0);

@@ -13,8 +13,12 @@ changed; rows must match in number and order. Verdicts must match line for line,
 first line's wall time.
 
 Usage:
-  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR            compare (ctest)
-  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --record   write the golden files
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR                 compare every study
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --study NAME    compare studies/NAME.toml
+                                                                          (ctest: golden.NAME)
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --stale         only: no golden files
+                                                                          for a study not shipped
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --record        write the golden files
 
 Record only when a change of behaviour is intended, and say why in the commit.
 Standard library only.
@@ -121,15 +125,24 @@ def compare_csv(golden_path, actual_path):
 
 
 def main(argv):
-    if len(argv) not in (4, 5) or (len(argv) == 5 and argv[4] != "--record"):
+    options = argv[4:]
+    if len(argv) < 4 or options not in ([], ["--record"], ["--stale"]) and not (
+            len(options) == 2 and options[0] == "--study"):
         raise SystemExit(__doc__)
     exe = str(pathlib.Path(argv[1]).resolve())
     source, work = pathlib.Path(argv[2]).resolve(), pathlib.Path(argv[3]).resolve()
-    record = len(argv) == 5
+    record = options == ["--record"]
     golden_root = source / "tests" / "golden" / "studies"
-    studies = sorted((source / "studies").glob("*.toml"))
-    if not studies:
+    shipped = sorted((source / "studies").glob("*.toml"))
+    if not shipped:
         raise SystemExit(f"no studies in {source / 'studies'}")
+    studies = shipped
+    if options[:1] == ["--study"]:
+        studies = [s for s in shipped if s.stem == options[1]]
+        if not studies:
+            raise SystemExit(f"no study {options[1]!r} in {source / 'studies'}")
+    elif options == ["--stale"]:
+        studies = []
     failures = []
     for study in studies:
         out, verdicts = run_study(exe, source, work, study)
@@ -158,8 +171,9 @@ def main(argv):
         status = "ok" if not problems else "DIFFERS"
         print(f"{study.stem}: {status}")
         failures += [f"{study.stem}: {p}" for p in problems]
-    for stale in sorted(p.name for p in golden_root.iterdir() if p.is_dir()) if not record else []:
-        if stale not in {s.stem for s in studies}:
+    check_stale = not record and options[:1] != ["--study"]
+    for stale in sorted(p.name for p in golden_root.iterdir() if p.is_dir()) if check_stale else []:
+        if stale not in {s.stem for s in shipped}:
             failures.append(f"{stale}: golden files for a study that is no longer shipped")
     if failures:
         print("\n".join(failures), file=sys.stderr)

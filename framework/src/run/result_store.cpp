@@ -7,12 +7,14 @@
 #include <sqlite3.h>
 
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/sha256.hpp"
@@ -289,6 +291,37 @@ RecordCheck read_record(const std::string& hash, std::string_view text,
   return check;
 }
 
+namespace {
+
+// SQLite returns SQLITE_BUSY without calling the busy handler in two cases a study meets: while
+// the last connection to close cleans up the WAL and shared-memory files, and while the first
+// connection after a crashed one (a SIGKILLed rank) recovers the WAL (sqlite.org/wal.html,
+// "Sometimes queries return SQLITE_BUSY in WAL mode"). Both end within milliseconds, so a
+// statement that meets SQLITE_BUSY is tried again for up to the busy timeout before it fails.
+constexpr int busy_timeout_ms = 10000;
+
+template <class Attempt>
+int retry_while_busy(Attempt attempt) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
+  int status = attempt();
+  while ((status & 0xff) == SQLITE_BUSY && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    status = attempt();
+  }
+  return status;
+}
+
+// sqlite3_step, tried again (after a reset) while the database is busy.
+int step(sqlite3_stmt* statement) {
+  return retry_while_busy([&] {
+    const int status = sqlite3_step(statement);
+    if ((status & 0xff) == SQLITE_BUSY) sqlite3_reset(statement);
+    return status;
+  });
+}
+
+}  // namespace
+
 ResultStore::ResultStore(const std::filesystem::path& file) : file_(file) {
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
   if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
@@ -298,7 +331,7 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file) {
     db_ = nullptr;
     throw std::runtime_error(fmt::format("{}: cannot open the result store: {}", file.string(), why));
   }
-  sqlite3_busy_timeout(db_, 10000);
+  sqlite3_busy_timeout(db_, busy_timeout_ms);
   try {
     exec("PRAGMA journal_mode=WAL");
     exec("PRAGMA synchronous=NORMAL");
@@ -313,9 +346,15 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file) {
 
 ResultStore::~ResultStore() { sqlite3_close(db_); }
 
+
 void ResultStore::exec(const char* sql) const {
   char* message = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+  const int status = retry_while_busy([&] {
+    sqlite3_free(message);
+    message = nullptr;
+    return sqlite3_exec(db_, sql, nullptr, nullptr, &message);
+  });
+  if (status != SQLITE_OK) {
     const std::string why = message ? message : "unknown error";
     sqlite3_free(message);
     throw std::runtime_error(fmt::format("{}: result store: {}", file_.string(), why));
@@ -342,7 +381,7 @@ RecordCheck ResultStore::lookup(const std::string& hash,
                                 const std::vector<std::string>* metric_names) const {
   Statement statement(db_, "SELECT result FROM trials WHERE hash = ?1", file_);
   sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
-  const int status = sqlite3_step(statement.handle);
+  const int status = step(statement.handle);
   if (status == SQLITE_DONE) return {};
   if (status != SQLITE_ROW) fail("cannot read the trial " + hash);
   const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, 0));
@@ -364,7 +403,7 @@ void ResultStore::put(const std::string& hash, const std::string& study, const s
   sqlite3_bind_text(statement.handle, 2, study.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 3, key.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 4, record.c_str(), -1, SQLITE_TRANSIENT);
-  if (sqlite3_step(statement.handle) != SQLITE_DONE) fail("cannot store the trial " + key);
+  if (step(statement.handle) != SQLITE_DONE) fail("cannot store the trial " + key);
 }
 
 void ResultStore::for_each(const std::function<void(const Entry&)>& visit) const {
@@ -374,8 +413,10 @@ void ResultStore::for_each(const std::function<void(const Entry&)>& visit) const
     const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, i));
     return std::string(text ? text : "");
   };
-  while (true) {
-    const int status = sqlite3_step(statement.handle);
+  // Only the first step may meet a busy database (and start again): the later ones read within
+  // the read transaction it opened.
+  for (bool first = true;; first = false) {
+    const int status = first ? step(statement.handle) : sqlite3_step(statement.handle);
     if (status == SQLITE_DONE) return;
     if (status != SQLITE_ROW) fail("cannot read the stored trials");
     Entry entry{column(0), column(1), column(2), column(4), {}};
@@ -392,7 +433,7 @@ std::size_t ResultStore::remove(const std::vector<std::string>& hashes) {
     for (const auto& hash : hashes) {
       sqlite3_reset(statement.handle);
       sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
-      if (sqlite3_step(statement.handle) != SQLITE_DONE) fail("cannot remove the trial " + hash);
+      if (step(statement.handle) != SQLITE_DONE) fail("cannot remove the trial " + hash);
       removed += static_cast<std::size_t>(sqlite3_changes(db_));
     }
   } catch (...) {
@@ -421,7 +462,7 @@ std::size_t ResultStore::merge_from(const std::filesystem::path& other) {
   const std::size_t count = ResultStore(other).size();  // also checks that it is a store
   Statement attach(db_, "ATTACH DATABASE ?1 AS other", file_);
   sqlite3_bind_text(attach.handle, 1, other.c_str(), -1, SQLITE_TRANSIENT);
-  if (sqlite3_step(attach.handle) != SQLITE_DONE)
+  if (step(attach.handle) != SQLITE_DONE)
     throw std::runtime_error(fmt::format("{}: cannot attach {}: {}", file_.string(), other.string(),
                                          sqlite3_errmsg(db_)));
   try {
@@ -436,7 +477,7 @@ std::size_t ResultStore::merge_from(const std::filesystem::path& other) {
 
 std::size_t ResultStore::size() const {
   Statement statement(db_, "SELECT COUNT(*) FROM trials", file_);
-  if (sqlite3_step(statement.handle) != SQLITE_ROW) fail("cannot count the stored trials");
+  if (step(statement.handle) != SQLITE_ROW) fail("cannot count the stored trials");
   return static_cast<std::size_t>(sqlite3_column_int64(statement.handle, 0));
 }
 
