@@ -118,7 +118,11 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                                           "unexcited_dimension",
                                           "path_l2_error",
                                           "off_path_l2_error",
-                                          "reference_norm_H_to_C"};
+                                          "reference_norm_H_to_C",
+                                          // the decay of ||f~||_H against the PE level
+                                          "learning_decay_rate",
+                                          "averaged_decay_rate",
+                                          "pe_decay_ratio"};
   CHECK(adaptive_metric_names() == expected);
   std::vector<std::string> may_be_nan;
   for (const auto& row : MetricTable<AdaptiveMetric>::rows)
@@ -133,5 +137,6 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                           "projected_l2_error", "estimate_gap_H", "estimate_gap_C", "state_gap",
                           "plant_gap", "gap_effectivity_H", "gap_effectivity_C",
                           "unexcited_dimension", "path_l2_error", "off_path_l2_error",
-                          "reference_norm_H_to_C"});
+                          "reference_norm_H_to_C", "learning_decay_rate", "averaged_decay_rate",
+                          "pe_decay_ratio"});
 }

@@ -249,7 +249,7 @@ TEST_CASE("the lap map agrees with time stepping over 10 laps", "[adaptive][lap_
       CHECK((by_map - stepped).norm() <= 1e-6 * stepped.norm());
       // Learning contracts: the learning block's spectral radius is below 1, and the limit
       // is a fixed point of the map.
-      const auto limit = periodic_limit(map, z0, 4, 1e-8);
+      const auto limit = periodic_limit(map, z0, 4, 1e-8, 1e-10);
       CHECK(limit.spectral_radius < 1);
       const Eigen::VectorXd again = map.monodromy * limit.state + map.offset;
       CHECK((again - limit.state).norm() <= 1e-8 * limit.state.norm());
@@ -277,7 +277,7 @@ TEST_CASE("the periodic limit keeps unexcited directions at their initial value"
   map.monodromy = Eigen::Vector3d(0.5, 0.9, 1.0).asDiagonal();
   map.offset = Eigen::Vector3d(1.0, 2.0, 0.0);
   const Eigen::VectorXd z0 = Eigen::Vector3d(0.3, -0.2, 7.0);
-  const auto limit = periodic_limit(map, z0, 1, 1e-10);
+  const auto limit = periodic_limit(map, z0, 1, 1e-10, 1e-12);
   CHECK(limit.state(0) == Approx(2.0).epsilon(1e-14));
   CHECK(limit.state(1) == Approx(20.0).epsilon(1e-13));
   CHECK(limit.state(2) == 7.0);

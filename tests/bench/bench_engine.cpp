@@ -356,7 +356,7 @@ void lap_map_functions(benchmark::State& state, const KernelCase& kernel_case, b
                                        std::numeric_limits<std::int64_t>::max());
     const LapPowers powers(map);
     const Eigen::VectorXd z = powers.advance(z0, laps);
-    const auto limit = periodic_limit(map, z0, 4, 100 * 1e-10);
+    const auto limit = periodic_limit(map, z0, 4, 100 * 1e-10, 1e-10);
     benchmark::DoNotOptimize(z.data());
     benchmark::DoNotOptimize(limit.state.data());
     state.counters["steps"] = static_cast<double>(map.stats.steps);

@@ -445,6 +445,39 @@ bound = { constant = 3.0 }
   CHECK_THAT(outcomes[0].found, Catch::StartsWith("effectivity sup_error / bound from 0.00333 to 0.00333"));
 }
 
+TEST_CASE("verdicts: bound = { ..., at_least } brackets the metric from both sides",
+          "[verification]") {
+  // sup_error / (power_function_sup * interpolant_native_norm) = 0.01 / 3 in the textbook series.
+  const auto bracket = [](const std::string& at_least) {
+    return Synthetic("[[expect]]\nmetric = \"sup_error\"\ndegree = 1\nbound = { by = "
+                     "\"power_function_sup\", times = \"interpolant_native_norm\", constant = "
+                     "0.004, at_least = " + at_least + " }\n",
+                     textbook)
+        .verify();
+  };
+  const auto holds = bracket("0.003");
+  REQUIRE(holds.size() == 1);  // the B-spline of degree 1
+  for (const auto& o : holds) {
+    CHECK(o.verdict == Verdict::pass);
+    CHECK(o.expected == "0.003 * power_function_sup * interpolant_native_norm <= sup_error <= "
+                        "0.004 * power_function_sup * interpolant_native_norm at every n");
+    CHECK(o.effectivity_min == Approx(0.01 / 3.0 / 0.004));
+  }
+  const auto below = bracket("0.0035");
+  REQUIRE(below.size() == 1);
+  for (const auto& o : below) {
+    CHECK(o.verdict == Verdict::fail);
+    CHECK_THAT(o.reason, Catch::StartsWith("below the lower bound at n = ") &&
+                             Catch::Contains(": sup_error is 0.952 times it"));
+  }
+  // The lower constant must lie in [0, constant).
+  CHECK_THROWS_WITH(bracket("0.004"),
+                    Catch::Contains("expect.bound.at_least: must be >= 0 and below constant = "
+                                    "0.004, found 0.004"));
+  CHECK_THROWS_WITH(bracket("-1.0"), Catch::Contains("expect.bound.at_least: must be >= 0"));
+  CHECK_THROWS_WITH(bracket("\"a\""), Catch::Contains("expect.bound.at_least:"));
+}
+
 TEST_CASE("verdicts: rate = { at_least = metric } derives the interval from that metric's fit",
           "[verification]") {
   // B-splines: power_function_sup ~ n^-(p - 1/2). sup_error decays like it (degree 1), faster

@@ -307,6 +307,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   const Eigen::Index m = system.dimension();
   const double lap_time = settings.lap_time(domain.length);
   const AdaptiveEngine engine = adaptive_engine_for(settings, m);
+  double radius_uncertainty = std::numeric_limits<double>::quiet_NaN();  // lap map only
   out.engine = engine == AdaptiveEngine::lap_map ? "lap_map" : "time_stepping";
   if (reference && engine != AdaptiveEngine::time_stepping)
     throw std::invalid_argument(
@@ -412,8 +413,10 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     check_cancelled();
     const LapPowers powers(*lap_map);
     const Eigen::VectorXd z0 = z;
-    const auto limit = periodic_limit(*lap_map, z0, d, 100 * settings.lap_map_rtol);
+    const auto limit = periodic_limit(*lap_map, z0, d, 100 * settings.lap_map_rtol,
+                                      settings.lap_map_rtol);
     metrics[M::learning_spectral_radius] = limit.spectral_radius;
+    radius_uncertainty = limit.spectral_radius_uncertainty;
     metrics[M::slowest_time_constant_laps] = limit.slowest_time_constant_laps;
     metrics[M::unexcited_directions] = static_cast<double>(limit.unexcited_directions);
     for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
@@ -551,6 +554,33 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       out.flags.push_back("not_persistently_excited");
     } else if (!excitation.resolved && (in_features || !solver.spectrum().singular)) {
       out.flags.push_back("pe_level_unresolved");
+    }
+  }
+  // The decay of ||f~||_H against the PE level: the lap map's slowest learning mode per second,
+  // and the averaged law's slowest rate H(0) pe_level / Gamma (docs/model.md section 14), the
+  // rkhs law's and rkhs_embedding's (the gradient law's W = I makes its rate another pencil's).
+  // The rate's error from the map's: an error delta in the radius is delta / radius in
+  // ln(radius). Beyond 1% of the rate it is flagged, beyond all of it the rate is NaN.
+  {
+    const double radius = metrics[M::learning_spectral_radius];
+    bool unresolved = false;
+    if (std::isfinite(radius) && radius > 0 && radius < 1) {
+      const double rate_per_lap = -std::log(radius);
+      const double error_per_lap = radius_uncertainty / radius;
+      unresolved = !(error_per_lap <= 0.01 * rate_per_lap);
+      if (error_per_lap < rate_per_lap) metrics[M::learning_decay_rate] = rate_per_lap / lap_time;
+    }
+    if (unresolved) out.flags.push_back("decay_rate_unresolved");
+    if (gram_inverse || in_features) {
+      const double dc_gain = B.dot(P * A.partialPivLu().solve(-B));  // H(0) = B^T P (-A)^-1 B
+      metrics[M::averaged_decay_rate] = dc_gain * metrics[M::pe_level] / gamma;
+    }
+    if (metrics[M::averaged_decay_rate] > 0) {
+      metrics[M::pe_decay_ratio] = metrics[M::learning_decay_rate] / metrics[M::averaged_decay_rate];
+      const auto& flags = out.flags;
+      if (!unresolved &&
+          std::find(flags.begin(), flags.end(), "pe_level_unresolved") != flags.end())
+        out.flags.push_back("decay_rate_unresolved");
     }
   }
   metrics[M::steps] = static_cast<double>(stats.steps);

@@ -116,7 +116,7 @@ Eigen::VectorXd LapPowers::advance(const Eigen::VectorXd& z0, std::uint64_t laps
 }
 
 PeriodicLimit periodic_limit(const LapMap& map, const Eigen::VectorXd& z0,
-                             Eigen::Index plant_dimension, double cutoff) {
+                             Eigen::Index plant_dimension, double cutoff, double map_error) {
   const Eigen::MatrixXd& phi = map.monodromy;
   const Eigen::Index m = phi.rows();
   const Eigen::MatrixXd gap = Eigen::MatrixXd::Identity(m, m) - phi;
@@ -138,12 +138,34 @@ PeriodicLimit periodic_limit(const LapMap& map, const Eigen::VectorXd& z0,
   out.state = z0 + svd.matrixV() * projected;
 
   const Eigen::Index learning = m - plant_dimension;
-  Eigen::EigenSolver<Eigen::MatrixXd> eigen(
-      phi.bottomRightCorner(learning, learning), /*computeEigenvectors=*/false);
+  const Eigen::MatrixXd block = phi.bottomRightCorner(learning, learning);
+  Eigen::EigenSolver<Eigen::MatrixXd> eigen(block, /*computeEigenvectors=*/true);
   double radius = 0;
-  for (const auto& lambda : eigen.eigenvalues())
-    if (std::abs(1.0 - lambda) > threshold) radius = std::max(radius, std::abs(lambda));
+  Eigen::Index attained = -1;
+  for (Eigen::Index i = 0; i < learning; ++i) {
+    const auto lambda = eigen.eigenvalues()(i);
+    if (std::abs(1.0 - lambda) > threshold && std::abs(lambda) > radius) {
+      radius = std::abs(lambda);
+      attained = i;
+    }
+  }
   out.spectral_radius = radius;
+  out.spectral_radius_uncertainty = std::numeric_limits<double>::quiet_NaN();
+  if (attained >= 0) {
+    // The left eigenvector: the eigenvector of Phi^T for the eigenvalue nearest lambda.
+    const auto lambda = eigen.eigenvalues()(attained);
+    Eigen::EigenSolver<Eigen::MatrixXd> transposed(block.transpose(), true);
+    Eigen::Index nearest = 0;
+    for (Eigen::Index i = 1; i < learning; ++i)
+      if (std::abs(transposed.eigenvalues()(i) - lambda) <
+          std::abs(transposed.eigenvalues()(nearest) - lambda))
+        nearest = i;
+    const Eigen::VectorXcd x = eigen.eigenvectors().col(attained);
+    const Eigen::VectorXcd y = transposed.eigenvectors().col(nearest);
+    const double condition = std::abs(y.dot(x.conjugate())) / (x.norm() * y.norm());
+    // ||Phi||_2 <= 1 + ||I - Phi||_2 = 1 + sigma_max(I - Phi).
+    out.spectral_radius_uncertainty = map_error * (1.0 + sigma(0)) / condition;
+  }
   out.slowest_time_constant_laps =
       radius > 0 && radius < 1 ? -1.0 / std::log(radius)
                                : (radius >= 1 ? std::numeric_limits<double>::infinity() : 0.0);

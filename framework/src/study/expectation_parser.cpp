@@ -233,9 +233,10 @@ class ExpectationReader {
            fmt::format("expected {{ by = \"metric\", times = \"metric\", constant = 1.0 }}, found {}",
                        show(node)));
     for (auto&& [key, value] : *table)
-      if (key.str() != "by" && key.str() != "times" && key.str() != "constant")
+      if (key.str() != "by" && key.str() != "times" && key.str() != "constant" &&
+          key.str() != "at_least")
         fail(src, key.source(), fmt::format("expect.bound.{}", key.str()),
-             "unknown key (known: by, times, constant)");
+             "unknown key (known: by, times, constant, at_least)");
     const auto* by = table->get("by");
     if (!by && table->contains("times"))
       fail(src, node.source(), "expect.bound.by", "missing: 'times' multiplies 'by'");
@@ -250,6 +251,13 @@ class ExpectationReader {
       if (!(e.bound.constant > 0))
         fail(src, constant->source(), "expect.bound.constant",
              fmt::format("must be > 0, found {}", show(*constant)));
+    }
+    if (const auto* at_least = table->get("at_least")) {
+      e.bound.at_least = number_at(*at_least, "expect.bound.at_least");
+      if (!(*e.bound.at_least >= 0 && *e.bound.at_least < e.bound.constant))
+        fail(src, at_least->source(), "expect.bound.at_least",
+             fmt::format("must be >= 0 and below constant = {}, found {}",
+                         format_real(e.bound.constant), show(*at_least)));
     }
   }
 

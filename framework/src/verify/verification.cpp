@@ -408,8 +408,16 @@ class Verifier {
       rhs += *factor;
     }
     o.expected = fmt::format("{} <= {} at every n", e.metric, rhs);
+    // The lower end of a bracket, relative to the upper: effectivity >= at_least / constant.
+    const double lowest = e.bound.at_least ? *e.bound.at_least / e.bound.constant : 0.0;
+    if (e.bound.at_least) {
+      std::string lower = format_real(*e.bound.at_least);
+      for (const auto* factor : {&e.bound.by, &e.bound.times})
+        if (!factor->empty()) lower += " * " + *factor;
+      o.expected = fmt::format("{} <= {} <= {} at every n", lower, e.metric, rhs);
+    }
     double low = std::numeric_limits<double>::infinity(), high = -low;
-    std::size_t used = 0, at_max = 0, skipped = 0;
+    std::size_t used = 0, at_max = 0, at_min = 0, skipped = 0;
     std::size_t failed_trials = 0, flagged_values = 0, unusable_values = 0;
     for (auto t : series.trials) {
       const auto& r = results_[t];
@@ -429,7 +437,10 @@ class Verifier {
       }
       const double effectivity = value / bound;
       ++used;
-      low = std::min(low, effectivity);
+      if (effectivity < low) {
+        low = effectivity;
+        at_min = trials_[t].n;
+      }
       if (effectivity > high) {
         high = effectivity;
         at_max = trials_[t].n;
@@ -455,9 +466,15 @@ class Verifier {
                           "of {} n{}",
                           e.metric, low, high, at_max, used, series.trials.size(),
                           skipped ? fmt::format(" (left out: {})", excluded) : std::string());
-    o.verdict = high <= 1.0 ? Verdict::pass : Verdict::fail;
-    o.reason = high <= 1.0 ? std::string("the bound holds at every usable n")
-                           : fmt::format("the bound is exceeded by a factor {:.3g} at n = {}", high, at_max);
+    const bool above = high > 1.0, below = low < lowest;
+    o.verdict = above || below ? Verdict::fail : Verdict::pass;
+    if (above)
+      o.reason = fmt::format("the bound is exceeded by a factor {:.3g} at n = {}", high, at_max);
+    else if (below)
+      o.reason = fmt::format("below the lower bound at n = {}: {} is {:.3g} times it", at_min,
+                             e.metric, low / lowest);
+    else
+      o.reason = "the bound holds at every usable n";
   }
 
   const StudyDefinition& study_;

@@ -87,8 +87,13 @@ struct PeriodicLimit {
   double spectral_radius;             ///< of the learning block of Phi (xhat, alpha), its
                                       ///< eigenvalues within `cutoff` of 1 left out
   double slowest_time_constant_laps;  ///< -1 / ln(spectral_radius)
+  /// First-order bound on the error of spectral_radius from an error `map_error ||Phi||_2` in
+  /// Phi: `map_error ||Phi||_2 / s` with `s = |y^T x| / (|x| |y|)` the condition of the
+  /// eigenvalue that attains it (x, y its right and left eigenvectors; Wilkinson). NaN when no
+  /// eigenvalue is left (radius 0).
+  double spectral_radius_uncertainty;
 };
 PeriodicLimit periodic_limit(const LapMap& map, const Eigen::VectorXd& z0,
-                             Eigen::Index plant_dimension, double cutoff);
+                             Eigen::Index plant_dimension, double cutoff, double map_error);
 
 }  // namespace rkhs

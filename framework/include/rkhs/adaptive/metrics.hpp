@@ -53,12 +53,15 @@ enum class AdaptiveMetric : std::size_t {
   path_l2_error,
   off_path_l2_error,
   reference_norm_H_to_C,
+  learning_decay_rate,
+  averaged_decay_rate,
+  pe_decay_ratio,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 42> rows{{
+  static constexpr std::array<MetricRow<M>, 45> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -171,6 +174,19 @@ struct MetricTable<AdaptiveMetric> {
        "on the grid, the rate of its own distance from the estimator in H (Theorem 4.1); NaN "
        "otherwise",
        true, ""},
+      // The decay of ||f - fhat||_H against the PE level (Theorem 3.3; docs/theorems.md).
+      {M::learning_decay_rate, "learning_decay_rate", "1/s",
+       "-ln(learning_spectral_radius) / lap time: the asymptotic decay rate of ||f~||_H; NaN "
+       "unless engine = lap_map, or when the lap map's error may exceed it",
+       true, "decay_rate_unresolved"},
+      {M::averaged_decay_rate, "averaged_decay_rate", "1/s",
+       "H(0) pe_level / Gamma, H(0) = B^T P (-A)^-1 B: the slowest rate of the averaged law "
+       "(docs/model.md section 14); NaN for the gradient law",
+       true, "pe_level_unresolved"},
+      {M::pe_decay_ratio, "pe_decay_ratio", "1",
+       "learning_decay_rate / averaged_decay_rate: 1 in the averaging limit (slow path, slow "
+       "learning); NaN unless both are defined",
+       true, "decay_rate_unresolved"},
   }};
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

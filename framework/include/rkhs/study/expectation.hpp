@@ -39,11 +39,13 @@ enum class ExpectationKind {
 };
 
 /// metric(n) <= constant * by(n) * times(n) at every usable n (by and times optional; without
-/// them the bound is the constant).
+/// them the bound is the constant); with at_least also metric(n) >= at_least * by(n) * times(n),
+/// a two-sided bracket (e.g. a ratio that theory says is 1).
 struct BoundSpec {
   std::string by;     ///< "" when absent
   std::string times;  ///< "" when absent (needs by)
   double constant = 1.0;
+  std::optional<double> at_least;  ///< the lower constant; absent: one-sided
 };
 
 /// One [[expect]] table, validated against the study it belongs to.
