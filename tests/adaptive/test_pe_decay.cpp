@@ -77,8 +77,9 @@ lap_map_atol = 1e-12
 double lag_factor(double omega) {
   double weighted = 0.0, total = 0.0;
   for (int k = 1; k < 100001; k += 2) {
-    const double w = std::pow(static_cast<double>(k), -4.0);
-    weighted += w / (1.0 + k * k * omega * omega);
+    const double harmonic = k;  // k * k in int overflows from k = 46341
+    const double w = std::pow(harmonic, -4.0);
+    weighted += w / (1.0 + harmonic * harmonic * omega * omega);
     total += w;
   }
   return weighted / total;
