@@ -297,12 +297,14 @@ TEST_CASE("Ctrl-C to mpirun: finished trials are stored, rank 0 says how to resu
     // mpirun waits odls_base_sigkill_timeout seconds, passes the signal on as SIGTERM and
     // kills the ranks as long again later (Open MPI's default: 1 s; docs/cluster.md): on a
     // loaded machine that can be less than the trials in flight need to stop, so the test gives
-    // the ranks the 3 s a user would give them (the study is far from done 3 s after the signal).
-    execl(
-        "/bin/sh", "sh", "-c",
-        ("exec env " + mpi_environment + " OMPI_MCA_odls_base_sigkill_timeout=3 " + mpirun(2, run))
-            .c_str(),
-        static_cast<char*>(nullptr));
+    // the ranks the 3 s a user would give them (the study is far from done 3 s after the signal),
+    // times the patience of a sanitizer build, whose ranks run several times slower.
+    const std::string grace = std::to_string(3 * rkhs::test::patience);
+    execl("/bin/sh", "sh", "-c",
+          ("exec env " + mpi_environment + " OMPI_MCA_odls_base_sigkill_timeout=" + grace + " " +
+           mpirun(2, run))
+              .c_str(),
+          static_cast<char*>(nullptr));
     _exit(127);
   }
   REQUIRE(rkhs::test::wait_until(
