@@ -4,6 +4,7 @@
 #include <boost/pfr.hpp>
 #include <cmath>
 #include <catch2/catch.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <type_traits>
@@ -20,6 +21,10 @@ template <class T>
 struct is_vector : std::false_type {};
 template <class T, class A>
 struct is_vector<std::vector<T, A>> : std::true_type {};
+template <class T>
+struct is_optional : std::false_type {};
+template <class T>
+struct is_optional<std::optional<T>> : std::true_type {};
 
 // A different value of the same type.
 template <class T>
@@ -36,6 +41,9 @@ void perturb(T& value) {
     value = static_cast<T>(static_cast<std::underlying_type_t<T>>(value) + 1);
   } else if constexpr (is_vector<T>::value) {
     value.emplace_back();
+  } else if constexpr (is_optional<T>::value) {
+    if (value) value.reset();
+    else value.emplace();
   } else {
     static_assert(std::is_same_v<T, PluginChoice>, "teach perturb() this field type");
     value.name += "x";
@@ -44,7 +52,7 @@ void perturb(T& value) {
 
 template <class T>
 constexpr bool is_leaf = std::is_same_v<T, std::string> || std::is_arithmetic_v<T> ||
-                         std::is_enum_v<T> || is_vector<T>::value ||
+                         std::is_enum_v<T> || is_vector<T>::value || is_optional<T>::value ||
                          std::is_same_v<T, PluginChoice> || !std::is_aggregate_v<T>;
 
 // The metrics of a result, bit for bit (NaN equal to NaN).

@@ -139,8 +139,8 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   SECTION("unknown top-level key") {
     const auto e = error_of(std::string(minimal) + "[kernels]\nx = 1\n");
     CHECK(e == "s.toml:10:2: kernels: unknown key (known: study, domain, grid, kernel, target, "
-               "centres, projection, solver, limits, adaptive, plant, law, integrator, plugins, "
-               "expect; did you mean 'kernel'?)");
+               "centres, projection, solver, limits, rates, adaptive, plant, law, integrator, "
+               "plugins, expect; did you mean 'kernel'?)");
   }
   SECTION("invalid TOML") {
     const auto e = error_of("[study\nname = 1\n");

@@ -55,15 +55,20 @@ struct Synthetic {
   std::vector<TrialResult> results;
   std::vector<MetricSeries> rates;
 
+  // `distances(trial)` gives the fill and separation distances (default: uniform centres).
   Synthetic(const std::string& expectations,
-            const std::function<double(const TrialSpec&, const std::string&)>& value)
-      : study(parse_study(base + expectations, "s.toml")), trials(study.trials()) {
+            const std::function<double(const TrialSpec&, const std::string&)>& value,
+            const std::function<std::pair<double, double>(const TrialSpec&)>& distances = {},
+            const std::string& header = base)
+      : study(parse_study(header + expectations, "s.toml")), trials(study.trials()) {
     for (const auto& trial : trials) {
       TrialResult r;
       r.ok = true;
+      const double uniform = study.domain.length / (2.0 * static_cast<double>(trial.n));
+      const auto [h, q] = distances ? distances(trial) : std::pair{uniform, uniform};
       for (const auto& metric : study.all_metrics()) {
-        const double h = study.domain.length / (2.0 * static_cast<double>(trial.n));
-        if (metric == "fill_distance" || metric == "separation_distance") r.metrics.push_back(h);
+        if (metric == "fill_distance") r.metrics.push_back(h);
+        else if (metric == "separation_distance") r.metrics.push_back(q);
         else r.metrics.push_back(value(trial, metric));
       }
       results.push_back(std::move(r));
@@ -548,4 +553,145 @@ name = "a <wrong> & \"quoted\" one"
   CHECK_THAT(xml, Catch::Contains("<property name=\"tier\" value=\"quick\"/>"));
   CHECK(xml_escape("a\nb\x01<") == "a&#10;b&lt;");
   CHECK(xml_escape("a\nb", false) == "a\nb");
+}
+
+TEST_CASE("fit windows: [[expect]] and [rates] set the points judged", "[verification]") {
+  // A metric that changes its rate at n = 50, continuously: 2500 n^-3 below, n^-1 from there.
+  const auto kink = [](const TrialSpec& t, const std::string& m) {
+    const double n = static_cast<double>(t.n);
+    if (m == "sup_error") return n < 50 ? 2500.0 * std::pow(n, -3.0) : 1.0 / n;
+    return textbook(t, m);
+  };
+  const std::string expectations = R"([[expect]]
+metric = "sup_error"
+degree = 1
+rate = -1.0
+n_from = 50
+[[expect]]
+metric = "sup_error"
+degree = 1
+rate = -1.0
+last = 3
+[[expect]]
+metric = "sup_error"
+degree = 1
+rate = -3.0
+n_to = 40
+[[expect]]
+metric = "sup_error"
+degree = 1
+bound = { constant = 0.021 }
+n_from = 50
+[[expect]]
+metric = "sup_error"
+degree = 1
+bound = { constant = 0.021 }
+)";
+  const Synthetic s(expectations, kink);
+  const auto outcomes = s.verify();
+  REQUIRE(outcomes.size() == 5);
+  for (std::size_t i : {0, 1, 2, 3}) {
+    INFO(i << ": " << outcomes[i].found << " / " << outcomes[i].reason);
+    CHECK(outcomes[i].verdict == Verdict::pass);
+  }
+  CHECK(outcomes[0].window_from == 50);
+  CHECK(outcomes[0].window_to == 100);
+  CHECK(outcomes[0].window_points == 6);
+  CHECK_THAT(outcomes[0].found, Catch::Contains("window set by n_from = 50: n = 50..100"));
+  CHECK(outcomes[1].window_from == 80);
+  CHECK(outcomes[1].window_points == 3);
+  CHECK(outcomes[2].window_to == 40);
+  CHECK(outcomes[2].rate == Approx(-3.0));
+  CHECK_THAT(outcomes[3].found, Catch::Contains("at 6 of 10 n (window set by n_from = 50)"));
+  // Without its window the bound fails below n = 50 (2500 / 10^3 = 2.5 > 0.021).
+  CHECK(outcomes[4].verdict == Verdict::fail);
+  CHECK_THAT(outcomes[4].reason, Catch::Contains("at n = 10"));
+
+  // [rates] sets the window of every series (rates.csv, tables and verdicts without their own).
+  const Synthetic study_wide("[rates]\nn_from = 50\n[[expect]]\nmetric = \"sup_error\"\ndegree = 1\n"
+                             "rate = -1.0\n",
+                             kink);
+  const auto& series = study_wide.rates;
+  const auto found = std::find_if(series.begin(), series.end(), [&](const MetricSeries& m) {
+    return m.metric == "sup_error" && m.group == 0;
+  });
+  REQUIRE(found != series.end());
+  REQUIRE(found->fit);
+  CHECK(found->fit->rate == Approx(-1.0));
+  CHECK(found->fit->points == 6);
+  CHECK_THAT(found->note, Catch::Contains("window set by n_from = 50: n = 50..100"));
+  CHECK(study_wide.verify().at(0).verdict == Verdict::pass);
+}
+
+TEST_CASE("fit windows: mistakes are errors with file:line:column", "[verification]") {
+  const auto with = [](const std::string& table) {
+    return base + "[[expect]]\nmetric = \"power_function_sup\"\ntheory = true\n" + table;
+  };
+  CHECK_THAT(error_of(with("n_from = 200\n")),
+             Catch::Contains("s.toml:19:10: expect.n_from: the window n = 200.. holds 0 of the "
+                             "grid's n (10..100); a fit needs at least 2"));
+  CHECK_THAT(error_of(with("n_from = 50\nn_to = 20\n")),
+             Catch::Contains("expect.n_to: n_to = 20 is below n_from = 50: the window is empty"));
+  CHECK_THAT(error_of(with("last = 1\n")),
+             Catch::Contains("s.toml:19:8: expect.last: expected a whole number of points >= 2"));
+  CHECK_THAT(error_of(with("last = 11\n")),
+             Catch::Contains("expect.last: last = 11 but the grid has 10 values of n"));
+  CHECK_THAT(error_of(with("h_from = 0.1\n")),
+             Catch::Contains("expect.h_from: a window in h needs study.abscissa = \"h\""));
+  CHECK_THAT(error_of(with("n_from = \"ten\"\n")),
+             Catch::Contains("expect.n_from: expected a positive number, found 'ten'"));
+  CHECK_THAT(error_of(base + "[rates]\nn_frm = 20\n"),
+             Catch::Contains("s.toml:17:1: rates.n_frm: unknown key") &&
+                 Catch::Contains("did you mean 'n_from'?"));
+  CHECK_NOTHROW(parse_study(with("n_from = 50\nn_to = 100\nlast = 3\n"), "s.toml"));
+}
+
+TEST_CASE("theory against h: bounds in the fill distance hold for any centres", "[verification]") {
+  // Scattered centres: h ~ n^-0.8 with scatter, q ~ n^-2 (the mesh ratio grows like n^1.2).
+  // The power function and the L2 error follow h as theory says for any point set; the
+  // condition number is a statement in q and needs quasi-uniform centres.
+  std::string header = base;
+  header.replace(header.find("name = \"v\"\n"), 11, "name = \"v\"\nabscissa = \"h\"\n");
+  const auto fill = [](const TrialSpec& t) {
+    const double n = static_cast<double>(t.n);
+    return 3.0 * std::pow(n, -0.8) * (1.0 + 0.2 * std::sin(7.0 * n));
+  };
+  const auto distances = [&](const TrialSpec& t) {
+    return std::pair{fill(t), 5.0 * std::pow(static_cast<double>(t.n), -2.0)};
+  };
+  const auto values = [&](const TrialSpec& t, const std::string& m) {
+    const double h = fill(t), tau = degree_of(t);
+    if (m == "power_function_sup") return 0.7 * std::pow(h, tau - 0.5);
+    if (m == "l2_error") return 0.01 * std::pow(h, tau + 1.0);  // smoother than H^tau: faster
+    if (m == "gram_condition_number") return std::pow(h, -2.0 * tau);
+    return textbook(t, m);
+  };
+  header.replace(header.find("\"interpolant_native_norm\"]"), 26,
+                 "\"interpolant_native_norm\", \"l2_error\"]");
+  const Synthetic scattered(R"([[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+theory = true
+[[expect]]
+metric = "l2_error"
+kernel = "bspline"
+theory = true
+[[expect]]
+metric = "gram_condition_number"
+kernel = "bspline"
+theory = true
+)",
+                            values, distances, header);
+  const auto outcomes = scattered.verify();
+  REQUIRE(outcomes.size() == 6);
+  for (std::size_t i : {0, 1, 2, 3}) {
+    INFO(i << ": " << outcomes[i].expected << " / " << outcomes[i].found << " / " << outcomes[i].reason);
+    CHECK(outcomes[i].verdict == Verdict::pass);
+    CHECK_THAT(outcomes[i].expected, Catch::Contains("against ln h, for any centres"));
+  }
+  for (std::size_t i : {4, 5}) {
+    CHECK(outcomes[i].verdict == Verdict::inconclusive);
+    CHECK_THAT(outcomes[i].reason, Catch::StartsWith("the centres are not quasi-uniform"));
+    CHECK_THAT(outcomes[i].expected, Catch::Contains("stated in the separation distance q"));
+  }
 }

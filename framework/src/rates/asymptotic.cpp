@@ -212,9 +212,42 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
   return window;
 }
 
+std::string FitWindow::text() const {
+  std::vector<std::string> parts;
+  if (n_from) parts.push_back("n_from = " + format_real(*n_from));
+  if (n_to) parts.push_back("n_to = " + format_real(*n_to));
+  if (h_from) parts.push_back("h_from = " + format_real(*h_from));
+  if (h_to) parts.push_back("h_to = " + format_real(*h_to));
+  if (last) parts.push_back(fmt::format("last = {}", *last));
+  std::string out;
+  for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
+  return out;
+}
+
+namespace {
+
+// Whether successive rates move the same way, each step no larger than the one before: a
+// smooth approach to a limit, as a pre-asymptotic term C n^p D n^-q produces (not scatter).
+bool bends_monotonically(const std::vector<double>& rates) {
+  if (rates.size() < 3) return false;
+  double previous_step = std::numeric_limits<double>::infinity(), sign = 0.0;
+  for (std::size_t i = 0; i + 1 < rates.size(); ++i) {
+    const double step = rates[i + 1] - rates[i];
+    if (!std::isfinite(step) || step == 0.0) return false;
+    const double step_sign = step > 0.0 ? 1.0 : -1.0;
+    if (sign != 0.0 && step_sign != sign) return false;
+    if (std::fabs(step) > previous_step) return false;
+    sign = step_sign;
+    previous_step = std::fabs(step);
+  }
+  return true;
+}
+
+}  // namespace
+
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,
-                              double confidence) {
+                              double confidence, const FitWindow& set_window) {
   if (x.size() != y.size() || n.size() != y.size() || usable.size() != y.size())
     throw std::invalid_argument("analyse_series: x, n, y and usable differ in size");
   if (!(confidence > 0.0 && confidence < 1.0))
@@ -226,6 +259,17 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     if (usable[i] && std::isfinite(y[i]) && y[i] > 0.0 && std::isfinite(x[i]) && x[i] > 0.0 &&
         std::isfinite(n[i]))
       positions.push_back(i);
+  if (!set_window.empty()) {
+    std::erase_if(positions, [&](std::size_t i) {
+      return (set_window.n_from && n[i] < *set_window.n_from) ||
+             (set_window.n_to && n[i] > *set_window.n_to) ||
+             (set_window.h_from && x[i] < *set_window.h_from) ||
+             (set_window.h_to && x[i] > *set_window.h_to);
+    });
+    if (set_window.last && positions.size() > *set_window.last)
+      positions.erase(positions.begin(),
+                      positions.end() - static_cast<std::ptrdiff_t>(*set_window.last));
+  }
   std::vector<double> labels, log_x, log_y, plain_n;
   for (auto i : positions) {
     labels.push_back(n[i]);
@@ -236,10 +280,17 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
 
   SeriesAnalysis out;
   out.evidence = not_a_number;
+  out.set_window = set_window.text();
   auto analyse_model = [&](RateModel model, ModelAnalysis& result) {
     result.model = model;
     const std::span<const double> u = model == RateModel::power_law ? log_x : plain_n;
-    auto window = detect_asymptotic_window(u, log_y, labels);
+    AsymptoticWindow window;
+    if (set_window.empty()) {
+      window = detect_asymptotic_window(u, log_y, labels);
+    } else {
+      for (std::size_t k = 0; k < positions.size(); ++k) window.points.push_back(k);
+      window.bulk_rate = window.noise = not_a_number;
+    }
     auto to_positions = [&](std::vector<std::size_t>& indices) {
       for (auto& k : indices) k = positions[k];
     };
@@ -308,6 +359,31 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     out.note = "models not compared (fewer than 3 points in a window)";
   } else {
     out.note = "neither model fits better on its own window";
+  }
+
+  // A bend: the window with its head, else the window alone (a head that is not part of the
+  // bend, e.g. a first point before the kernel's support covers the centres).
+  if (set_window.empty() && positions.size() >= 2) {
+    const bool upward = x[positions.back()] > x[positions.front()];
+    auto try_bend = [&](const std::vector<std::size_t>& candidate) {
+      if (candidate.size() < 6) return false;
+      std::vector<double> cx, cy;
+      for (auto p : candidate) {
+        cx.push_back(x[p]);
+        cy.push_back(y[p]);
+      }
+      if (!bends_monotonically(pairwise_rates(cx, cy))) return false;
+      auto fit = fit_power_law_corrected(cx, cy, upward, confidence);
+      if (!fit) return false;
+      for (auto& k : fit->fit.used) k = candidate[k];
+      out.corrected = std::move(fit);
+      out.corrected_points = candidate;
+      return true;
+    };
+    const auto& window = out.power_law.window;
+    std::vector<std::size_t> with_head = window.head;
+    with_head.insert(with_head.end(), window.points.begin(), window.points.end());
+    if (!try_bend(with_head) && !window.head.empty()) try_bend(window.points);
   }
   return out;
 }

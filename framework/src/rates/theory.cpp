@@ -44,6 +44,8 @@ std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelPrope
                 "sobolev_order), so theory predicts no rate");
   const double tau = *properties.sobolev_order, d = dimension;
   const auto given = fmt::format("tau = {}, d = {}", format_real(tau), dimension);
+  theory.holds_for_any_centres =
+      metric == "power_function_sup" || metric == "sup_error" || metric == "l2_error";
   if (metric == "power_function_sup" || metric == "sup_error") {
     theory.h_exponent = tau - d / 2;
     theory.sharp = metric == "power_function_sup";

@@ -191,6 +191,24 @@ std::string rates_csv(const RunRecord& run) {
       row.push_back(fmt::format("{}", fmt::join(notes, "; ")));
       out += csv_row(row);
     }
+    // The power law with a pre-asymptotic term, where the pairwise rates bend (asymptotic.hpp).
+    if (const auto& corrected = series.analysis.corrected) {
+      const auto& fit = corrected->fit;
+      auto row = row_start("corrected_fit", RateModel::power_law, n_of(fit.used.front()),
+                           n_of(fit.used.back()));
+      row.push_back(std::to_string(fit.points));
+      for (double v : {fit.rate, fit.std_error, fit.ci_low, fit.ci_high, fit.r_squared,
+                       corrected->advantage})
+        row.push_back(csv_number(v));
+      row.push_back(fmt::format(
+          "C x^p (1 + D t^-q) with q = {:.3g}, D = {:.3g} at n = {}; {}", corrected->order,
+          corrected->correction, n_of(fit.used.back()),
+          series.analysis.bends() ? "judged by power-law rate verdicts"
+          : series.analysis.reported != RateModel::power_law
+              ? "not judged: the exponential model is reported"
+              : "not judged: the correction does not earn its two parameters (ΔAICc < 2)"));
+      out += csv_row(row);
+    }
     const auto& window = series.analysis.reported_analysis().window;
     auto outside = [&](std::size_t k) {
       return std::find(window.head.begin(), window.head.end(), k) != window.head.end() ||

@@ -91,6 +91,7 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
       {&study.metrics, "metrics",
        "which metrics are written and fitted; a trial measures and stores all of its kind's"},
       {&study.abscissa, "abscissa", "what rates are fitted against, after the trials"},
+      {&study.rates_window, "rates_window", "which points rates are fitted on, after the trials"},
       {&study.expectations, "expectations", "judged after the trials"},
       {&study.warnings, "warnings", "messages about the file"},
   };

@@ -40,12 +40,18 @@ class ExpectationReader {
     if (const auto* node = table.get("tier")) e.tiers = parse_tiers(*node, study_.source, "expect.tier");
     read_selectors(table, e);
     read_kind(table, e);
+    e.window = read_fit_window(Reporter(study_.source), table, "expect.", study_);
+    if (e.kind == ExpectationKind::bound && (e.window.h_from || e.window.h_to))
+      fail(study_.source, table.get(e.window.h_from ? "h_from" : "h_to")->source(),
+           e.window.h_from ? "expect.h_from" : "expect.h_to",
+           "a bound holds at each n: select its n with n_from, n_to or last");
     return e;
   }
 
  private:
   static inline const std::vector<std::string> reserved_{
-      "metric", "name", "tier", "theory", "rate", "tolerance", "model", "bound"};
+      "metric", "name", "tier", "theory", "rate", "tolerance", "model", "bound",
+      "n_from", "n_to", "h_from", "h_to", "last"};
 
   std::string string_at(const toml::node& node, std::string_view key) const {
     if (!node.is_string())

@@ -743,7 +743,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   }
   check_keys(report, root, "",
              {"study", "domain", "grid", "kernel", "target", "centres", "projection", "solver",
-              "limits", "adaptive", "plant", "law", "integrator", "plugins", "expect"});
+              "limits", "rates", "adaptive", "plant", "law", "integrator", "plugins", "expect"});
   load_study_plugins(report, root);
 
   StudyDefinition study;
@@ -883,6 +883,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                   fmt::format("found \"{}\", expected \"pseudo_inverse\", \"regularised\" or \"fail\"",
                               policy));
     study.solver.regularisation = get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
+  }
+
+  if (const auto* rates = optional_table(report, root, "rates")) {
+    check_keys(report, *rates, "rates.", fit_window_keys);
+    study.rates_window = read_fit_window(report, *rates, "rates.", study);
   }
 
   check_evaluation_grid(report, *header, study);

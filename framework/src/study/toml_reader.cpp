@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "rkhs/core/registry.hpp"
 
@@ -108,6 +109,66 @@ std::optional<ParameterValue> scalar_value(const toml::node& node) {
 [[noreturn]] void fail(const std::string& source, const toml::source_region& where,
                        std::string_view key, std::string_view message) {
   Reporter(source).fail(where, key, message);
+}
+
+FitWindow read_fit_window(const Reporter& report, const toml::table& table,
+                          std::string_view prefix, const StudyDefinition& study) {
+  FitWindow window;
+  auto key_of = [&](std::string_view key) { return std::string(prefix) + std::string(key); };
+  auto number = [&](std::string_view key) -> std::optional<double> {
+    const auto* node = table.get(key);
+    if (!node) return std::nullopt;
+    if (!node->is_number() || !std::isfinite(node->value<double>().value()) ||
+        !(node->value<double>().value() > 0.0))
+      report.fail(node->source(), key_of(key),
+                  fmt::format("expected a positive number, found {}", show(*node)));
+    if ((key == "h_from" || key == "h_to") && study.abscissa != Abscissa::fill_distance)
+      report.fail(node->source(), key_of(key),
+                  fmt::format("a window in h needs study.abscissa = \"h\" (this study fits against "
+                              "n: use n_{} instead)",
+                              key == "h_from" ? "from" : "to"));
+    return node->value<double>().value();
+  };
+  window.n_from = number("n_from");
+  window.n_to = number("n_to");
+  window.h_from = number("h_from");
+  window.h_to = number("h_to");
+  for (auto [from, to, name] : {std::tuple{window.n_from, window.n_to, "n"},
+                                std::tuple{window.h_from, window.h_to, "h"}})
+    if (from && to && *from > *to)
+      report.fail(table.get(std::string(name) + "_to")->source(), key_of(std::string(name) + "_to"),
+                  fmt::format("{}_to = {} is below {}_from = {}: the window is empty", name,
+                              format_real(*to), name, format_real(*from)));
+  if (const auto* node = table.get("last")) {
+    const auto value = node->value<std::int64_t>();
+    if (!node->is_integer() || !value || *value < 2)
+      report.fail(node->source(), key_of("last"),
+                  fmt::format("expected a whole number of points >= 2 (a fit needs 2, a CI 3), "
+                              "found {}",
+                              show(*node)));
+    window.last = static_cast<std::size_t>(*value);
+  }
+  // The grid's n in the window (h is known only once the trials ran).
+  std::size_t inside = 0;
+  for (auto n : study.n_values) {
+    const double value = static_cast<double>(n);
+    inside += (!window.n_from || value >= *window.n_from) && (!window.n_to || value <= *window.n_to);
+  }
+  if (window.last) inside = std::min(inside, *window.last);
+  if ((window.n_from || window.n_to) && inside < 2) {
+    const auto* node = table.get(window.n_from ? "n_from" : "n_to");
+    report.fail(node->source(), key_of(window.n_from ? "n_from" : "n_to"),
+                fmt::format("the window n = {}..{} holds {} of the grid's n ({}..{}); a fit "
+                            "needs at least 2",
+                            window.n_from ? format_real(*window.n_from) : "",
+                            window.n_to ? format_real(*window.n_to) : "", inside,
+                            study.n_values.front(), study.n_values.back()));
+  }
+  if (window.last && *window.last > study.n_values.size())
+    report.fail(table.get("last")->source(), key_of("last"),
+                fmt::format("last = {} but the grid has {} values of n", *window.last,
+                            study.n_values.size()));
+  return window;
 }
 
 }  // namespace rkhs::detail

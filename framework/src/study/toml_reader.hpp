@@ -79,4 +79,14 @@ bool get_bool(const Reporter& report, const toml::table& table, std::string_view
 /// An integer, number, string or boolean node as a parameter value; std::nullopt otherwise.
 std::optional<ParameterValue> scalar_value(const toml::node& node);
 
+/// The fit-window keys of `table` (n_from, n_to, h_from, h_to, last; docs/verification.md),
+/// checked against the study: numbers, from <= to, h_* only with abscissa = "h", `last` a whole
+/// number >= 2, and a window that holds at least 2 of the grid's n (n_from, n_to, last).
+/// Other keys are the caller's to check. `prefix` ("rates.", "expect.") qualifies keys.
+FitWindow read_fit_window(const Reporter& report, const toml::table& table,
+                          std::string_view prefix, const StudyDefinition& study);
+
+/// The keys read_fit_window reads.
+inline const std::vector<std::string> fit_window_keys{"n_from", "n_to", "h_from", "h_to", "last"};
+
 }  // namespace rkhs::detail

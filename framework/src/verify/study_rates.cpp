@@ -28,6 +28,63 @@ std::string_view excluding_flag(StudyKind kind, std::string_view metric) {
                                      : excluding_flag_in<ApproximationMetric>(metric);
 }
 
+void fit_series(MetricSeries& series, const FitWindow& window) {
+  const std::size_t size = series.values.size();
+  std::vector<bool> usable(size);
+  std::size_t failed = 0, flagged = 0, first_flagged = size;
+  for (std::size_t k = 0; k < size; ++k) {
+    usable[k] = !series.failed[k] && !series.flagged[k];
+    if (series.failed[k]) ++failed;
+    else if (series.flagged[k]) {
+      ++flagged;
+      first_flagged = std::min(first_flagged, k);
+    }
+  }
+  series.analysis = analyse_series(series.abscissa, series.n, series.values, usable, 0.95, window);
+  const auto& reported = series.analysis.reported_analysis();
+  series.pairwise = reported.pairwise;
+  series.fit = reported.fit;
+  series.note.clear();
+  series.no_fit_reason.clear();
+
+  std::vector<std::string> notes;
+  if (failed) notes.push_back(fmt::format("{} failed trial{} excluded", failed, failed > 1 ? "s" : ""));
+  // Flagged values that run to the end of the series are a floor the trials measured.
+  bool flagged_tail = flagged > 0;
+  for (std::size_t k = first_flagged; flagged_tail && k < size; ++k)
+    flagged_tail = series.flagged[k] || series.failed[k];
+  if (flagged_tail)
+    notes.push_back(fmt::format("floor from n = {}: {} value{} flagged ({})",
+                                format_real(series.n[first_flagged]), flagged,
+                                flagged > 1 ? "s" : "", series.exclusion_flag));
+  else if (flagged)
+    notes.push_back(fmt::format("{} value{} excluded ({})", flagged, flagged > 1 ? "s" : "",
+                                series.exclusion_flag));
+  if (!window.empty())
+    notes.push_back(fmt::format("window set by {}: n = {}", window.text(),
+                                label_range(series.n, reported.window.points)));
+  if (!reported.window.note.empty()) notes.push_back(reported.window.note);
+  if (series.fit) {
+    if (!series.fit->note.empty()) notes.push_back(series.fit->note);
+  } else {
+    std::size_t usable_points = 0;
+    for (std::size_t k = 0; k < size; ++k)
+      usable_points += usable[k] && std::isfinite(series.values[k]) && series.values[k] > 0.0;
+    const auto in_window = reported.window.points.size();
+    series.no_fit_reason =
+        !window.empty() && in_window < usable_points
+            ? fmt::format("{} of {} usable points in the window set by {}; a fit needs at least 2",
+                          in_window, usable_points, window.text())
+            : fmt::format("{} of {} points usable{}; a fit needs at least 2", usable_points, size,
+                          failed + flagged > 0
+                              ? fmt::format(" after excluding {} failed or flagged", failed + flagged)
+                              : std::string());
+    notes.push_back(fmt::format("no fit: {} usable point{}", usable_points,
+                                usable_points == 1 ? "" : "s"));
+  }
+  for (std::size_t i = 0; i < notes.size(); ++i) series.note += (i ? "; " : "") + notes[i];
+}
+
 std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
                                         const std::vector<TrialResult>& results) {
@@ -53,61 +110,20 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
       series.metric = metric;
       series.group = g;
       series.trials = indices;
-      std::vector<bool> usable;
-      std::size_t failed = 0, flagged = 0, first_flagged = indices.size();
+      series.exclusion_flag = std::string(flag);
       for (std::size_t k = 0; k < indices.size(); ++k) {
         const auto& result = results[indices[k]];
         const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)
                                                        : result.metrics[fill_index];
-        const double y = result.metrics[m];
-        const bool excluded =
-            !flag.empty() &&
-            std::find(result.flags.begin(), result.flags.end(), flag) != result.flags.end();
         series.abscissa.push_back(x);
         series.n.push_back(static_cast<double>(trials[indices[k]].n));
-        series.values.push_back(y);
-        series.flagged.push_back(excluded);
-        usable.push_back(result.ok && !excluded);
-        if (!result.ok) ++failed;
-        else if (excluded) {
-          ++flagged;
-          first_flagged = std::min(first_flagged, k);
-        }
+        series.values.push_back(result.metrics[m]);
+        series.flagged.push_back(
+            !flag.empty() &&
+            std::find(result.flags.begin(), result.flags.end(), flag) != result.flags.end());
+        series.failed.push_back(!result.ok);
       }
-      series.analysis = analyse_series(series.abscissa, series.n, series.values, usable);
-      const auto& reported = series.analysis.reported_analysis();
-      series.pairwise = reported.pairwise;
-      series.fit = reported.fit;
-
-      std::vector<std::string> notes;
-      if (failed) notes.push_back(fmt::format("{} failed trial{} excluded", failed, failed > 1 ? "s" : ""));
-      // Flagged values that run to the end of the series are a floor the trials measured.
-      bool flagged_tail = flagged > 0;
-      for (std::size_t k = first_flagged; flagged_tail && k < indices.size(); ++k)
-        flagged_tail = series.flagged[k] || !results[indices[k]].ok;
-      if (flagged_tail)
-        notes.push_back(fmt::format("floor from n = {}: {} value{} flagged ({})",
-                                    trials[indices[first_flagged]].n, flagged,
-                                    flagged > 1 ? "s" : "", flag));
-      else if (flagged)
-        notes.push_back(fmt::format("{} value{} excluded ({})", flagged, flagged > 1 ? "s" : "", flag));
-      if (!reported.window.note.empty()) notes.push_back(reported.window.note);
-      if (series.fit) {
-        if (!series.fit->note.empty()) notes.push_back(series.fit->note);
-      } else {
-        std::size_t usable_points = 0;
-        for (std::size_t k = 0; k < indices.size(); ++k)
-          usable_points += usable[k] && std::isfinite(series.values[k]) && series.values[k] > 0.0;
-        series.no_fit_reason =
-            fmt::format("{} of {} points usable{}; a fit needs at least 2", usable_points,
-                        indices.size(),
-                        failed + flagged > 0 ? fmt::format(" after excluding {} failed or flagged",
-                                                           failed + flagged)
-                                             : std::string());
-        notes.push_back(fmt::format("no fit: {} usable point{}", usable_points,
-                                    usable_points == 1 ? "" : "s"));
-      }
-      for (std::size_t i = 0; i < notes.size(); ++i) series.note += (i ? "; " : "") + notes[i];
+      fit_series(series, study.rates_window);
       out.push_back(std::move(series));
     }
   }

@@ -29,9 +29,22 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/rates/corrected_fit.hpp"
 #include "rkhs/rates/rates.hpp"
 
 namespace rkhs {
+
+/// A fit window set by the user (`[rates]` or an `[[expect]]` table, docs/verification.md): the
+/// usable points with n_from <= n <= n_to and h_from <= h <= h_to (ends optional, inclusive),
+/// then the last `last` of them. A set window replaces the automatic one: the fit uses exactly
+/// these points, without head or floor detection and without the pre-asymptotic term.
+struct FitWindow {
+  std::optional<double> n_from, n_to, h_from, h_to;
+  std::optional<std::size_t> last;
+  bool empty() const { return !n_from && !n_to && !h_from && !h_to && !last; }
+  /// The keys as written, e.g. "n_from = 32, last = 4"; "" when empty.
+  std::string text() const;
+};
 
 /// The usable points of a series split into head, window and floor. All indices are positions
 /// in the caller's arrays, increasing.
@@ -85,6 +98,28 @@ struct SeriesAnalysis {
     return model == RateModel::power_law ? power_law : exponential;
   }
   const ModelAnalysis& reported_analysis() const { return analysis(reported); }
+
+  /// The power law with a pre-asymptotic term (rkhs/rates/corrected_fit.hpp), fitted when the
+  /// power law's pairwise rates bend monotonically towards a limit (each successive change of
+  /// the same sign and no larger than the one before) on at least 6 points: the window with
+  /// its head, or failing that the window alone. Empty otherwise, and with a set window.
+  std::optional<CorrectedRateFit> corrected;
+  /// Positions of the points `corrected` used (its RateFit::used holds positions too).
+  std::vector<std::size_t> corrected_points;
+  /// The bend describes the series: the power law is reported, and the correction earns its
+  /// two parameters (ΔAICc = corrected->advantage >= 2 over the straight line on its points).
+  /// Rate verdicts then judge the corrected fit.
+  bool bends() const {
+    return reported == RateModel::power_law && corrected && corrected->advantage >= 2.0;
+  }
+  /// The fit a power-law rate verdict judges: corrected when bends(), else power_law.fit;
+  /// nullptr when there is none.
+  const RateFit* power_law_rate_fit() const {
+    if (bends()) return &corrected->fit;
+    return power_law.fit ? &*power_law.fit : nullptr;
+  }
+  /// Set when the user chose the window (FitWindow::text(), e.g. "n_from = 32"), else "".
+  std::string set_window;
 };
 
 /// The asymptotic window of the points (u_i, v_i), i < u.size(), already transformed (u = ln x
@@ -99,10 +134,12 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
 /// distance h), `n` the exponential model's (and the labels in notes). Points with
 /// usable[i] == false (failed trials, flagged values) and points with a non-finite or
 /// non-positive value or abscissa are left out before anything else. Throws
-/// std::invalid_argument when the sizes differ or confidence is not in (0, 1).
+/// std::invalid_argument when the sizes differ or confidence is not in (0, 1). A non-empty
+/// `window` restricts the points (h_from and h_to apply to x) and replaces the automatic
+/// window; fewer than 2 points in it leave both models without a fit.
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,
-                              double confidence = 0.95);
+                              double confidence = 0.95, const FitWindow& window = {});
 
 /// Pairwise exponential rates ln(y_{i+1} / y_i) / (n_{i+1} - n_i), the counterpart of
 /// pairwise_rates; NaN where a value is non-positive or non-finite or n_{i+1} = n_i.

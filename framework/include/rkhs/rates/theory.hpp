@@ -7,9 +7,9 @@
 // Kernels whose native space is equivalent to the Sobolev space H^tau on a bounded domain in
 // d dimensions, with fill distance h and separation distance q (quasi-uniform: q ~ h ~ n^-1/d):
 //
-//   power_function_sup     ~ h^(tau - d/2)   order attained (two-sided)
-//   sup_error             <= C h^(tau - d/2)  upper bound only (|f - Pi f| <= P ||f||_H)
-//   l2_error              <= C h^tau          upper bound only (smoother f converge faster)
+//   power_function_sup     ~ h^(tau - d/2)   order attained (two-sided)    } in h for any
+//   sup_error             <= C h^(tau - d/2)  upper bound only (|f - Pi f| <= P ||f||_H)   } centres
+//   l2_error              <= C h^tau          upper bound only (smoother f converge faster) }
 //   gram_min_eigenvalue    ~ q^(2 tau - d)   order attained (two-sided)
 //   gram_condition_number  ~ n q^-(2 tau - d) = h^(-2 tau)   (two-sided)
 //
@@ -41,6 +41,13 @@ struct TheoryRate {
   bool sharp = true;
   int direction = -1;     ///< exponential: -1 the metric decays, +1 it grows
   int dimension = 1;      ///< d of the kernel's domain (KernelProperties::dimension)
+  /// True when the statement in the fill distance h holds for any centres, quasi-uniform or
+  /// not: the power function (P(x) <= C h^(tau - d/2) by a sampling inequality, >= c
+  /// dist(x, X)^(tau - d/2) by a bump function in the largest hole) and the errors it bounds.
+  /// False when the theory is stated in the separation distance q (the Gram matrix's
+  /// eigenvalues), which is h only for quasi-uniform centres. Against n every theory needs
+  /// quasi-uniform centres (h ~ n^-1/d).
+  bool holds_for_any_centres = false;
   std::string statement;  ///< "power_function_sup ~ h^(tau - d/2) = h^0.5 (tau = 1, d = 1)"
 };
 

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "rkhs/core/parameters.hpp"
+#include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/rates/rates.hpp"
 
 namespace rkhs {
@@ -65,6 +66,9 @@ struct Expectation {
   std::string rate_reference;
   double tolerance = 0.1;           ///< rate = x and theory: half-width of the accepted interval
   BoundSpec bound;                  ///< bound only
+  /// n_from, n_to, h_from, h_to, last: the points judged (a rate: the window of the fit,
+  /// replacing the automatic one; a bound: the n where it must hold). Empty: the study's.
+  FitWindow window;
   std::vector<std::string> tiers;   ///< empty: belongs to no named tier
 
   /// Whether `trial`'s group satisfies every selector (values compared as printed in

@@ -15,6 +15,7 @@
 #include "rkhs/core/domain.hpp"
 #include "rkhs/study/expectation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/core/parameters.hpp"
 
 namespace rkhs {
@@ -101,6 +102,9 @@ struct StudyDefinition {
   std::vector<PluginChoice> plants, laws, integrators;  ///< adaptive studies only
   std::vector<std::string> metrics;  ///< the metrics written and fitted, in output order
   Abscissa abscissa = Abscissa::n;
+  /// [rates]: the window every series is fitted on (empty: the automatic asymptotic window;
+  /// rkhs/rates/asymptotic.hpp).
+  FitWindow rates_window;
   SolverOptions solver;
   StudyLimits limits;
   AdaptiveSettings adaptive;  ///< StudyKind::adaptive only

@@ -26,6 +26,8 @@ struct MetricSeries {
   std::vector<double> n;                ///< n per trial (the exponential model's abscissa)
   std::vector<double> values;           ///< the metric, NaN for failed trials
   std::vector<bool> flagged;            ///< excluded from the fit as numerically meaningless
+  std::vector<bool> failed;             ///< the trial failed (its value is not a measurement)
+  std::string exclusion_flag;           ///< the flag behind `flagged` ("" when none applies)
   /// Size trials.size() - 1, NaN where undefined: the pairwise rates of the reported model
   /// (analysis.reported), power-law rates unless the exponential model is reported.
   std::vector<double> pairwise;
@@ -40,9 +42,15 @@ struct MetricSeries {
 /// rkhs/adaptive/metrics.hpp: `flag` where `flag_excludes_from_fits`).
 std::string_view excluding_flag(StudyKind kind, std::string_view metric);
 
-/// Series for every group and every metric of the study, groups in trial order.
+/// Series for every group and every metric of the study, groups in trial order, fitted on the
+/// study's window (`[rates]`: StudyDefinition::rates_window; empty: the automatic one).
 std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
                                         const std::vector<TrialSpec>& trials,
                                         const std::vector<TrialResult>& results);
+
+/// (Re)computes a series' analysis, fit, pairwise rates, note and no_fit_reason from its
+/// abscissa, n, values, flagged and failed, on `window` (empty: the automatic window). An
+/// [[expect]] table with its own window judges the series refitted this way.
+void fit_series(MetricSeries& series, const FitWindow& window);
 
 }  // namespace rkhs
