@@ -329,3 +329,45 @@ TEST_CASE("plots: an empty series gets a note, and one failed plot does not stop
               .exit_code == 0);
   CHECK(read(dir / "out" / "report.html").find("<img") == std::string::npos);
 }
+
+TEST_CASE("the expression target: listed with its parameters, refused or noted by validate",
+          "[cli][expression]") {
+  const auto listed = run("list target");
+  CHECK(listed.exit_code == 0);
+  CHECK_THAT(listed.output, Catch::Contains("  expression f(s) written in the study file as an "
+                                            "expression of the arc length s\n"));
+  CHECK_THAT(listed.output, Catch::Contains("    f              f(s), an expression of the arc "
+                                            "length s"));
+  CHECK_THAT(listed.output, Catch::Contains("(default none: required)\n    <name>         any "
+                                            "other key: a constant f reads by that name, e.g. a "
+                                            "= 2 (a list is an axis) (a number)\n"));
+  const auto dir = scratch("expression_target");
+  const std::string header = R"([study]
+name = "cli_expression"
+evaluation_points = 256
+[domain]
+radius = 4.0
+[grid]
+n = [8, 16]
+[[kernel]]
+name = "gaussian"
+[[target]]
+name = "expression"
+)";
+  std::ofstream(dir / "typo.toml") << header << "f = \"2 * sin(2 * pi * s / L\"\n";
+  const auto refused = run("validate " + (dir / "typo.toml").string());
+  INFO(refused.output);
+  CHECK(refused.exit_code == 2);
+  CHECK_THAT(refused.output,
+             Catch::Contains("typo.toml:12:5: target.f: expression f=2 * sin(2 * pi * s / L: at "
+                             "the end of f = \"2 * sin(2 * pi * s / L\": found the end of the "
+                             "expression, expected \")\""));
+  std::ofstream(dir / "ramp.toml") << header << "f = \"a * s\"\na = [1, 2]\n";
+  const auto noted = run("validate " + (dir / "ramp.toml").string());
+  INFO(noted.output);
+  CHECK(noted.exit_code == 0);
+  CHECK_THAT(noted.output, Catch::Contains("ramp.toml:10:1: target: note: f = \"a * s\" is not "
+                                           "periodic on the closed track"));
+  CHECK_THAT(noted.output, Catch::Contains("valid; 1 kernel x 2 targets x 1 centre placement x 2 "
+                                           "values of n = 4 trials"));
+}

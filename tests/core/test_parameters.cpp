@@ -33,3 +33,29 @@ TEST_CASE("parameters resolve with defaults, types and ranges", "[registry]") {
   CHECK_THROWS_WITH(ParameterSet::resolve(specs, {{"degre", std::int64_t{1}}}),
                     "unknown parameter 'degre' (known: degree, r, convention)");
 }
+
+TEST_CASE("a plugin that takes parameters the user names resolves them after its own",
+          "[registry]") {
+  const std::vector<ParameterSpec> specs{text_parameter("f", "", "the expression")};
+  const auto user = real_parameter("<name>", 0.0, "a constant", 0.0);
+  const auto p = ParameterSet::resolve(
+      specs, {{"f", std::string("a * s")}, {"k", std::int64_t{3}}, {"a", 0.5}}, &user);
+  // Declared first, then the user's in the order of their names; integers become reals.
+  REQUIRE(p.values().size() == 3);
+  CHECK(p.canonical() == "f=a * s a=0.5 k=3");
+  CHECK(p.real("k") == 3.0);
+  CHECK(p.given("a"));
+  // Checked against the user parameters' spec: type, range, and a name for columns.
+  CHECK_THROWS_WITH(ParameterSet::resolve(specs, {{"a", std::string("x")}}, &user),
+                    "parameter 'a' must be a number, found a string");
+  CHECK_THROWS_WITH(ParameterSet::resolve(specs, {{"a", -1.0}}, &user),
+                    "parameter 'a' must be >= 0, found -1");
+  CHECK_THROWS_WITH(ParameterSet::resolve(specs, {{"a b", 1.0}}, &user),
+                    "parameter name 'a b' is not a name: a letter or _ followed by letters, "
+                    "digits and _");
+  // Without them an undeclared name is unknown, as before.
+  CHECK_THROWS_WITH(ParameterSet::resolve(specs, {{"a", 1.0}}), "unknown parameter 'a' (known: f)");
+  CHECK(check_user_parameter_name("_k2") == "");
+  CHECK(check_user_parameter_name("2k") != "");
+  CHECK(check_user_parameter_name("") != "");
+}

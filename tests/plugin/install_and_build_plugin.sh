@@ -72,7 +72,7 @@ grep -q "^beta = 0.5$" kernel-plugin/bad_beta.toml || fail "imq_study.toml has n
 status=0
 "$rkhs" validate kernel-plugin/bad_beta.toml > "$work/bad_beta.txt" 2>&1 || status=$?
 [[ $status == 2 ]] || { cat "$work/bad_beta.txt"; fail "validate with beta = 0.5 exited $status, not 2"; }
-grep -q "bad_beta.toml:[0-9]*:[0-9]*: kernel: inverse_multiquadric beta=0.5 c=1: parameter 'beta' must be > 1/2 on a closed track" "$work/bad_beta.txt" \
+grep -q "bad_beta.toml:21:8: kernel.beta: inverse_multiquadric beta=0.5 c=1: parameter 'beta' must be > 1/2 on a closed track" "$work/bad_beta.txt" \
   || { cat "$work/bad_beta.txt"; fail "no file:line:column message naming beta"; }
 
 step "--plugin and RKHS_STUDY_PLUGIN_PATH"

@@ -54,14 +54,16 @@ TEST_CASE("a bad registration is recorded, not thrown", "[registry]") {
   CHECK_FALSE(registry.add({"", "no name", {}, {}}, factory));
   auto bad = real_parameter("x", -1.0, "must be positive", 0.0);
   CHECK_FALSE(registry.add({"b", "bad default", {bad}, {}}, factory));
+  CHECK_FALSE(registry.add({"d", "bad user parameters", {}, {}, bad}, factory));
   registry.freeze();
   CHECK_FALSE(registry.add({"c", "late", {}, {}}, factory));
   const auto errors = registry.errors();
-  REQUIRE(errors.size() == 4);
+  REQUIRE(errors.size() == 5);
   CHECK(errors[0] == "centres plugin 'a': duplicate name");
   CHECK(errors[1] == "centres plugin '': empty plugin name");
   CHECK(errors[2] == "centres plugin 'b': parameter 'x': default must be >= 0");
-  CHECK(errors[3] == "centres plugin 'c': registered after the registry was frozen");
+  CHECK(errors[3] == "centres plugin 'd': user parameters: default must be >= 0");
+  CHECK(errors[4] == "centres plugin 'c': registered after the registry was frozen");
   CHECK(registry.names() == std::vector<std::string>{"a"});
 }
 

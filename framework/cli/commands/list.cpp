@@ -33,6 +33,12 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
     const auto& info = registry.find(name)->info;
     out << fmt::format("  {:<10} {}\n", name, info.doc);
     for (const auto& spec : info.parameters) out << describe_parameter(spec) << "\n";
+    if (info.user_parameters) {  // any other key: a parameter the user names
+      const auto& spec = *info.user_parameters;
+      const auto range = describe_range(spec);
+      out << fmt::format("    {:<14} {} ({}{})\n", spec.name, spec.doc, type_name(spec.type),
+                         range == "any number" ? "" : "; " + range);
+    }
     if constexpr (std::is_same_v<RegistryType, KernelRegistry>) {
       // A kernel's facts are its properties() (one source), shown for the default parameters
       // on a periodic track of length 1.

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 
@@ -194,19 +195,39 @@ std::string validate_spec(const ParameterSpec& spec) {
   return "";
 }
 
+std::string check_user_parameter_name(std::string_view name) {
+  const auto letter = [](char c) {
+    return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+  };
+  const auto letter_or_digit = [&](char c) {
+    return letter(c) || std::isdigit(static_cast<unsigned char>(c));
+  };
+  if (name.empty() || !letter(name[0]) || !std::all_of(name.begin(), name.end(), letter_or_digit))
+    return "is not a name: a letter or _ followed by letters, digits and _";
+  return "";
+}
+
 ParameterSet ParameterSet::resolve(const std::vector<ParameterSpec>& specs,
-                                   const std::map<std::string, ParameterValue>& given) {
+                                   const std::map<std::string, ParameterValue>& given,
+                                   const ParameterSpec* user_parameters) {
+  std::vector<ParameterSpec> users;  // one spec per parameter the user named, by name
   for (const auto& entry : given) {
     const std::string& name = entry.first;  // not a structured binding: the lambda captures it
-    if (std::none_of(specs.begin(), specs.end(), [&](const auto& s) { return s.name == name; })) {
+    if (std::any_of(specs.begin(), specs.end(), [&](const auto& s) { return s.name == name; }))
+      continue;
+    if (!user_parameters) {
       std::string known;
       for (std::size_t i = 0; i < specs.size(); ++i) known += (i ? ", " : "") + specs[i].name;
       throw ParameterError(name, fmt::format("unknown parameter '{}' (known: {})", name,
                                              known.empty() ? "none" : known));
     }
+    if (auto why = check_user_parameter_name(name); !why.empty())
+      throw ParameterError(name, fmt::format("parameter name '{}' {}", name, why));
+    users.push_back(*user_parameters);
+    users.back().name = name;
   }
   ParameterSet set;
-  for (const auto& spec : specs) {
+  const auto add = [&](const ParameterSpec& spec) {
     auto it = given.find(spec.name);
     ParameterValue value = it == given.end() ? spec.default_value : it->second;
     if (it == given.end() && spec.default_doc.starts_with("= ")) {
@@ -222,7 +243,9 @@ ParameterSet ParameterSet::resolve(const std::vector<ParameterSpec>& specs,
                                                   format_value(value)));
     set.values_.emplace_back(spec.name, std::move(value));
     if (it != given.end()) set.given_.push_back(spec.name);
-  }
+  };
+  for (const auto& spec : specs) add(spec);
+  for (const auto& spec : users) add(spec);
   return set;
 }
 

@@ -232,10 +232,36 @@ struct PluginEntry {
   };
   std::string name;
   const std::vector<ParameterSpec>* specs = nullptr;
-  std::vector<Axis> axes;  // in the order the plugin declares its parameters
+  std::vector<Axis> axes;  // declared parameters in declaration order, then the user's by name
   std::vector<std::string> tiers;
   toml::source_region where;
+  const ParameterSpec* user_parameters = nullptr;  // PluginInfo::user_parameters
 };
+
+// Whether a value in a study file is of a parameter type (a number for real and integer
+// parameters: whether it is whole is ParameterSet::resolve's to say).
+bool has_type(const toml::node& node, ParameterType type) {
+  switch (type) {
+    case ParameterType::real:
+    case ParameterType::integer:
+      return node.is_number();
+    case ParameterType::choice:
+    case ParameterType::text:
+      return node.is_string();
+    case ParameterType::boolean:
+      return node.is_boolean();
+  }
+  return false;
+}
+
+// Where the entry gives `parameter` in the combination `at`: its value, or the entry's table
+// when the parameter took its default.
+toml::source_region parameter_location(const PluginEntry& entry, const std::vector<std::size_t>& at,
+                                       const std::string& parameter) {
+  for (std::size_t a = 0; a < entry.axes.size(); ++a)
+    if (entry.axes[a].name == parameter) return entry.axes[a].values[at[a]].second;
+  return entry.where;
+}
 
 // The choice of `entry` with value at[a] of each axis a; fails at the value a ParameterError
 // names.
@@ -245,12 +271,24 @@ PluginChoice resolve_choice(const Reporter& report, std::string_view section,
   for (std::size_t a = 0; a < entry.axes.size(); ++a)
     given[entry.axes[a].name] = entry.axes[a].values[at[a]].first;
   try {
-    return {entry.name, ParameterSet::resolve(*entry.specs, given), entry.tiers};
+    return {entry.name, ParameterSet::resolve(*entry.specs, given, entry.user_parameters),
+            entry.tiers};
   } catch (const ParameterError& e) {
-    toml::source_region where = entry.where;
-    for (std::size_t a = 0; a < entry.axes.size(); ++a)
-      if (entry.axes[a].name == e.parameter()) where = entry.axes[a].values[at[a]].second;
-    report.fail(where, fmt::format("{}.{}", section, e.parameter()), e.what());
+    report.fail(parameter_location(entry, at, e.parameter()),
+                fmt::format("{}.{}", section, e.parameter()), e.what());
+  }
+}
+
+// Calls visit(at) for every combination of an entry's lists (at[a]: the value of axis a), the
+// first parameter varying slowest.
+template <class Visit>
+void for_each_combination(const PluginEntry& entry, Visit&& visit) {
+  std::vector<std::size_t> at(entry.axes.size(), 0);
+  while (true) {
+    visit(at);
+    std::size_t a = entry.axes.size();
+    while (a > 0 && ++at[a - 1] == entry.axes[a - 1].values.size()) at[--a] = 0;
+    if (a == 0) break;
   }
 }
 
@@ -267,6 +305,7 @@ PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
                 fmt::format("unknown {} '{}' {}", registry.kind(), entry.name,
                             with_suggestion(entry.name, registry.names())));
   entry.specs = &plugin->info.parameters;
+  if (plugin->info.user_parameters) entry.user_parameters = &*plugin->info.user_parameters;
   std::vector<std::string> known;
   for (const auto& spec : *entry.specs) known.push_back(spec.name);
 
@@ -277,11 +316,38 @@ PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
       entry.tiers = detail::parse_tiers(node, report.source(), prefix + "tier");
       continue;
     }
-    if (std::find(known.begin(), known.end(), parameter) == known.end())
+    const bool declared = std::find(known.begin(), known.end(), parameter) != known.end();
+    if (!declared && !entry.user_parameters)
       report.fail(key.source(), prefix + parameter,
                   fmt::format("unknown parameter of {} '{}' {}", registry.kind(), entry.name,
                               known.empty() ? std::string("(it has none)")
                                             : with_suggestion(parameter, known)));
+    if (!declared) {
+      // A parameter the user names: its values must have the user parameters' type (a
+      // misspelt declared parameter is said to be one, e.g. F = "..." for f).
+      const auto& spec = *entry.user_parameters;
+      const auto refuse = [&](const toml::node& value) {
+        report.fail(
+            value.source(), prefix + parameter,
+            fmt::format("'{}' is not declared by {} '{}' {}, so it is one of the "
+                        "{}'s own parameters, which must be {}: found {} ({})",
+                        parameter, registry.kind(), entry.name,
+                        known.empty() ? std::string("(it declares none)")
+                                      : with_suggestion(parameter, known),
+                        registry.kind(), type_name(spec.type), describe(value), show(value)));
+      };
+      if (auto why = check_user_parameter_name(parameter); !why.empty())
+        report.fail(key.source(), prefix + parameter,
+                    fmt::format("'{}' {} (a parameter of {} '{}' that it does not declare names "
+                                "one of its own parameters)",
+                                parameter, why, registry.kind(), entry.name));
+      if (const auto* array = node.as_array()) {
+        for (const auto& item : *array)
+          if (!has_type(item, spec.type)) refuse(item);
+      } else if (!has_type(node, spec.type)) {
+        refuse(node);
+      }
+    }
     PluginEntry::Axis axis{parameter, {}};
     if (const auto* array = node.as_array()) {
       if (array->empty()) report.fail(node.source(), prefix + parameter, "empty list of values");
@@ -301,9 +367,12 @@ PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
     }
     entry.axes.push_back(std::move(axis));
   }
+  // Declared parameters in declaration order, then the user's by name (the order of
+  // ParameterSet::resolve).
   std::sort(entry.axes.begin(), entry.axes.end(), [&](const auto& a, const auto& b) {
-    return std::find(known.begin(), known.end(), a.name) <
-           std::find(known.begin(), known.end(), b.name);
+    const auto rank_a = std::find(known.begin(), known.end(), a.name) - known.begin();
+    const auto rank_b = std::find(known.begin(), known.end(), b.name) - known.begin();
+    return rank_a != rank_b ? rank_a < rank_b : a.name < b.name;
   });
   // Every value once, with the first of the other lists (a choice of the grid): a value out of
   // range or listed twice is found here, before the entry is expanded.
@@ -326,13 +395,9 @@ PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
 // Every combination of an entry's lists, the first parameter varying slowest.
 void expand_plugin_entry(const Reporter& report, std::string_view section,
                          const PluginEntry& entry, std::vector<PluginChoice>& out) {
-  std::vector<std::size_t> at(entry.axes.size(), 0);
-  while (true) {
+  for_each_combination(entry, [&](const std::vector<std::size_t>& at) {
     out.push_back(resolve_choice(report, section, entry, at));
-    std::size_t a = entry.axes.size();
-    while (a > 0 && ++at[a - 1] == entry.axes[a - 1].values.size()) at[--a] = 0;
-    if (a == 0) break;
-  }
+  });
 }
 
 // A plugin axis ([[kernel]], [[target]], ...) read and checked, expanded later (expand_plugins):
@@ -352,8 +417,10 @@ PluginAxis read_plugins(const Reporter& report, const toml::table& root, std::st
       report.fail({}, section,
                   fmt::format("missing: add at least one [[{}]] table with a name (known: {})",
                               section, fmt::join(registry.names(), ", ")));
-    axis.entries.push_back(
-        PluginEntry{*default_name, &registry.find(*default_name)->info.parameters, {}, {}, {}});
+    const auto& info = registry.find(*default_name)->info;
+    PluginEntry entry{*default_name, &info.parameters, {}, {}, {}};
+    if (info.user_parameters) entry.user_parameters = &*info.user_parameters;
+    axis.entries.push_back(std::move(entry));
     return axis;
   }
   auto add_entry = [&](const toml::node& item) {
@@ -906,31 +973,39 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   if (projections) study.projections = expand_plugins(report, *projections);
 
   // Build every kernel and target once: a combination that is invalid only for this domain
-  // (e.g. a non-periodic sine on a closed track) is an input error, not a failed trial.
-  auto check_instances = [&](const std::vector<PluginChoice>& choices, std::string_view section,
-                             auto&& make) {
-    for (const auto& choice : choices) {
-      try {
-        make(choice);
-      } catch (const std::exception& e) {
-        report.fail(root.get(section) ? root.get(section)->source() : toml::source_region{},
-                    section, fmt::format("{}: {}", choice.label(), e.what()));
-      }
-    }
+  // (e.g. a non-periodic sine on a closed track) is an input error, not a failed trial. A
+  // ParameterError is reported at the value of the parameter it names (at the entry when that
+  // took its default), like the errors of the declarations; any other error at the section.
+  auto check_instances = [&](const PluginAxis& axis, auto&& make) {
+    const std::string_view section = axis.section;
+    for (const auto& entry : axis.entries)
+      for_each_combination(entry, [&](const std::vector<std::size_t>& at) {
+        const auto choice = resolve_choice(report, section, entry, at);
+        try {
+          make(choice, entry);
+        } catch (const ParameterError& e) {
+          report.fail(parameter_location(entry, at, e.parameter()),
+                      fmt::format("{}.{}", section, e.parameter()),
+                      fmt::format("{}: {}", choice.label(), e.what()));
+        } catch (const std::exception& e) {
+          report.fail(root.get(section) ? root.get(section)->source() : toml::source_region{},
+                      section, fmt::format("{}: {}", choice.label(), e.what()));
+        }
+      });
   };
-  check_instances(study.kernels, "kernel", [&](const PluginChoice& c) {
+  check_instances(axes[0], [&](const PluginChoice& c, const PluginEntry&) {
     kernel_registry().find(c.name)->factory(c.parameters, study.domain);
   });
-  check_instances(study.targets, "target", [&](const PluginChoice& c) {
+  check_instances(axes[1], [&](const PluginChoice& c, const PluginEntry& entry) {
     const auto target = target_registry().find(c.name)->factory(c.parameters, study.domain);
     for (const auto& note : target->notes())
-      study.warnings.push_back(report.locate(
-          root.get("target") ? root.get("target")->source() : toml::source_region{}, "target",
-          "note: " + note));
+      study.warnings.push_back(report.locate(entry.where, "target", "note: " + note));
   });
   // Every kernel with every projection and n: a projection that cannot be built for one (a
   // spline space of another kernel, an n that is not a level) is an input error.
-  check_instances(study.projections, "projection", [&](const PluginChoice& c) {
+  const PluginAxis none;  // an axis this study does not have: nothing to check
+  const auto& projection_axis = projections ? *projections : none;
+  check_instances(projection_axis, [&](const PluginChoice& c, const PluginEntry&) {
     const auto projection = projection_registry().find(c.name)->factory(c.parameters);
     const auto properties = projection->properties();
     for (const auto& k : study.kernels) {
@@ -951,7 +1026,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   // Theorem 4.1 trials: the law is the infinite-dimensional estimator, the road is f.
   if (study.kind == StudyKind::adaptive && !study.projections.empty()) {
     const auto* node = root.get("projection");
-    check_instances(study.laws, "law", [&](const PluginChoice& c) {
+    check_instances(axes[4], [&](const PluginChoice& c, const PluginEntry&) {
       const auto law = law_registry().find(c.name)->factory(c.parameters);
       if (law->coordinates() != LawCoordinates::features)
         throw std::invalid_argument(fmt::format(
@@ -970,7 +1045,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                   "with [[projection]] the gaps are taken along the integration: laps = "
                   "\"limit\" has none");
   }
-  check_instances(study.plants, "plant", [&](const PluginChoice& c) {
+  const auto& plants = study.kind == StudyKind::adaptive ? axes[3] : none;
+  check_instances(plants, [&](const PluginChoice& c, const PluginEntry&) {
     const auto plant = plant_registry().find(c.name)->factory(c.parameters);
     const auto d = plant->A().rows();
     const auto Q = parse_matrix(study.adaptive.q, d);

@@ -72,8 +72,15 @@ class ParameterSet {
   /// Resolves `given` against `specs`: fills defaults, converts integers written for real
   /// parameters, checks types, ranges and choices. Throws ParameterError for an unknown name,
   /// a wrong type or an invalid value.
+  ///
+  /// With `user_parameters` (PluginInfo::user_parameters), a name `specs` does not declare is
+  /// not unknown: it is a parameter the user named, checked against `user_parameters` (its
+  /// type and range; its name and default are not used) and required to be a valid user
+  /// parameter name (check_user_parameter_name). The user's parameters follow the declared ones,
+  /// in the order of their names.
   static ParameterSet resolve(const std::vector<ParameterSpec>& specs,
-                              const std::map<std::string, ParameterValue>& given);
+                              const std::map<std::string, ParameterValue>& given,
+                              const ParameterSpec* user_parameters = nullptr);
 
   double real(std::string_view name) const;  ///< real or integer parameter as double
   std::int64_t integer(std::string_view name) const;
@@ -107,5 +114,10 @@ std::string_view type_name(ParameterType type);
 /// Checks a declaration (default valid, bounds ordered, choices non-empty). Returns an empty
 /// string when valid, otherwise what is wrong.
 std::string validate_spec(const ParameterSpec& spec);
+
+/// "" when `name` may name a parameter a user adds to a plugin that takes them (a letter or _
+/// followed by letters, digits and _: it becomes a column of trials.csv and a selector of
+/// [[expect]] tables); otherwise what is wrong with it.
+std::string check_user_parameter_name(std::string_view name);
 
 }  // namespace rkhs

@@ -18,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -33,6 +34,13 @@ struct PluginInfo {
   std::string doc;                         ///< one line
   std::vector<ParameterSpec> parameters;   ///< in the order they are printed and keyed
   std::vector<std::pair<std::string, std::string>> traits;  ///< kind-specific facts, for `list`
+  /// Set when the plugin also takes parameters the user names: every other key of its study-file
+  /// table is one (e.g. the constants `a = 2`, `k = [1, 2]` of an expression target), checked
+  /// against this spec's type and range (ParameterSet::resolve). Its name is what `list` prints
+  /// for them ("<name>"), its doc what it says of them; its default is never used. Such
+  /// parameters are like declared ones everywhere else: a list is an axis of the grid, each is
+  /// a column of trials.csv and a selector of [[expect]] tables.
+  std::optional<ParameterSpec> user_parameters = std::nullopt;
 };
 
 /// Levenshtein distance, for "did you mean" suggestions.
@@ -70,6 +78,10 @@ class Registry {
         if (!problem.empty()) break;
         if (auto why = validate_spec(spec); !why.empty())
           problem = "parameter '" + spec.name + "': " + why;
+      }
+      if (problem.empty() && info.user_parameters) {
+        if (auto why = validate_spec(*info.user_parameters); !why.empty())
+          problem = "user parameters: " + why;
       }
       if (!problem.empty()) {
         errors_.push_back(kind_ + " plugin '" + info.name + "': " + problem);

@@ -69,7 +69,8 @@
 //    build configuration entry point
 // 6: AnyKernel::feature_basis, LearningLaw::coordinates and LearningLaw::require_kernel
 // 7: LearningLaw::reference_resolution
-#define RKHS_PLUGIN_ABI_VERSION 7
+// 8: PluginInfo::user_parameters, and ParameterSet::resolve's user parameters
+#define RKHS_PLUGIN_ABI_VERSION 8
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

@@ -63,7 +63,7 @@ struct TargetKind {
   using Registry = TargetRegistry;
   static constexpr std::string_view singular = "target";
   static constexpr std::string_view plural = "targets";
-  static constexpr std::string_view builtins[] = {"csv", "iso8608", "sine"};
+  static constexpr std::string_view builtins[] = {"csv", "expression", "iso8608", "sine"};
   static constexpr auto loaded = &LoadedPlugin::targets;
   static Registry& registry() { return target_registry(); }
 };
