@@ -84,7 +84,7 @@ int rkhs_study_main(int argc, char** argv) {
         ->check(CLI::Range(0.0, 1e9));
   };
   add_rank_timeout(run);
-  bool no_plots = false;
+  bool no_plots = false, no_check_plots = false;
   run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
 
   // The kinds `list` accepts come from the table of plugin kinds (plugin_kinds.hpp).
@@ -119,18 +119,37 @@ int rkhs_study_main(int argc, char** argv) {
 
   auto* check = app.add_subcommand(
       "check",
-      "run a study and judge its [[expect]] tables: exit 0 all pass, 1 a failure, "
-      "3 inconclusive, 2 bad input");
-  check->add_option("study", check_arguments.study_file, "study definition (TOML)")
+      "run studies and judge their [[expect]] tables: exit 0 all pass, 1 a failure, 2 bad "
+      "input, 3 inconclusive, 5 -k selected nothing");
+  check
+      ->add_option("studies", check_arguments.study_files,
+                   "study definitions (TOML), run and judged in turn")
       ->required()
       ->check(CLI::ExistingFile);
   check->add_option("--tier", check_arguments.tier,
                     "run only the entries and expectations of this tier (e.g. quick)");
-  check->add_flag("--strict", check_arguments.strict, "count inconclusive verdicts as failures");
+  check
+      ->add_option("-k", check_arguments.keyword_expression,
+                   "judge only the test cases whose names match EXPR: case-insensitive "
+                   "substrings with and, or, not and parentheses, as pytest's -k (e.g. \"power "
+                   "and not gaussian\"); a study with none selected is not run")
+      ->type_name("EXPR");
+  auto* strict = check->add_flag("--strict", check_arguments.strict,
+                                 "count inconclusive verdicts and XPASS as failures");
+  check
+      ->add_option("--allow", check_arguments.allow,
+                   "verdicts that do not fail the check: inconclusive (exit 0, not 3)")
+      ->check(CLI::IsMember({"inconclusive"}))
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->excludes(strict);
   check->add_option("--junit", check_arguments.junit_file,
-                    "write JUnit XML: one test case per expectation and group");
+                    "write JUnit XML: one suite per study, one test case per expectation and "
+                    "group");
   check->add_option("--out", check_arguments.out_dir,
-                    "also write trials.csv, rates.csv and summary.json here (default: none)");
+                    "also write what `run` writes (trials.csv, rates.csv, summary.json with the "
+                    "verdicts, report.html, plots) here; DIR/<study name> for several studies");
+  check->add_flag("--no-plots", no_check_plots, "with --out: do not render plots");
   check->add_option("--threads", check_arguments.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   check->add_flag("--quiet,-q", check_arguments.quiet, "no progress line");
@@ -167,6 +186,7 @@ int rkhs_study_main(int argc, char** argv) {
   session.runs_trials = *run || *check;
   session.shard = !run_arguments.shard.empty();
   run_arguments.plots = !no_plots;
+  check_arguments.plots = !no_check_plots;
   return run_command(session, argc, argv, [&](rkhs::pipeline::Executor& executor) {
     if (*run) return command_run(run_arguments, executor);
     if (*check) return command_check(check_arguments, executor);

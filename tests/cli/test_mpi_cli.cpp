@@ -180,6 +180,49 @@ TEST_CASE("rkhs-study check --mpi judges the same expectations", "[cli][mpi]") {
   CHECK_THAT(distributed.output, Catch::Contains("11 passed"));
 }
 
+TEST_CASE("rkhs-study check --mpi goes through several studies with every rank", "[cli][mpi]") {
+  const auto dir = rkhs::test::scratch_directory("mpi_check_several");
+  const std::string header = R"([study]
+name = "NAME"
+evaluation_points = 512
+metrics = ["fill_distance", "separation_distance", "power_function_sup"]
+[domain]
+radius = 4.0
+[grid]
+n = { from = 10, to = 60, step = 10 }
+[[kernel]]
+name = "bspline"
+degree = [1, 2]
+J = 8
+[[expect]]
+metric = "power_function_sup"
+theory = true
+)";
+  std::string files;
+  for (const auto* name : {"mpi_first", "mpi_second", "mpi_third"}) {
+    auto text = header;
+    text.replace(text.find("NAME"), 4, name);
+    std::ofstream(dir / (std::string(name) + ".toml")) << text;
+    files += " " + (dir / (std::string(name) + ".toml")).string();
+  }
+  const auto xml = dir / "r.xml";
+  const auto distributed = shell(mpirun(
+      2, "check" + files + " -k 'degree=2 and not third' --mpi --no-plots --junit " + xml.string() +
+             " --out " + (dir / "out").string() + " --store " + (dir / "store.sqlite").string()));
+  INFO(distributed.output);
+  CHECK(distributed.exit_code == 0);
+  CHECK_THAT(distributed.output,
+             Catch::Contains("mpi_third: not run: -k selects none of its 2 test cases"));
+  CHECK_THAT(distributed.output,
+             Catch::Contains("total over 3 studies: 2 passed, 0 failed, 0 inconclusive, 4 "
+                             "deselected"));
+  const auto junit = rkhs::test::read_text(xml);
+  CHECK_THAT(junit, Catch::Contains("<testsuite name=\"mpi_first\" tests=\"1\""));
+  CHECK_THAT(junit, Catch::Contains("<testsuite name=\"mpi_second\" tests=\"1\""));
+  CHECK_THAT(junit, Catch::Contains("<testsuite name=\"mpi_third\" tests=\"0\""));
+  CHECK(fs::exists(dir / "out" / "mpi_second" / "summary.json"));
+}
+
 namespace {
 
 const std::string ten_slow_trials = rkhs::test::slow_study("mpi_kill");

@@ -88,7 +88,7 @@ def validate(report, strict):
               and "verdict:" in out.text, "system-out report")
         check("CI [" in out.text and "window n = 10..60" in out.text, "fitted rate, CI and window")
     names = [c.get("name") for c in cases]
-    check(names[0] == '#1 theory <pass> & "quotes": kernel=bspline degree=1 r=1',
+    check(names[0] == 'theory <pass> & "quotes" [kernel=bspline degree=1 r=1]',
           f"escaped name read back: {names[0]}")
     failure = failures[0].find("failure")
     check(failure.get("type") == "fail", "failure type")

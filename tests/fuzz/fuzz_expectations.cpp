@@ -6,7 +6,8 @@
 // each tier it names (rkhs::restrict_to_tier, what `check --tier` does) when its grid is small.
 // Refusals are StudyError, the one exception both document; anything else is a bug. What parses
 // must hold what the parser promises: known metrics, positive finite tolerances and constants,
-// an interval whose minimum is not above its maximum.
+// an interval whose minimum is not above its maximum, an xfail reason that is not blank; and
+// its test cases must have names unique within the study.
 //
 // Inputs that name `plugins` are skipped, as in fuzz_study_file.cpp (no dlopen of what a
 // mutation names).
@@ -15,12 +16,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <set>
 #include <string>
 #include <string_view>
 
 #include "fuzz_support.hpp"
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/tiers.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
 
 namespace {
 
@@ -101,8 +104,16 @@ void check(const rkhs::StudyDefinition& study) {
       if (!e.bound.times.empty() && (e.bound.by.empty() || !listed(study.metrics, e.bound.times)))
         std::abort();
     }
+    if (!e.xfail.empty() && e.xfail.find_first_not_of(" \t") == std::string::npos) std::abort();
     (void)e.selector_text();
   }
+}
+
+// The test cases of `check` have names unique within the study (expectation_cases.hpp).
+void check_case_names(const rkhs::StudyDefinition& study) {
+  std::set<std::string> names;
+  for (const auto& c : rkhs::expectation_cases(study, study.trials()))
+    if (!names.insert(c.name).second) std::abort();
 }
 
 }  // namespace
@@ -119,6 +130,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::size_t trials = 1;
     for (const auto& axis : study.grid_axes()) trials *= axis.count;
     if (trials > 2000) return 0;  // restrict_to_tier builds the grid
+    check_case_names(study);
     for (const auto& tier : rkhs::study_tiers(study)) {
       try {
         check(rkhs::restrict_to_tier(study, tier));

@@ -65,7 +65,7 @@ def run_study(exe, source, work, study):
     out = work / name
     shutil.rmtree(out, ignore_errors=True)
     result = subprocess.run(
-        [exe, "check", "--no-store", "--quiet", "--threads", "2", "--out", name,
+        [exe, "check", "--no-store", "--no-plots", "--quiet", "--threads", "2", "--out", name,
          "--data-dir", str(source / "studies" / "data"), definition.name],
         cwd=work, capture_output=True, text=True, check=False)
     # 0 all pass, 1 a failure, 3 inconclusive: short horizons fail some expectations, and that

@@ -374,9 +374,10 @@ rate = { max = -1.0 }
   const auto counts = count_verdicts(outcomes);
   CHECK(counts.passed == 7);
   CHECK(counts.failed == 1);
-  CHECK(check_exit_code(counts, false) == 1);
-  const auto report = format_verification(outcomes, false);
-  CHECK_THAT(report, Catch::Contains("FAIL         #4 power_function_sup, kernel=bspline degree=1 r=1 (s.toml:"));
+  CHECK(check_exit_code(counts) == 1);
+  const auto report = format_verification(outcomes);
+  CHECK_THAT(report, Catch::Contains("FAIL         power_function_sup degree=1 "
+                                     "[kernel=bspline degree=1 r=1] (s.toml:"));
   CHECK_THAT(report, Catch::EndsWith("7 passed, 1 failed, 0 inconclusive\n"));
 
   // The Gaussian's theory fails when its series is algebraic.
@@ -404,8 +405,9 @@ TEST_CASE("verdicts: inconclusive when the CI is too wide or the window too shor
   REQUIRE(outcome.size() == 1);
   CHECK(outcome[0].verdict == Verdict::inconclusive);
   CHECK_THAT(outcome[0].reason, Catch::Contains("wider than the accepted interval (0.200)"));
-  CHECK(check_exit_code(count_verdicts(outcome), false) == 3);
-  CHECK(check_exit_code(count_verdicts(outcome), true) == 1);
+  CHECK(check_exit_code(count_verdicts(outcome)) == 3);
+  CHECK(check_exit_code(count_verdicts(outcome), {.strict = true}) == 1);
+  CHECK(check_exit_code(count_verdicts(outcome), {.allow_inconclusive = true}) == 0);
 
   // Only two unflagged points: no verdict.
   const Synthetic short_series("[[expect]]\nmetric = \"power_function_sup\"\ndegree = 1\ntheory = true\n",
@@ -417,8 +419,8 @@ TEST_CASE("verdicts: inconclusive when the CI is too wide or the window too shor
   CHECK(two[0].verdict == Verdict::inconclusive);
   CHECK(two[0].reason == "only 2 points in the window: a verdict needs at least 3");
 
-  CHECK(check_exit_code({}, false) == 0);
-  CHECK(format_verification({}, false) == "no expectations to check (nothing verified)\n");
+  CHECK(check_exit_code({}) == 0);
+  CHECK(format_verification({}) == "no expectations to check (nothing verified)\n");
 }
 
 TEST_CASE("verdicts: bounds report effectivities and fail when exceeded", "[verification]") {
@@ -545,10 +547,15 @@ name = "a <wrong> & \"quoted\" one"
 )", textbook);
   const auto outcomes = mixed.verify();
   REQUIRE(outcomes.size() == 3);
-  const auto xml = junit_xml({mixed.study, outcomes, false, 1.5, "quick", "2024-01-01T00:00:00Z"});
+  const auto xml =
+      junit_xml({{{&mixed.study, &outcomes, 1.5, "quick", "2024-01-01T00:00:00Z"}}, {}, {}});
   CHECK_THAT(xml, Catch::StartsWith("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"rkhs-study check\" tests=\"3\" failures=\"1\" errors=\"0\" skipped=\"0\" time=\"1.500\">"));
-  CHECK_THAT(xml, Catch::Contains("<testcase classname=\"v.power_function_sup\" name=\"#1 kernel=bspline degree=1 r=1\" file=\"s.toml\" line=\"16\""));
-  CHECK_THAT(xml, Catch::Contains("name=\"#2 a &lt;wrong&gt; &amp; &quot;quoted&quot; one: kernel=gaussian\""));
+  CHECK_THAT(xml,
+             Catch::Contains(
+                 "<testcase classname=\"v.power_function_sup\" name=\"power_function_sup "
+                 "kernel=bspline [kernel=bspline degree=1 r=1]\" file=\"s.toml\" line=\"16\""));
+  CHECK_THAT(xml, Catch::Contains(
+                      "name=\"a &lt;wrong&gt; &amp; &quot;quoted&quot; one [kernel=gaussian]\""));
   CHECK_THAT(xml, Catch::Contains("<failure type=\"fail\" message=\"FAIL: the 95% CI"));
   CHECK_THAT(xml, Catch::Contains("<property name=\"tier\" value=\"quick\"/>"));
   CHECK(xml_escape("a\nb\x01<") == "a&#10;b&lt;");

@@ -1,61 +1,245 @@
-// `rkhs-study check STUDY`: runs the study (or one tier of it) and judges its [[expect]] tables
-// (docs/verification.md). The exit code is the verdicts': 0 all pass, 1 a failure, 3 only
-// inconclusive ones besides passes (1 with --strict).
+// `rkhs-study check STUDY...`: runs each study (or one tier of it) in turn and judges its
+// [[expect]] tables (docs/verification.md): the test cases `-k` selects, xfail markers, one
+// combined report, one JUnit file with a suite per study, one exit code over all studies: 0 all
+// pass, 1 a failure (--strict: also inconclusive or XPASS), 3 inconclusive ones besides passes
+// (0 with --allow inconclusive), 5 when -k selected nothing.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <deque>
+#include <exception>
+#include <filesystem>
 #include <iostream>
+#include <optional>
+#include <set>
+#include <stdexcept>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
+#include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/study/tiers.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
 #include "rkhs/verify/junit.hpp"
+#include "rkhs/verify/keyword_expression.hpp"
 #include "rkhs/verify/verification.hpp"
 
 namespace rkhs::cli {
 
-int command_check(const CheckCommand& arguments, pipeline::Executor& executor) {
-  const auto study = pipeline::load_everywhere(executor, [&] {
-    auto loaded = load_study(arguments.study_file);
-    if (!arguments.tier.empty()) loaded = restrict_to_tier(std::move(loaded), arguments.tier);
-    return loaded;
-  });
-  if (executor.is_root()) print_warnings(study);
-  const auto trials = study.trials();
-  executor.agree_on(study, trials);
-  const bool root = executor.is_root();
-  const bool quiet = arguments.quiet || !root;
-  const int thread_count = arguments.threads > 0 ? arguments.threads : executor.default_threads();
-  const auto tier_text = arguments.tier.empty() ? std::string() : " (tier " + arguments.tier + ")";
-  if (!quiet)
-    std::cerr << fmt::format("rkhs-study check: {}{}: {}, {}\n", study.name, tier_text,
-                             counted(trials.size(), "trial", "trials"),
-                             counted(thread_count, "thread", "threads"));
-  RunOptions options;
-  options.threads = thread_count;
-  stop_on_signals(options);
-  const auto outcome = pipeline::run_study(executor, study, trials, options, arguments.store);
-  if (!root) return stop_was_requested() ? exit_interrupted : exit_ok;
-  print_store_problems(outcome);
-  if (!quiet) print_run_sources(outcome, executor);
-  if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments.store);
+namespace {
 
-  const auto& run = *outcome.completed;
-  if (!arguments.out_dir.empty()) write_outputs(run.record(), arguments.out_dir);
-  const auto outcomes = verify_expectations(study, trials, run.stored.results, run.rates);
-  std::cout << fmt::format("{}{}: {}, {} ok, {} failed in {:.2f} s\n", study.name, tier_text,
-                           counted(trials.size(), "trial", "trials"), trials.size() - run.failed,
-                           run.failed, run.seconds);
-  if (run.failed)
-    std::cout << fmt::format(
-        "note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n", run.failed,
-        run.failed > 1 ? "s" : "");
-  std::cout << format_verification(outcomes, arguments.strict);
-  if (!arguments.junit_file.empty())
-    write_file_atomically(arguments.junit_file,
-                          junit_xml({study, outcomes, arguments.strict, run.seconds,
-                                     arguments.tier, run.started}));
-  return check_exit_code(count_verdicts(outcomes), arguments.strict);
+// One study of the command line: loaded and restricted to the tier on every process, its test
+// cases split by -k before anything runs; its outcomes on the root once it ran.
+struct CheckedStudy {
+  StudyDefinition study;
+  std::vector<TrialSpec> trials;
+  std::set<std::pair<std::size_t, std::string>> selected;  ///< (expectation number, group)
+  std::size_t deselected = 0;
+  std::vector<ExpectationOutcome> outcomes;  ///< the selected cases' (root)
+  double seconds = 0;
+  std::string started;
+};
+
+// Two files that define studies of the same name would write the same --out directory and
+// JUnit suite: refused, naming both.
+void require_distinct_names(const std::deque<CheckedStudy>& studies) {
+  for (std::size_t i = 0; i < studies.size(); ++i)
+    for (std::size_t j = i + 1; j < studies.size(); ++j)
+      if (studies[i].study.name == studies[j].study.name)
+        throw std::invalid_argument(
+            studies[i].study.source == studies[j].study.source
+                ? fmt::format("{} is given twice", studies[i].study.source)
+                : fmt::format("{} and {} both define the study '{}': their reports would be "
+                              "mistaken for each other; rename one ([study] name)",
+                              studies[i].study.source, studies[j].study.source,
+                              studies[i].study.name));
+}
+
+class Check {
+ public:
+  Check(const CheckCommand& arguments, pipeline::Executor& executor)
+      : arguments_(arguments), executor_(executor) {
+    policy_.strict = arguments.strict;
+    policy_.allow_inconclusive = std::find(arguments.allow.begin(), arguments.allow.end(),
+                                           "inconclusive") != arguments.allow.end();
+    tier_text_ = arguments.tier.empty() ? std::string() : " (tier " + arguments.tier + ")";
+  }
+
+  int run() {
+    collect();
+    const bool root = executor_.is_root();
+    for (auto& checked : studies_) {
+      if (selection_ && checked.selected.empty()) {
+        if (root) report_not_run(checked);
+        continue;
+      }
+      // The root reports (and may fail to write); every process then learns whether to go on,
+      // so that the ranks of an MPI job leave together.
+      std::optional<int> stop;
+      std::exception_ptr error;
+      const auto outcome = run_one(checked);
+      if (root) {
+        try {
+          stop = report(checked, outcome);
+        } catch (...) {
+          error = std::current_exception();
+        }
+      }
+      const bool go_on = executor_.root_decision(!stop && !error);
+      if (error) std::rethrow_exception(error);
+      if (!go_on) {
+        if (stop) return *stop;
+        return stop_was_requested() ? exit_interrupted : exit_ok;
+      }
+    }
+    return root ? finish() : exit_ok;
+  }
+
+ private:
+  // Every study loaded, restricted to the tier and split by -k before any trial runs: a bad file
+  // or expression is exit 2, naming it, with nothing run.
+  void collect() {
+    executor_.on_every_process([&] {
+      if (!arguments_.keyword_expression.empty())
+        selection_ = KeywordExpression::parse(arguments_.keyword_expression);
+    });
+    for (const auto& file : arguments_.study_files) {
+      auto study = pipeline::load_everywhere(executor_, [&] {
+        auto loaded = load_study(file);
+        if (!arguments_.tier.empty()) loaded = restrict_to_tier(std::move(loaded), arguments_.tier);
+        return loaded;
+      });
+      studies_.push_back(CheckedStudy{std::move(study), {}, {}, 0, {}, 0, {}});
+    }
+    executor_.on_every_process([&] { require_distinct_names(studies_); });
+    for (auto& checked : studies_) {
+      if (executor_.is_root()) print_warnings(checked.study);
+      checked.trials = checked.study.trials();
+      for (const auto& c : expectation_cases(checked.study, checked.trials)) {
+        if (!selection_ || selection_->matches(c.keywords))
+          checked.selected.emplace(c.expectation->number, c.group);
+        else
+          ++checked.deselected;
+      }
+    }
+  }
+
+  pipeline::PipelineOutcome run_one(const CheckedStudy& checked) {
+    executor_.agree_on(checked.study, checked.trials);
+    const int threads = arguments_.threads > 0 ? arguments_.threads : executor_.default_threads();
+    if (!quiet())
+      std::cerr << fmt::format("rkhs-study check: {}{}: {}, {}\n", checked.study.name, tier_text_,
+                               counted(checked.trials.size(), "trial", "trials"),
+                               counted(threads, "thread", "threads"));
+    RunOptions options;
+    options.threads = threads;
+    stop_on_signals(options);
+    return pipeline::run_study(executor_, checked.study, checked.trials, options, arguments_.store);
+  }
+
+  bool quiet() const { return arguments_.quiet || !executor_.is_root(); }
+
+  // The study's verdicts, outputs and report on the root; the exit code when the check must
+  // stop (an interrupted run), nothing otherwise.
+  std::optional<int> report(CheckedStudy& checked, const pipeline::PipelineOutcome& outcome) {
+    print_store_problems(outcome);
+    if (!quiet()) print_run_sources(outcome, executor_);
+    if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments_.store);
+
+    const auto& run = *outcome.completed;
+    const auto& study = checked.study;
+    checked.outcomes = verify_expectations(study, checked.trials, run.stored.results, run.rates);
+    std::erase_if(checked.outcomes, [&](const ExpectationOutcome& o) {
+      return !checked.selected.contains({o.expectation->number, o.group});
+    });
+    checked.seconds = run.seconds;
+    checked.started = run.started;
+    if (!arguments_.out_dir.empty()) write_outputs_of(checked, run);
+    std::cout << fmt::format("{}{}: {}, {} ok, {} failed in {:.2f} s\n", study.name, tier_text_,
+                             counted(checked.trials.size(), "trial", "trials"),
+                             checked.trials.size() - run.failed, run.failed, run.seconds);
+    if (run.failed)
+      std::cout << fmt::format(
+          "note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n", run.failed,
+          run.failed > 1 ? "s" : "");
+    std::cout << format_verification(checked.outcomes, policy_, checked.deselected);
+    return std::nullopt;
+  }
+
+  // What `run --out` writes, with the verdicts in summary.json and report.html: into --out,
+  // or --out/<study name> when several studies are checked.
+  void write_outputs_of(const CheckedStudy& checked, const pipeline::CompletedRun& run) const {
+    const auto directory = studies_.size() > 1
+                               ? std::filesystem::path(arguments_.out_dir) / checked.study.name
+                               : std::filesystem::path(arguments_.out_dir);
+    auto record = run.record();
+    record.tier = arguments_.tier;
+    record.verdicts = &checked.outcomes;
+    record.deselected = checked.deselected;
+    write_outputs(record, directory);
+    const std::size_t plots = arguments_.plots ? render_plots(record, directory, quiet()) : 0;
+    write_file_atomically(
+        directory / "report.html",
+        html_report(record, arguments_.plots ? directory / "plots" : std::filesystem::path(),
+                    &checked.outcomes));
+    if (!quiet())
+      std::cerr << fmt::format("  wrote {}/trials.csv, rates.csv, summary.json, report.html{}\n",
+                               directory.string(),
+                               plots ? fmt::format(", plots/ ({} plots)", plots) : "");
+  }
+
+  void report_not_run(const CheckedStudy& checked) const {
+    const std::size_t cases = checked.deselected;
+    std::cout << fmt::format("{}{}: not run: {}\n", checked.study.name, tier_text_,
+                             cases ? fmt::format("-k selects none of its {} ({} deselected)",
+                                                 counted(cases, "test case", "test cases"), cases)
+                                   : std::string("it has no expectations to judge"));
+  }
+
+  // The combined counts, the JUnit file and the exit code, on the root.
+  int finish() const {
+    VerdictCounts total;
+    double seconds = 0;
+    for (const auto& checked : studies_) {
+      auto counts = count_verdicts(checked.outcomes);
+      counts.deselected = checked.deselected;
+      total += counts;
+      seconds += checked.seconds;
+    }
+    if (!arguments_.junit_file.empty()) {
+      JUnitReport junit{{}, policy_, arguments_.keyword_expression};
+      for (const auto& checked : studies_)
+        junit.suites.push_back({&checked.study, &checked.outcomes, checked.seconds, arguments_.tier,
+                                checked.started, checked.deselected});
+      write_file_atomically(arguments_.junit_file, junit_xml(junit));
+    }
+    if (studies_.size() > 1)
+      std::cout << fmt::format("total over {} studies: {} in {:.2f} s\n", studies_.size(),
+                               format_counts(total, policy_), seconds);
+    // -k that selects nothing is pytest's "no tests collected" (5), also when the studies
+    // have no expectations at all.
+    if (selection_ && total.selected() == 0) {
+      std::cout << (total.deselected
+                        ? fmt::format("no test case selected: -k '{}' deselected all {}\n",
+                                      selection_->text(), total.deselected)
+                        : std::string("no test case selected: no expectations to judge\n"));
+      return check_none_selected;
+    }
+    return check_exit_code(total, policy_);
+  }
+
+  const CheckCommand& arguments_;
+  pipeline::Executor& executor_;
+  CheckPolicy policy_;
+  std::string tier_text_;
+  std::optional<KeywordExpression> selection_;
+  std::deque<CheckedStudy> studies_;  // a deque: outcomes point into each study, never moved
+};
+
+}  // namespace
+
+int command_check(const CheckCommand& arguments, pipeline::Executor& executor) {
+  return Check(arguments, executor).run();
 }
 
 }  // namespace rkhs::cli

@@ -11,24 +11,32 @@
 namespace rkhs::cli {
 
 constexpr int exit_ok = 0, exit_failed_trials = 1, exit_bad_input = 2, exit_interrupted = 130;
+// `check` adds the verdicts' codes: check_failed (1), check_inconclusive (3) and
+// check_none_selected (5) of rkhs/verify/verification.hpp.
 
 /// Options of the commands that run trials.
 struct RunArguments {
-  std::string study_file;
   int threads = 0;     ///< 0: the executor's default (all cores)
   bool quiet = false;  ///< no progress line, no per-run messages
   pipeline::StoreOptions store;
+  bool plots = true;  ///< render plots into <out>/plots (--no-plots: not)
 };
 
 struct RunCommand : RunArguments {
+  std::string study_file;
   std::string out_dir;  ///< "" : results/<study name>
-  bool plots = true;
   std::string shard;    ///< "K/N" or ""
 };
 int command_run(const RunCommand& arguments, pipeline::Executor& executor);
 
+/// `check`: the studies run and judged in turn with the same options, one report, one exit
+/// code (docs/verification.md).
 struct CheckCommand : RunArguments {
-  std::string tier, junit_file, out_dir;
+  std::vector<std::string> study_files;
+  std::string tier, junit_file;
+  std::string out_dir;             ///< "": none; with several studies, DIR/<study name> each
+  std::string keyword_expression;  ///< -k: the test cases to judge ("": all)
+  std::vector<std::string> allow;  ///< --allow: verdicts that do not fail ("inconclusive")
   bool strict = false;
 };
 int command_check(const CheckCommand& arguments, pipeline::Executor& executor);

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "commands/commands.hpp"
+#include "rkhs/report/plots.hpp"
 
 namespace rkhs::cli {
 
@@ -83,6 +84,23 @@ void print_run_sources(const pipeline::PipelineOutcome& outcome,
     std::cerr << fmt::format("  {} reused from {}, {} run now\n",
                              counted(outcome.completed->stored.reused, "trial", "trials"),
                              outcome.store_file, outcome.completed->stored.ran);
+}
+
+std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bool quiet) {
+  try {
+    const auto outcome = write_plots(record, out_dir);
+    if (!quiet) {
+      std::cerr << fmt::format("  {} in {}/plots (SVG and PNG)\n",
+                               counted(outcome.rendered.size(), "plot", "plots"), out_dir);
+      for (const auto& note : outcome.notes) std::cerr << "  note: " << note << "\n";
+    }
+    for (const auto& failure : outcome.failures)
+      std::cerr << "rkhs-study: warning: plot not rendered: " << failure << "\n";
+    return outcome.rendered.size();
+  } catch (const std::exception& e) {
+    std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
+    return 0;
+  }
 }
 
 void print_store_problems(const pipeline::PipelineOutcome& outcome) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "rkhs/pipeline/study_pipeline.hpp"
+#include "rkhs/report/output.hpp"
 #include "rkhs/run/run.hpp"
 #include "rkhs/study/study.hpp"
 
@@ -36,6 +37,10 @@ int report_interruption(const StoredRun& run, const pipeline::StoreOptions& stor
 /// (stderr), after a run whose every trial has a result.
 void print_run_sources(const pipeline::PipelineOutcome& outcome,
                        const pipeline::Executor& executor);
+
+/// Plots of `record` into <out_dir>/plots (rkhs/report/plots.hpp); the number rendered. What
+/// could not be rendered is a warning on stderr, never an error.
+std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bool quiet);
 
 /// "rkhs-study: warning: STORE: trial KEY: what is wrong; run again" for every stored record a
 /// run did not trust (StoredRun::store_problems), on stderr, also with --quiet.

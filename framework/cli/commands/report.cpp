@@ -1,5 +1,6 @@
 // `rkhs-study report DIR`: the tables of the run in DIR again, from the study file its
-// summary.json names and the result store (trials not stored are run).
+// summary.json names (restricted to its tier, if it ran one) and the result store (trials not
+// stored are run).
 #include <iostream>
 
 #include "commands/commands.hpp"
@@ -7,13 +8,16 @@
 #include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/report/run_summary.hpp"
+#include "rkhs/study/tiers.hpp"
 
 namespace rkhs::cli {
 
 int command_report(const std::string& directory, const std::string& format,
                    const pipeline::StoreOptions& store) {
   const auto summary = read_run_summary(std::filesystem::path(directory) / "summary.json");
-  const auto study = load_study(summary.source);
+  // A run of one tier (`check --tier quick --out DIR`) is reported as it ran.
+  auto study = load_study(summary.source);
+  if (!summary.tier.empty()) study = restrict_to_tier(std::move(study), summary.tier);
   const auto trials = study.trials();
   pipeline::LocalExecutor executor;
   RunOptions options;

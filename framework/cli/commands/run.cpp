@@ -15,7 +15,6 @@
 #include "rkhs/pipeline/journal.hpp"
 #include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
-#include "rkhs/report/plots.hpp"
 
 namespace rkhs::cli {
 
@@ -62,24 +61,6 @@ int run_shard(const RunCommand& arguments, const StudyDefinition& study,
       study.name, k, n, mine.size(), trials.size(), stored.reused, stored.ran,
       arguments.store.file);
   return exit_ok;
-}
-
-// Plots into <out>/plots; what could not be rendered is a warning, never an error.
-std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bool quiet) {
-  try {
-    const auto outcome = write_plots(record, out_dir);
-    if (!quiet) {
-      std::cerr << fmt::format("  {} in {}/plots (SVG and PNG)\n",
-                               counted(outcome.rendered.size(), "plot", "plots"), out_dir);
-      for (const auto& note : outcome.notes) std::cerr << "  note: " << note << "\n";
-    }
-    for (const auto& failure : outcome.failures)
-      std::cerr << "rkhs-study: warning: plot not rendered: " << failure << "\n";
-    return outcome.rendered.size();
-  } catch (const std::exception& e) {
-    std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
-    return 0;
-  }
 }
 
 }  // namespace
@@ -135,21 +116,19 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
     return report_interruption(*outcome.interrupted, arguments.store, journal->file().string());
 
   const auto& run = *outcome.completed;
-  const auto record = run.record();
+  // The expectations' verdicts, judged once here, go into summary.json and report.html.
+  const auto verdicts = verify_expectations(study, trials, run.stored.results, run.rates);
+  auto record = run.record();
+  record.verdicts = &verdicts;
   write_outputs(record, out_dir);
   journal->remove();
   const std::size_t plot_count = arguments.plots ? render_plots(record, out_dir, quiet) : 0;
   // Without plots this run, the page embeds none (not those an earlier run left in plots/).
-  // The page shows the expectations' verdicts, judged once here.
-  std::optional<std::vector<ExpectationOutcome>> verdicts;
-  if (!study.expectations.empty())
-    verdicts = verify_expectations(study, record.trials, record.results, record.rates);
-  write_file_atomically(
-      std::filesystem::path(out_dir) / "report.html",
-      html_report(record,
-                  arguments.plots ? std::filesystem::path(out_dir) / "plots"
-                                  : std::filesystem::path(),
-                  verdicts ? &*verdicts : nullptr));
+  write_file_atomically(std::filesystem::path(out_dir) / "report.html",
+                        html_report(record,
+                                    arguments.plots ? std::filesystem::path(out_dir) / "plots"
+                                                    : std::filesystem::path(),
+                                    &verdicts));
 
   if (!quiet) std::cout << console_tables(record);
   std::cout << fmt::format(

@@ -154,10 +154,11 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
 
   if (!study.expectations.empty()) {
     page += "<h2>Expectations</h2>\n";
-    page += verdicts ? "<pre class=\"verdicts\">" +
-                           escape_html(format_verification(*verdicts, false)) + "</pre>\n"
-                     : "<p>Not judged in this report (<code>rkhs-study check</code> judges "
-                       "them).</p>\n";
+    page += verdicts
+                ? "<pre class=\"verdicts\">" +
+                      escape_html(format_verification(*verdicts, {}, run.deselected)) + "</pre>\n"
+                : "<p>Not judged in this report (<code>rkhs-study check</code> judges "
+                  "them).</p>\n";
   }
 
   page += "<h2>Rates</h2>\n";

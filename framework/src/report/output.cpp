@@ -1,13 +1,13 @@
 #include "rkhs/report/output.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -60,6 +60,59 @@ std::string json_plugin(const PluginChoice& choice) {
 
 std::string group_label(const TrialSpec& trial) {
   return trial.group_key;
+}
+
+std::string_view kind_name(ExpectationKind kind) {
+  switch (kind) {
+    case ExpectationKind::theory:
+      return "theory";
+    case ExpectationKind::rate:
+      return "rate";
+    case ExpectationKind::model:
+      return "model";
+    case ExpectationKind::bound:
+      return "bound";
+  }
+  return "";
+}
+
+// "expectations": the verdicts of RunRecord::verdicts, one object per test case.
+std::string expectations_json(const RunRecord& run) {
+  auto counts = count_verdicts(*run.verdicts);
+  counts.deselected = run.deselected;
+  std::string out = fmt::format(
+      "  \"expectations\": {{\n    \"counts\": {{\"passed\": {}, \"failed\": {}, "
+      "\"inconclusive\": {}, \"xfailed\": {}, \"xpassed\": {}, \"deselected\": {}}},\n"
+      "    \"outcomes\": [\n",
+      counts.passed, counts.failed, counts.inconclusive, counts.xfailed, counts.xpassed,
+      counts.deselected);
+  const auto optional_text = [](const std::string& text) {
+    return text.empty() ? std::string("null") : json_string(text);
+  };
+  const auto n_or_null = [](std::size_t n) { return n ? std::to_string(n) : std::string("null"); };
+  for (std::size_t k = 0; k < run.verdicts->size(); ++k) {
+    const auto& o = (*run.verdicts)[k];
+    const auto& e = *o.expectation;
+    std::string verdict(verdict_name(o.verdict));
+    for (auto& c : verdict) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    out += fmt::format(
+        "      {{\"name\": {}, \"expectation_name\": {}, \"metric\": {}, \"kind\": {}, "
+        "\"location\": {}, \"group\": {}, \"group_label\": {}, \"verdict\": {}, "
+        "\"outcome\": {}, \"xfail\": {}, \"rate\": {}, \"ci_low\": {}, \"ci_high\": {}, "
+        "\"accepted_low\": {}, \"accepted_high\": {}, \"effectivity_min\": {}, "
+        "\"effectivity_max\": {}, \"window\": {{\"from\": {}, \"to\": {}, \"points\": {}}}, "
+        "\"expected\": {}, \"found\": {}, \"reason\": {}, \"seconds\": {}}}{}\n",
+        json_string(o.name), optional_text(e.name), json_string(e.metric),
+        json_string(kind_name(e.kind)), json_string(e.location), json_string(o.group),
+        json_string(o.group_label), json_string(verdict),
+        json_string(case_outcome_id(case_outcome(o))), optional_text(e.xfail), json_number(o.rate),
+        json_number(o.ci_low), json_number(o.ci_high), json_number(o.accepted_low),
+        json_number(o.accepted_high), json_number(o.effectivity_min),
+        json_number(o.effectivity_max), n_or_null(o.window_from), n_or_null(o.window_to),
+        o.window_points, json_string(o.expected), json_string(o.found), json_string(o.reason),
+        json_number(std::round(o.seconds * 1e4) / 1e4), k + 1 < run.verdicts->size() ? "," : "");
+  }
+  return out + "    ]\n  }\n";
 }
 
 }  // namespace
@@ -265,6 +318,7 @@ std::string summary_json(const RunRecord& run) {
   for (const auto& r : run.results) failed += r.ok ? 0 : 1;
   out += fmt::format("  \"counts\": {{\"trials\": {}, \"ok\": {}, \"failed\": {}}},\n",
                      run.trials.size(), run.trials.size() - failed, failed);
+  out += fmt::format("  \"tier\": {},\n", run.tier.empty() ? "null" : json_string(run.tier));
 
   out += "  \"trials\": [\n";
   for (const auto& trial : run.trials) {
@@ -328,8 +382,8 @@ std::string summary_json(const RunRecord& run) {
         n_list(flagged), fmt::join(pairwise, ", "), json_string(series.note),
         model_fields(alternative), s + 1 < run.rates.size() ? "," : "");
   }
-  out += "  ]\n}\n";
-  return out;
+  out += run.verdicts ? "  ],\n" + expectations_json(run) : "  ]\n";
+  return out + "}\n";
 }
 
 std::string estimates_csv(const RunRecord& run) {

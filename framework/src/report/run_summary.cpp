@@ -22,7 +22,7 @@ RunSummary read_run_summary(const std::filesystem::path& file) {
     if (!json.is_object() || !json.contains(key) || !json[key].is_string()) return {};
     return json[key].get<std::string>();
   };
-  RunSummary summary{text("study"), text("source")};
+  RunSummary summary{text("study"), text("source"), text("tier")};
   if (summary.source.empty())
     throw std::runtime_error(file.string() + ": no \"source\" study file recorded");
   return summary;

@@ -56,4 +56,9 @@ bool Expectation::in_tier(std::string_view tier) const {
   return tier.empty() || std::find(tiers.begin(), tiers.end(), tier) != tiers.end();
 }
 
+std::string Expectation::id() const {
+  if (!name.empty()) return name;
+  return selectors.empty() ? metric : metric + ' ' + selector_text();
+}
+
 }  // namespace rkhs

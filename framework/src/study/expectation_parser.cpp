@@ -38,6 +38,7 @@ class ExpectationReader {
     read_metric(table, e);
     if (const auto* node = table.get("name")) e.name = string_at(*node, "expect.name");
     if (const auto* node = table.get("tier")) e.tiers = parse_tiers(*node, study_.source, "expect.tier");
+    if (const auto* node = table.get("xfail")) e.xfail = read_xfail(*node);
     read_selectors(table, e);
     read_kind(table, e);
     e.window = read_fit_window(Reporter(study_.source), table, "expect.", study_);
@@ -50,8 +51,18 @@ class ExpectationReader {
 
  private:
   static inline const std::vector<std::string> reserved_{
-      "metric", "name", "tier", "theory", "rate", "tolerance", "model", "bound",
+      "metric", "name", "tier", "xfail", "theory", "rate", "tolerance", "model", "bound",
       "n_from", "n_to", "h_from", "h_to", "last"};
+
+  // xfail = "reason": why the expectation is known not to hold, which reports repeat.
+  std::string read_xfail(const toml::node& node) const {
+    if (!node.is_string() || node.as_string()->get().find_first_not_of(" \t") == std::string::npos)
+      fail(study_.source, node.source(), "expect.xfail",
+           fmt::format("expected the reason the expectation is known not to hold (a non-empty "
+                       "string, e.g. xfail = \"the floor sets in before n = 50\"), found {}",
+                       show(node)));
+    return node.as_string()->get();
+  }
 
   std::string string_at(const toml::node& node, std::string_view key) const {
     if (!node.is_string())

@@ -36,50 +36,100 @@ std::string line_of(const std::string& location) {
 }  // namespace
 
 std::string junit_xml(const JUnitReport& report) {
-  const auto counts = count_verdicts(report.outcomes);
-  const std::size_t failures = counts.failed + (report.strict ? counts.inconclusive : 0);
-  const std::size_t skipped = report.strict ? 0 : counts.inconclusive;
-  const auto time = fmt::format("{:.3f}", report.seconds);
-  const auto& study = report.study;
+  const bool strict = report.policy.strict;
+  struct Totals {
+    std::size_t tests = 0, failures = 0, skipped = 0;
+  };
+  const auto totals_of = [&](const std::vector<ExpectationOutcome>& outcomes) {
+    const auto counts = count_verdicts(outcomes);
+    return Totals{outcomes.size(),
+                  counts.failed + (strict ? counts.inconclusive + counts.xpassed : 0),
+                  counts.xfailed + (strict ? 0 : counts.inconclusive)};
+  };
+  Totals all;
+  double seconds = 0;
+  for (const auto& suite : report.suites) {
+    const auto totals = totals_of(*suite.outcomes);
+    all.tests += totals.tests;
+    all.failures += totals.failures;
+    all.skipped += totals.skipped;
+    seconds += suite.seconds;
+  }
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   out += fmt::format(
       "<testsuites name=\"rkhs-study check\" tests=\"{}\" failures=\"{}\" errors=\"0\" "
-      "skipped=\"{}\" time=\"{}\">\n",
-      report.outcomes.size(), failures, skipped, time);
-  out += fmt::format(
-      "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"0\" skipped=\"{}\" "
-      "time=\"{}\"{} file=\"{}\">\n",
-      xml_escape(study.name), report.outcomes.size(), failures, skipped, time,
-      report.timestamp.empty() ? std::string() : fmt::format(" timestamp=\"{}\"", xml_escape(report.timestamp)),
-      xml_escape(study.source));
-  out += "    <properties>\n";
-  out += fmt::format("      <property name=\"study\" value=\"{}\"/>\n", xml_escape(study.source));
-  out += fmt::format("      <property name=\"tier\" value=\"{}\"/>\n",
-                     xml_escape(report.tier.empty() ? "all" : report.tier));
-  out += fmt::format("      <property name=\"strict\" value=\"{}\"/>\n", report.strict ? "true" : "false");
-  out += "    </properties>\n";
-  for (const auto& o : report.outcomes) {
-    const auto& e = *o.expectation;
-    const auto name = fmt::format("#{} {}{}", e.number, e.name.empty() ? "" : e.name + ": ", o.group_label);
+      "skipped=\"{}\" time=\"{:.3f}\">\n",
+      all.tests, all.failures, all.skipped, seconds);
+  for (const auto& suite : report.suites) {
+    const auto& study = *suite.study;
+    const auto totals = totals_of(*suite.outcomes);
     out += fmt::format(
-        "    <testcase classname=\"{}.{}\" name=\"{}\" file=\"{}\" line=\"{}\" time=\"0\">\n",
-        xml_escape(study.name), xml_escape(e.metric), xml_escape(name), xml_escape(study.source),
-        line_of(e.location));
-    const auto body = fmt::format("expected: {}\nfound: {}\nverdict: {}: {}\ngroup: {}\nat: {}",
-                                  o.expected, o.found, verdict_name(o.verdict), o.reason, o.group,
-                                  e.location);
-    const auto message = fmt::format("{}: {}. Expected {}. Found {}", verdict_name(o.verdict),
-                                     o.reason, o.expected, o.found);
-    if (o.verdict == Verdict::fail || (report.strict && o.verdict == Verdict::inconclusive))
-      out += fmt::format("      <failure type=\"{}\" message=\"{}\">{}</failure>\n",
-                         o.verdict == Verdict::fail ? "fail" : "inconclusive", xml_escape(message),
-                         xml_escape(body, false));
-    else if (o.verdict == Verdict::inconclusive)
-      out += fmt::format("      <skipped message=\"{}\"/>\n", xml_escape(message));
-    out += fmt::format("      <system-out>{}</system-out>\n", xml_escape(body, false));
-    out += "    </testcase>\n";
+        "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"0\" skipped=\"{}\" "
+        "time=\"{:.3f}\"{} file=\"{}\">\n",
+        xml_escape(study.name), totals.tests, totals.failures, totals.skipped, suite.seconds,
+        suite.timestamp.empty() ? std::string()
+                                : fmt::format(" timestamp=\"{}\"", xml_escape(suite.timestamp)),
+        xml_escape(study.source));
+    out += "    <properties>\n";
+    const auto property = [&out](std::string_view name, std::string_view value) {
+      out += fmt::format("      <property name=\"{}\" value=\"{}\"/>\n", name, xml_escape(value));
+    };
+    property("study", study.source);
+    property("tier", suite.tier.empty() ? "all" : suite.tier);
+    property("strict", strict ? "true" : "false");
+    if (report.policy.allow_inconclusive) property("allow", "inconclusive");
+    if (!report.keyword_expression.empty()) {
+      property("keyword_expression", report.keyword_expression);
+      property("deselected", std::to_string(suite.deselected));
+    }
+    out += "    </properties>\n";
+    for (const auto& o : *suite.outcomes) {
+      const auto& e = *o.expectation;
+      const auto outcome = case_outcome(o);
+      out += fmt::format(
+          "    <testcase classname=\"{}.{}\" name=\"{}\" file=\"{}\" line=\"{}\" "
+          "time=\"{:.3f}\">\n",
+          xml_escape(study.name), xml_escape(e.metric), xml_escape(o.name),
+          xml_escape(study.source), line_of(e.location), o.seconds);
+      const auto xfail = e.xfail.empty() ? std::string() : fmt::format("\nxfail: {}", e.xfail);
+      const auto body =
+          fmt::format("expected: {}\nfound: {}\nverdict: {}: {}{}\noutcome: {}\ngroup: {}\nat: {}",
+                      o.expected, o.found, verdict_name(o.verdict), o.reason, xfail,
+                      case_outcome_name(outcome), o.group, e.location);
+      const auto message = fmt::format("{}: {}. Expected {}. Found {}", verdict_name(o.verdict),
+                                       o.reason, o.expected, o.found);
+      const auto failure = [&](std::string_view type, const std::string& text) {
+        out += fmt::format("      <failure type=\"{}\" message=\"{}\">{}</failure>\n", type,
+                           xml_escape(text), xml_escape(body, false));
+      };
+      const auto skipped = [&](std::string_view type, const std::string& text) {
+        out += fmt::format("      <skipped type=\"{}\" message=\"{}\"/>\n", type, xml_escape(text));
+      };
+      switch (outcome) {
+        case CaseOutcome::passed:
+          break;
+        case CaseOutcome::failed:
+          failure("fail", message);
+          break;
+        case CaseOutcome::inconclusive:
+          if (strict)
+            failure("inconclusive", message);
+          else
+            skipped("inconclusive", message);
+          break;
+        case CaseOutcome::xfailed:
+          skipped("xfail", fmt::format("XFAIL: {}. {}", e.xfail, message));
+          break;
+        case CaseOutcome::xpassed:
+          if (strict) failure("xpass", fmt::format("XPASS(strict): {}. {}", e.xfail, message));
+          break;
+      }
+      out += fmt::format("      <system-out>{}</system-out>\n", xml_escape(body, false));
+      out += "    </testcase>\n";
+    }
+    out += "  </testsuite>\n";
   }
-  out += "  </testsuite>\n</testsuites>\n";
+  out += "</testsuites>\n";
   return out;
 }
 

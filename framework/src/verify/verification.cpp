@@ -3,15 +3,16 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
-#include <set>
 
 #include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/study/trial_grid.hpp"
 #include "rkhs/rates/theory.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
 
 namespace rkhs {
 namespace {
@@ -171,7 +172,8 @@ class Verifier {
   Verifier(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
            const std::vector<TrialResult>& results, const std::vector<MetricSeries>& rates)
       : study_(study), trials_(trials), results_(results), rates_(rates) {
-    label_groups();
+    for (auto& c : expectation_cases(study_, trials_))
+      cases_.emplace(std::pair(c.expectation, c.group), std::move(c));
   }
 
   std::vector<ExpectationOutcome> run() const {
@@ -182,37 +184,15 @@ class Verifier {
         if (series.metric != expectation.metric || series.trials.empty() ||
             !expectation.selects(trials_[series.trials.front()]))
           continue;
+        const auto start = std::chrono::steady_clock::now();
         out.push_back(judge(expectation, s));
+        out.back().seconds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       }
     return out;
   }
 
  private:
-  // The axis columns whose values differ between groups (kernel always), for short labels.
-  void label_groups() {
-    const auto columns = axis_columns(trials_);
-    std::map<std::string, std::vector<std::string>> values;  // group key -> axis values
-    for (const auto& trial : trials_)
-      if (!values.contains(trial.group_key)) values[trial.group_key] = axis_values(columns, trial);
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-      std::set<std::string> distinct;
-      for (const auto& [key, v] : values)
-        if (!v[c].empty()) distinct.insert(v[c]);
-      if (distinct.size() > 1 || columns[c] == "kernel") shown_.push_back(c);
-    }
-    for (const auto& [key, v] : values) {
-      std::string label;
-      for (auto c : shown_) {
-        if (v[c].empty()) continue;
-        if (!label.empty()) label += ' ';
-        label += columns[c];
-        label += '=';
-        label += v[c];
-      }
-      labels_[key] = label;
-    }
-  }
-
   ExpectationOutcome judge(const Expectation& e, std::size_t s) const {
     // An expectation with its own window judges the series refitted on it.
     std::optional<MetricSeries> windowed;
@@ -225,7 +205,10 @@ class Verifier {
     o.expectation = &e;
     o.series = s;
     o.group = trials_[series.trials.front()].group_key;
-    o.group_label = labels_.at(o.group);
+    const auto& test_case = cases_.at(std::pair(&e, o.group));
+    o.group_label = test_case.group_label;
+    o.name = test_case.name;
+    for (auto t : series.trials) o.seconds += results_[t].seconds;
     o.rate = o.ci_low = o.ci_high = o.accepted_low = o.accepted_high = not_a_number;
     o.effectivity_min = o.effectivity_max = not_a_number;
     switch (e.kind) {
@@ -542,8 +525,7 @@ class Verifier {
   const std::vector<TrialSpec>& trials_;
   const std::vector<TrialResult>& results_;
   const std::vector<MetricSeries>& rates_;
-  std::vector<std::size_t> shown_;
-  std::map<std::string, std::string> labels_;
+  std::map<std::pair<const Expectation*, std::string>, ExpectationCase> cases_;
 };
 
 }  // namespace
@@ -563,37 +545,123 @@ std::vector<ExpectationOutcome> verify_expectations(const StudyDefinition& study
   return Verifier(study, trials, results, rates).run();
 }
 
+CaseOutcome case_outcome(const ExpectationOutcome& outcome) {
+  const bool xfail = outcome.expectation && !outcome.expectation->xfail.empty();
+  switch (outcome.verdict) {
+    case Verdict::pass:
+      return xfail ? CaseOutcome::xpassed : CaseOutcome::passed;
+    case Verdict::fail:
+      return xfail ? CaseOutcome::xfailed : CaseOutcome::failed;
+    default:
+      return CaseOutcome::inconclusive;
+  }
+}
+
+std::string_view case_outcome_name(CaseOutcome outcome) {
+  switch (outcome) {
+    case CaseOutcome::passed:
+      return "PASS";
+    case CaseOutcome::failed:
+      return "FAIL";
+    case CaseOutcome::xfailed:
+      return "XFAIL";
+    case CaseOutcome::xpassed:
+      return "XPASS";
+    default:
+      return "INCONCLUSIVE";
+  }
+}
+
+std::string_view case_outcome_id(CaseOutcome outcome) {
+  switch (outcome) {
+    case CaseOutcome::passed:
+      return "passed";
+    case CaseOutcome::failed:
+      return "failed";
+    case CaseOutcome::xfailed:
+      return "xfailed";
+    case CaseOutcome::xpassed:
+      return "xpassed";
+    default:
+      return "inconclusive";
+  }
+}
+
+VerdictCounts& VerdictCounts::operator+=(const VerdictCounts& other) {
+  passed += other.passed;
+  failed += other.failed;
+  inconclusive += other.inconclusive;
+  xfailed += other.xfailed;
+  xpassed += other.xpassed;
+  deselected += other.deselected;
+  return *this;
+}
+
 VerdictCounts count_verdicts(const std::vector<ExpectationOutcome>& outcomes) {
   VerdictCounts counts;
   for (const auto& o : outcomes) {
-    if (o.verdict == Verdict::pass) ++counts.passed;
-    else if (o.verdict == Verdict::fail) ++counts.failed;
-    else ++counts.inconclusive;
+    switch (case_outcome(o)) {
+      case CaseOutcome::passed:
+        ++counts.passed;
+        break;
+      case CaseOutcome::failed:
+        ++counts.failed;
+        break;
+      case CaseOutcome::xfailed:
+        ++counts.xfailed;
+        break;
+      case CaseOutcome::xpassed:
+        ++counts.xpassed;
+        break;
+      case CaseOutcome::inconclusive:
+        ++counts.inconclusive;
+        break;
+    }
   }
   return counts;
 }
 
-int check_exit_code(const VerdictCounts& counts, bool strict) {
-  if (counts.failed > 0 || (strict && counts.inconclusive > 0)) return 1;
-  return counts.inconclusive > 0 ? 3 : 0;
+int check_exit_code(const VerdictCounts& counts, const CheckPolicy& policy) {
+  if (counts.failed > 0 || (policy.strict && (counts.inconclusive > 0 || counts.xpassed > 0)))
+    return check_failed;
+  if (counts.selected() == 0 && counts.deselected > 0) return check_none_selected;
+  if (counts.inconclusive > 0 && !policy.allow_inconclusive) return check_inconclusive;
+  return check_passed;
 }
 
-std::string format_verification(const std::vector<ExpectationOutcome>& outcomes, bool strict) {
+std::string format_counts(const VerdictCounts& counts, const CheckPolicy& policy) {
+  std::string out = fmt::format("{} passed, {} failed, {} inconclusive", counts.passed,
+                                counts.failed, counts.inconclusive);
+  if (counts.xfailed) out += fmt::format(", {} xfailed", counts.xfailed);
+  if (counts.xpassed) out += fmt::format(", {} xpassed", counts.xpassed);
+  if (counts.deselected) out += fmt::format(", {} deselected", counts.deselected);
+  if (policy.strict && (counts.inconclusive || counts.xpassed))
+    out += counts.xpassed && counts.inconclusive
+               ? " (--strict: inconclusive and XPASS count as failed)"
+           : counts.xpassed ? " (--strict: XPASS counts as failed)"
+                            : " (--strict: inconclusive counts as failed)";
+  else if (policy.allow_inconclusive && counts.inconclusive)
+    out += " (--allow inconclusive: inconclusive does not fail the check)";
+  return out;
+}
+
+std::string format_verification(const std::vector<ExpectationOutcome>& outcomes,
+                                const CheckPolicy& policy, std::size_t deselected) {
   std::string out;
   for (const auto& o : outcomes) {
     const auto& e = *o.expectation;
-    out += fmt::format("{:<12} #{} {}{}, {} ({})\n", verdict_name(o.verdict), e.number,
-                       e.name.empty() ? "" : e.name + ": ", e.metric, o.group_label, e.location);
+    out += fmt::format("{:<12} {} ({})\n", case_outcome_name(case_outcome(o)), o.name, e.location);
     out += fmt::format("    expected: {}\n", o.expected);
     out += fmt::format("    found:    {}\n", o.found);
     out += fmt::format("    verdict:  {}\n", o.reason);
+    if (!e.xfail.empty()) out += fmt::format("    xfail:    {}\n", e.xfail);
   }
-  const auto counts = count_verdicts(outcomes);
-  if (outcomes.empty()) return "no expectations to check (nothing verified)\n";
-  out += fmt::format("{} passed, {} failed, {} inconclusive{}\n", counts.passed, counts.failed,
-                     counts.inconclusive,
-                     strict && counts.inconclusive ? " (--strict: inconclusive counts as failed)" : "");
-  return out;
+  auto counts = count_verdicts(outcomes);
+  counts.deselected = deselected;
+  if (outcomes.empty())
+    return deselected ? fmt::format("no expectation selected ({} deselected)\n", deselected)
+                      : "no expectations to check (nothing verified)\n";
+  return out + format_counts(counts, policy) + "\n";
 }
 
 }  // namespace rkhs

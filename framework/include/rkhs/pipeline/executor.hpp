@@ -48,6 +48,11 @@ class Executor {
                                        const std::vector<TrialSpec>& trials, RunOptions options,
                                        ResultStore* store, bool fresh) = 0;
 
+  /// Collective: the root's `decision` on every process (one process: `decision` itself), so
+  /// that the processes of a job leave a sequence of runs together, e.g. after an interrupted
+  /// one or an error on the root.
+  virtual bool root_decision(bool decision) const { return decision; }
+
   /// After run(): each process with its host, threads and the trials it ran (empty for one
   /// process).
   virtual std::vector<RankRecord> ranks() const { return {}; }

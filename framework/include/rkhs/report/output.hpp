@@ -14,6 +14,7 @@
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/trial_grid.hpp"
 #include "rkhs/verify/study_rates.hpp"
+#include "rkhs/verify/verification.hpp"
 
 namespace rkhs {
 
@@ -26,10 +27,18 @@ struct RunRecord {
   double wall_seconds = 0;
   std::string started;  ///< ISO 8601 UTC time the run started
   std::vector<RankRecord> ranks = {};  ///< MPI ranks of a distributed run (empty: one process)
+  std::string tier = {};  ///< the tier the run was restricted to (`check --tier`; "": none)
+  /// The expectations' outcomes on this run (verify_expectations, the cases `check -k`
+  /// selected), written to summary.json as "expectations"; null: not judged, no such key.
+  const std::vector<ExpectationOutcome>* verdicts = nullptr;
+  std::size_t deselected = 0;  ///< cases `check -k` left out
 };
 
 std::string trials_csv(const RunRecord& run);
 std::string rates_csv(const RunRecord& run);
+/// The study, its provenance, trials and rates as JSON; with RunRecord::verdicts also
+/// "expectations": the counts and, per test case, its name, metric, group, verdict, outcome
+/// (with xfail), rate, CI, accepted interval, window and reason (docs/results.md).
 std::string summary_json(const RunRecord& run);
 /// Adaptive studies: fhat and f on the snapshot grid at the chosen laps (one row per trial, lap
 /// and point: the data of the paper's "road surface estimates" figures).

@@ -8,6 +8,7 @@
 //   degree = 1                        #   (a list accepts any of its values)
 //   theory = true                     # what is expected: theory = true | rate | model | bound
 //   tier = "quick"                    # optional: the tiers this expectation belongs to
+//   xfail = "why"                     # optional: a known deviation (a fail does not fail check)
 //
 // An expectation applies to every group (all axes but n) its selector matches; each
 // (expectation, group) pair gets its own verdict.
@@ -70,6 +71,9 @@ struct Expectation {
   /// replacing the automatic one; a bound: the n where it must hold). Empty: the study's.
   FitWindow window;
   std::vector<std::string> tiers;   ///< empty: belongs to no named tier
+  /// `xfail = "reason"`: the expectation is known not to hold (pytest's xfail marker): a fail
+  /// is reported as XFAIL and does not fail `check`, a pass as XPASS. "" when absent.
+  std::string xfail;
 
   /// Whether `trial`'s group satisfies every selector (values compared as printed in
   /// trials.csv, so `sigma = 1` matches the real 1.0).
@@ -78,6 +82,10 @@ struct Expectation {
   std::string selector_text() const;
   /// Whether the expectation is in `tier` ("" means every expectation).
   bool in_tier(std::string_view tier) const;
+  /// The stable part of the names of its test cases, which does not depend on the table's
+  /// position in the file: `name` when given, else "<metric> <selector_text()>" ("<metric>"
+  /// without selectors).
+  std::string id() const;
 };
 
 /// The default tolerance of rate = x and theory expectations: 0.1 on the slope.

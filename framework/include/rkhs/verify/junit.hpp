@@ -1,11 +1,20 @@
 #pragma once
 // JUnit XML for CI systems (GitLab, Jenkins, GitHub test reporters): `rkhs-study check --junit`.
 //
-//   <testsuites> with one <testsuite> (the study), one <testcase> per expectation and group:
-//   classname "<study>.<metric>", name "#k <group label>", file and line of the [[expect]]
-//   table. A fail is a <failure>, an inconclusive verdict a <skipped> (a <failure> of type
-//   "inconclusive" with --strict); every test case carries the expected, found and verdict
-//   lines (fitted rate, CI, window) in <system-out>, and failures and skips in their message.
+//   <testsuites> with one <testsuite> per study (time: the run's wall time; timestamp: when it
+//   started), one <testcase> per expectation and group: classname "<study>.<metric>", name the
+//   case's stable name (ExpectationCase::name: the expectation's `name`, or its metric and
+//   selectors, and the group), file and line of the [[expect]] table, time the seconds of the
+//   group's trials plus the judging (ExpectationOutcome::seconds).
+//
+//   FAIL          <failure type="fail">
+//   INCONCLUSIVE  <skipped type="inconclusive">; <failure type="inconclusive"> with --strict
+//   XFAIL         <skipped type="xfail"> whose message starts with the xfail reason
+//   XPASS         a passing test case; <failure type="xpass"> with --strict
+//
+//   Every test case carries the expected, found and verdict lines (fitted rate, CI, window) in
+//   <system-out>, failures and skips also in their message. Cases that `-k` deselected are
+//   not listed (the suite's "deselected" property counts them).
 
 #include <string>
 #include <string_view>
@@ -16,13 +25,20 @@
 
 namespace rkhs {
 
-struct JUnitReport {
-  const StudyDefinition& study;
-  const std::vector<ExpectationOutcome>& outcomes;
-  bool strict = false;
-  double seconds = 0;         ///< wall time of the run, reported on the suite
+/// One study's suite. The pointers must outlive junit_xml().
+struct JUnitSuite {
+  const StudyDefinition* study = nullptr;
+  const std::vector<ExpectationOutcome>* outcomes = nullptr;  ///< the selected cases
+  double seconds = 0;         ///< wall time of the study's run (0: not run)
   std::string tier;           ///< "" when all tiers ran
   std::string timestamp;      ///< ISO 8601, "" to omit
+  std::size_t deselected = 0;  ///< cases `-k` left out
+};
+
+struct JUnitReport {
+  std::vector<JUnitSuite> suites;
+  CheckPolicy policy;
+  std::string keyword_expression;  ///< `-k`, "" when not given
 };
 
 /// The XML document (UTF-8, escaped; never throws except std::bad_alloc).

@@ -11,8 +11,12 @@
 // A bound metric <= C by [times] passes when every effectivity metric / (C by times) is <= 1
 // and fails otherwise; without a usable point it is inconclusive.
 //
+// An expectation marked `xfail = "reason"` is known not to hold: its fail is an XFAIL (does
+// not fail `check`), its pass an XPASS (reported; a failure with --strict), as pytest's xfail.
+//
 // `check` exits 0 when every verdict is a pass, 1 when any is a fail (and, with --strict, when
-// any is inconclusive), 3 when none fails but some are inconclusive.
+// any is inconclusive or an XPASS), 3 when none fails but some are inconclusive (0 with
+// --allow inconclusive), 5 when -k selected none of the expectations.
 
 #include <optional>
 #include <string>
@@ -37,6 +41,10 @@ struct ExpectationOutcome {
   std::size_t series = 0;   ///< index of the judged MetricSeries (the expectation's metric)
   std::string group;        ///< the group's key (every axis but n)
   std::string group_label;  ///< the axes that tell this group from the study's others
+  std::string name;         ///< the test case's stable name (ExpectationCase::name)
+  /// What the verdict cost: the wall time of the group's trials (as recorded when they ran,
+  /// also for trials reused from the store) plus the time to judge it.
+  double seconds = 0;
   Verdict verdict = Verdict::inconclusive;
   std::string expected;  ///< what was expected and where it comes from
   std::string found;     ///< what the study shows: fit, CI, window, exclusions, model choice
@@ -57,16 +65,49 @@ std::vector<ExpectationOutcome> verify_expectations(const StudyDefinition& study
                                                     const std::vector<TrialResult>& results,
                                                     const std::vector<MetricSeries>& rates);
 
+/// How an outcome counts, its verdict read with its expectation's xfail marker (pytest's
+/// outcomes): a fail of an xfail expectation is xfailed, a pass xpassed; inconclusive stays.
+enum class CaseOutcome { passed, failed, inconclusive, xfailed, xpassed };
+CaseOutcome case_outcome(const ExpectationOutcome& outcome);
+
+/// "PASS", "FAIL", "INCONCLUSIVE", "XFAIL", "XPASS" (the console's and JUnit's words).
+std::string_view case_outcome_name(CaseOutcome outcome);
+/// "passed", "failed", "inconclusive", "xfailed", "xpassed" (summary.json).
+std::string_view case_outcome_id(CaseOutcome outcome);
+
 struct VerdictCounts {
-  std::size_t passed = 0, failed = 0, inconclusive = 0;
+  std::size_t passed = 0, failed = 0, inconclusive = 0, xfailed = 0, xpassed = 0;
+  std::size_t deselected = 0;  ///< cases `-k` left out (not judged)
+  std::size_t selected() const { return passed + failed + inconclusive + xfailed + xpassed; }
+  VerdictCounts& operator+=(const VerdictCounts& other);
 };
+/// The outcomes counted by case_outcome (deselected 0).
 VerdictCounts count_verdicts(const std::vector<ExpectationOutcome>& outcomes);
 
-/// 0 all pass (or nothing to check), 1 any fail (strict: or any inconclusive), 3 otherwise.
-int check_exit_code(const VerdictCounts& counts, bool strict);
+/// How `check` reads the counts (its options).
+struct CheckPolicy {
+  bool strict = false;  ///< --strict: inconclusive and XPASS fail the check
+  bool allow_inconclusive =
+      false;  ///< --allow inconclusive: inconclusive does not (not with strict)
+};
 
-/// The console report: per outcome "VERDICT  #k metric, group (file:line:column)" with the
-/// expected / found / verdict lines below, then "N passed, M failed, K inconclusive".
-std::string format_verification(const std::vector<ExpectationOutcome>& outcomes, bool strict);
+/// The exit codes of `rkhs-study check` for its verdicts (2 is bad input, 130 an interrupted run).
+inline constexpr int check_passed = 0, check_failed = 1, check_inconclusive = 3,
+                     check_none_selected = 5;
+
+/// 1 any fail (strict: or any inconclusive or XPASS); else 5 when cases were deselected and
+/// none selected (pytest's "no tests collected"); else 3 when some are inconclusive and they
+/// are not allowed; else 0 (also with nothing to check).
+int check_exit_code(const VerdictCounts& counts, const CheckPolicy& policy = {});
+
+/// The console report: per outcome "OUTCOME  name (file:line:column)" with the expected /
+/// found / verdict (and xfail) lines below, then "N passed, M failed, K inconclusive" (and the
+/// xfailed, xpassed and deselected counts when there are any).
+std::string format_verification(const std::vector<ExpectationOutcome>& outcomes,
+                                const CheckPolicy& policy = {}, std::size_t deselected = 0);
+
+/// The counts line of format_verification: "2 passed, 1 failed, 0 inconclusive, 1 xfailed,
+/// 3 deselected", with what --strict or --allow changed.
+std::string format_counts(const VerdictCounts& counts, const CheckPolicy& policy = {});
 
 }  // namespace rkhs

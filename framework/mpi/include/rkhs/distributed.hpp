@@ -171,6 +171,9 @@ class MpiExecutor final : public pipeline::Executor {
   void agree_on(const StudyDefinition& study, const std::vector<TrialSpec>& trials) override;
   std::optional<StoredRun> run(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
                                RunOptions options, ResultStore* store, bool fresh) override;
+  bool root_decision(bool decision) const override {
+    return session_.broadcast(decision ? "1" : "0") == "1";
+  }
   std::vector<RankRecord> ranks() const override { return statistics_.ranks; }
   std::string where() const override;
 
