@@ -39,8 +39,8 @@ namespace {
 /// f'(s) is a difference quotient of order 4 (derivative()).
 class ExpressionTarget final : public TargetFunction {
  public:
-  /// The step h of derivative(), metres: 2^-14 (a power of two, so that s + k h is exact for
-  /// most s).
+  /// The step h of derivative(), metres: 2^-14, about 6.1e-5 (a power of two, so that s + k h
+  /// is exact for most s).
   static constexpr double step = 0x1p-14;
   /// The points of the domain f is checked at when it is built.
   static constexpr std::size_t check_points = 1024;
@@ -88,9 +88,9 @@ class ExpressionTarget final : public TargetFunction {
   ///   (h / l)^4 / 30 + 1.5 delta l / h   (central),  (h / l)^4 / 5 + 10.7 delta l / h (one-sided),
   /// with delta = u below 5e-11 (central) and 3e-10 (one-sided) for every l from 1 cm to 10 m
   /// (the default derivative's h = 1e-6 m central difference: 3e-9). The nodes s + k h are
-  /// exact, h being a power of two, except within 4h below a power of two, where each may be
-  /// off by u |s + k h|: at most 1.5 u (|s| + 2h) |f'| / h more (central; 10.7 u (|s| + 4h)
-  /// |f'| / h one-sided), 2.7e-11 |f'| per 10 m of s.
+  /// rounded to doubles: exact for most s (h is a power of two; not within 4h below a power of
+  /// two), and always within u |s + k h|, which adds at most 1.5 u (|s| + 2h) |f'| / h
+  /// (central; 10.7 u (|s| + 4h) |f'| / h one-sided): 2.7e-11 |f'| per 10 m of s.
   void derivative(std::span<const double> points, std::span<double> out) const override {
     for (std::size_t m = 0; m < points.size(); ++m) out[m] = slope_at(points[m]);
   }
@@ -187,7 +187,10 @@ class ExpressionTarget final : public TargetFunction {
           expression_.text(), format_real(end), format_real(start), format_real(length));
       return;
     }
-    const double slope_start = slope_at(0.0), slope_end = slope_at(length);
+    // The slopes on either side of the seam: into the lap at 0, out of it at L (a central
+    // difference there would average the two).
+    const double slope_start = slope_at(0.0, Stencil::forward);
+    const double slope_end = slope_at(length, Stencil::backward);
     double slope_scale = 0;
     for (std::size_t m = 0; m < points.size(); m += 8)
       slope_scale = std::max(slope_scale, std::abs(slope_at(points[m])));
@@ -199,28 +202,30 @@ class ExpressionTarget final : public TargetFunction {
           expression_.text(), slope_end, slope_start, format_real(length));
   }
 
+  enum class Stencil { central, forward, backward };
+
+  // The difference quotient of derivative(): one-sided where an interval would be left.
   double slope_at(double s) const {
+    if (!domain_.periodic && s - 2 * step < 0) return slope_at(s, Stencil::forward);
+    if (!domain_.periodic && s + 2 * step > domain_.length) return slope_at(s, Stencil::backward);
+    return slope_at(s, Stencil::central);
+  }
+
+  // The 5-point difference quotient `stencil` at s (derivative() gives the formulas).
+  double slope_at(double s, Stencil stencil) const {
     const double h = step;
     std::array<double, 5> nodes{}, values{};
-    double quotient = 0;
-    if (!domain_.periodic && s - 2 * h < 0) {
-      for (int k = 0; k < 5; ++k) nodes[k] = s + k * h;
-      evaluate(nodes, values);
-      quotient =
-          (-25 * values[0] + 48 * values[1] - 36 * values[2] + 16 * values[3] - 3 * values[4]) /
-          (12 * h);
-    } else if (!domain_.periodic && s + 2 * h > domain_.length) {
-      for (int k = 0; k < 5; ++k) nodes[k] = s - k * h;
-      evaluate(nodes, values);
-      quotient =
-          (25 * values[0] - 48 * values[1] + 36 * values[2] - 16 * values[3] + 3 * values[4]) /
-          (12 * h);
-    } else {
+    if (stencil == Stencil::central) {
       nodes = {s - 2 * h, s - h, s + h, s + 2 * h, s};
       evaluate(std::span<const double>(nodes.data(), 4), std::span<double>(values.data(), 4));
-      quotient = (values[0] - 8 * values[1] + 8 * values[2] - values[3]) / (12 * h);
+      return (values[0] - 8 * values[1] + 8 * values[2] - values[3]) / (12 * h);
     }
-    return quotient;
+    const double direction = stencil == Stencil::forward ? 1.0 : -1.0;
+    for (int k = 0; k < 5; ++k) nodes[k] = s + direction * k * h;
+    evaluate(nodes, values);
+    return direction *
+           (-25 * values[0] + 48 * values[1] - 36 * values[2] + 16 * values[3] - 3 * values[4]) /
+           (12 * h);
   }
 
   Domain domain_;

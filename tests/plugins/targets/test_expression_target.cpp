@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <thread>
 
 #include "../../study_support.hpp"
 #include "rkhs/approx/target.hpp"
@@ -106,6 +107,37 @@ TEST_CASE(
   }
 }
 
+TEST_CASE("threads evaluating one expression target at once get the values one thread gets",
+          "[target][expression][threads]") {
+  const Domain track{2 * std::numbers::pi * 4, true};
+  const auto f = expression("a * sin(2 * pi * k * s / L) + 0.1 * cos(6 * pi * s / L)", track,
+                            {{"a", 2.0}, {"k", std::int64_t{2}}});
+  const auto points = track.uniform_points(4096);
+  std::vector<double> values(points.size()), slopes(points.size());
+  f->evaluate(points, values);
+  f->derivative(points, slopes);
+  constexpr int thread_count = 4;
+  std::vector<std::vector<double>> thread_values(thread_count), thread_slopes(thread_count);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < thread_count; ++t)
+    threads.emplace_back([&, t] {
+      auto& v = thread_values[static_cast<std::size_t>(t)];
+      auto& d = thread_slopes[static_cast<std::size_t>(t)];
+      v.resize(points.size());
+      d.resize(points.size());
+      for (int round = 0; round < 5; ++round) {  // interleaved with the other threads
+        for (std::size_t m = 0; m < points.size(); ++m) v[m] = (*f)(points[m]);
+        f->derivative(points, d);
+      }
+    });
+  for (auto& thread : threads) thread.join();
+  for (int t = 0; t < thread_count; ++t) {
+    INFO("thread " << t);
+    CHECK(thread_values[static_cast<std::size_t>(t)] == values);
+    CHECK(thread_slopes[static_cast<std::size_t>(t)] == slopes);
+  }
+}
+
 TEST_CASE("the expression target's slope meets its bound for features from 1 cm to 10 m",
           "[target][expression]") {
   // The header's claim: below 5e-11 of the slope scale |f| / l (central), 3e-10 (one-sided at
@@ -153,6 +185,12 @@ TEST_CASE("a closed track's expression that is not periodic is noted and its sea
   CHECK_THAT(tent->notes()[0], Catch::Contains("has a kink at s = 0 on the closed track: "
                                                "f'(L) = 1 and f'(0) = -1"));
   CHECK(tent->kink_points() == std::vector<double>{0.0});
+  // A kink symmetric about the seam: the one-sided slopes differ (pi / L into the lap, -pi / L
+  // out of it), though a central difference at 0 would see 0 on both sides.
+  const auto arches = expression("abs(sin(pi * s / L))", track);
+  REQUIRE(arches->notes().size() == 1);
+  CHECK_THAT(arches->notes()[0], Catch::Contains("has a kink at s = 0 on the closed track: "
+                                                 "f'(L) = -0.314159 and f'(0) = 0.314159"));
   // A whole number of cycles: nothing to say. An interval: never.
   CHECK(expression("cos(6 * pi * s / L) + 3", track)->notes().empty());
   CHECK(expression("s / L", Domain{10.0, false})->notes().empty());
