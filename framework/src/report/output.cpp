@@ -62,20 +62,6 @@ std::string group_label(const TrialSpec& trial) {
   return trial.group_key;
 }
 
-std::string_view kind_name(ExpectationKind kind) {
-  switch (kind) {
-    case ExpectationKind::theory:
-      return "theory";
-    case ExpectationKind::rate:
-      return "rate";
-    case ExpectationKind::model:
-      return "model";
-    case ExpectationKind::bound:
-      return "bound";
-  }
-  return "";
-}
-
 // "expectations": the verdicts of RunRecord::verdicts, one object per test case.
 std::string expectations_json(const RunRecord& run) {
   auto counts = count_verdicts(*run.verdicts);
@@ -103,7 +89,7 @@ std::string expectations_json(const RunRecord& run) {
         "\"effectivity_max\": {}, \"window\": {{\"from\": {}, \"to\": {}, \"points\": {}}}, "
         "\"expected\": {}, \"found\": {}, \"reason\": {}, \"seconds\": {}}}{}\n",
         json_string(o.name), optional_text(e.name), json_string(e.metric),
-        json_string(kind_name(e.kind)), json_string(e.location), json_string(o.group),
+        json_string(expectation_kind_name(e.kind)), json_string(e.location), json_string(o.group),
         json_string(o.group_label), json_string(verdict),
         json_string(case_outcome_id(case_outcome(o))), optional_text(e.xfail), json_number(o.rate),
         json_number(o.ci_low), json_number(o.ci_high), json_number(o.accepted_low),

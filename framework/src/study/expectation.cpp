@@ -61,4 +61,14 @@ std::string Expectation::id() const {
   return selectors.empty() ? metric : metric + ' ' + selector_text();
 }
 
+std::string_view expectation_kind_name(ExpectationKind kind) {
+  switch (kind) {
+    case ExpectationKind::theory: return "theory";
+    case ExpectationKind::rate: return "rate";
+    case ExpectationKind::model: return "model";
+    case ExpectationKind::bound: return "bound";
+  }
+  return "";
+}
+
 }  // namespace rkhs

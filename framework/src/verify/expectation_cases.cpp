@@ -12,20 +12,6 @@ namespace rkhs {
 
 namespace {
 
-std::string_view kind_word(ExpectationKind kind) {
-  switch (kind) {
-    case ExpectationKind::theory:
-      return "theory";
-    case ExpectationKind::rate:
-      return "rate";
-    case ExpectationKind::model:
-      return "model";
-    case ExpectationKind::bound:
-      return "bound";
-  }
-  return "";
-}
-
 // What the expectation expects, as the study file writes it: tells apart two expectations of
 // the same metric and groups.
 std::string written_form(const Expectation& e) {
@@ -147,7 +133,7 @@ std::vector<ExpectationCase> expectation_cases(const StudyDefinition& study,
   const auto stem = std::filesystem::path(study.source).stem().string();
   for (auto& c : cases) {
     const auto& e = *c.expectation;
-    c.keywords = {c.name, e.metric, study.name, stem, std::string(kind_word(e.kind))};
+    c.keywords = {c.name, e.metric, study.name, stem, std::string(expectation_kind_name(e.kind))};
     if (!e.name.empty()) c.keywords.push_back(e.name);
     c.keywords.insert(c.keywords.end(), e.tiers.begin(), e.tiers.end());
     if (!e.xfail.empty()) c.keywords.push_back("xfail");

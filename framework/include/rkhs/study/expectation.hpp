@@ -16,6 +16,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rkhs/core/parameters.hpp"
@@ -87,6 +88,9 @@ struct Expectation {
   /// without selectors).
   std::string id() const;
 };
+
+/// The kind as the study file's key names it: "rate", "theory", "model", "bound".
+std::string_view expectation_kind_name(ExpectationKind kind);
 
 /// The default tolerance of rate = x and theory expectations: 0.1 on the slope.
 inline constexpr double default_rate_tolerance = 0.1;
