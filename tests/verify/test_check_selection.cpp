@@ -21,6 +21,7 @@
 #include "rkhs/verify/keyword_expression.hpp"
 #include "rkhs/verify/study_rates.hpp"
 #include "rkhs/verify/verification.hpp"
+#include "verify/synthetic_results.hpp"
 
 using namespace rkhs;
 
@@ -57,48 +58,23 @@ std::string parse_error(const std::string& expression) {
   return "no error";
 }
 
-std::string study_error(const std::string& text) {
-  try {
-    parse_study(text, "s.toml");
-  } catch (const StudyError& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using test::study_error;
 
 // The power function and condition number as theory says (B-splines of degree tau:
-// n^-(tau - 1/2) and n^(2 tau); the Gaussian: exp(-0.3 n) and exp(0.5 n)), uniform centres.
-struct Textbook {
-  StudyDefinition study;
-  std::vector<TrialSpec> trials;
-  std::vector<TrialResult> results;
-  std::vector<MetricSeries> rates;
+// n^-(tau - 1/2) and n^(2 tau); the Gaussian: exp(-0.3 n) and exp(0.5 n)), uniform centres,
+// each trial 0.25 s.
+double textbook_value(const TrialSpec& trial, const std::string& metric) {
+  const double n = static_cast<double>(trial.n);
+  const bool spline = trial.kernel.name == "bspline";
+  const double tau = spline ? static_cast<double>(trial.kernel.parameters.integer("degree")) : 0.0;
+  if (metric == "power_function_sup")
+    return spline ? 2.0 * std::pow(n, -(tau - 0.5)) : std::exp(-0.3 * n);
+  return spline ? 3.0 * std::pow(n, 2 * tau) : std::exp(0.5 * n);
+}
 
+struct Textbook : test::SyntheticResults {
   explicit Textbook(const std::string& expectations)
-      : study(parse_study(base + expectations, "s.toml")), trials(study.trials()) {
-    for (const auto& trial : trials) {
-      TrialResult r;
-      r.ok = true;
-      r.seconds = 0.25;
-      const double n = static_cast<double>(trial.n);
-      const bool spline = trial.kernel.name == "bspline";
-      const double tau =
-          spline ? static_cast<double>(trial.kernel.parameters.integer("degree")) : 0.0;
-      for (const auto& metric : study.all_metrics()) {
-        if (metric == "fill_distance" || metric == "separation_distance")
-          r.metrics.push_back(study.domain.length / (2.0 * n));
-        else if (metric == "power_function_sup")
-          r.metrics.push_back(spline ? 2.0 * std::pow(n, -(tau - 0.5)) : std::exp(-0.3 * n));
-        else
-          r.metrics.push_back(spline ? 3.0 * std::pow(n, 2 * tau) : std::exp(0.5 * n));
-      }
-      results.push_back(std::move(r));
-    }
-    rates = compute_rates(study, trials, results);
-  }
-  std::vector<ExpectationOutcome> verify() const {
-    return verify_expectations(study, trials, results, rates);
-  }
+      : SyntheticResults(base + expectations, textbook_value, {}, 0.25) {}
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "rkhs/rates/theory.hpp"
 #include "rkhs/study/tiers.hpp"
 #include "rkhs/verify/verification.hpp"
+#include "verify/synthetic_results.hpp"
 
 using namespace rkhs;
 
@@ -39,45 +40,13 @@ name = "gaussian"
 sigma = 1.0
 )";
 
-std::string error_of(const std::string& text) {
-  try {
-    parse_study(text, "s.toml");
-  } catch (const StudyError& e) {
-    return e.what();
-  }
-  return "no error";
-}
+std::string error_of(const std::string& text) { return test::study_error(text); }
 
-// Results made up from formulas: metric(trial) for every trial, uniform-centre distances.
-struct Synthetic {
-  StudyDefinition study;
-  std::vector<TrialSpec> trials;
-  std::vector<TrialResult> results;
-  std::vector<MetricSeries> rates;
-
-  // `distances(trial)` gives the fill and separation distances (default: uniform centres).
-  Synthetic(const std::string& expectations,
-            const std::function<double(const TrialSpec&, const std::string&)>& value,
-            const std::function<std::pair<double, double>(const TrialSpec&)>& distances = {},
+// Results made up from formulas on `header` (default: base) with the expectations appended.
+struct Synthetic : test::SyntheticResults {
+  Synthetic(const std::string& expectations, const Value& value, const Distances& distances = {},
             const std::string& header = base)
-      : study(parse_study(header + expectations, "s.toml")), trials(study.trials()) {
-    for (const auto& trial : trials) {
-      TrialResult r;
-      r.ok = true;
-      const double uniform = study.domain.length / (2.0 * static_cast<double>(trial.n));
-      const auto [h, q] = distances ? distances(trial) : std::pair{uniform, uniform};
-      for (const auto& metric : study.all_metrics()) {
-        if (metric == "fill_distance") r.metrics.push_back(h);
-        else if (metric == "separation_distance") r.metrics.push_back(q);
-        else r.metrics.push_back(value(trial, metric));
-      }
-      results.push_back(std::move(r));
-    }
-    rates = compute_rates(study, trials, results);
-  }
-  std::vector<ExpectationOutcome> verify() const {
-    return verify_expectations(study, trials, results, rates);
-  }
+      : SyntheticResults(header + expectations, value, distances) {}
 };
 
 double degree_of(const TrialSpec& t) {
