@@ -94,24 +94,29 @@ TEST_CASE("every rate-table writer renders the model: axis h, the fit's rate and
   const RunRecord record{study, trials, results, rates, 1, 0.0, "2026-01-01T00:00:00Z"};
 
   const auto console = console_tables(record);
-  CHECK(contains(console, "     h  fill_distance"));
-  CHECK(contains(console, "fitted rate: 1.23 ± 0.01 (90% CI [1.20, 1.27]"));
+  CHECK(contains(console, "\n  n       h  fill_distance"));
+  CHECK(contains(console, "fill_distance, fitted rate: 1.23 ± 0.01 (90% CI [1.20, 1.27]"));
   CHECK_FALSE(contains(console, "95% CI"));
 
   const auto markdown = markdown_tables(record);
-  CHECK(contains(markdown, "| h | fill_distance | rate |"));
-  CHECK(contains(markdown, "Fitted rate: 1.23 ± 0.01 (90% CI [1.2, 1.27]"));
+  CHECK(contains(markdown, "| n | h | fill_distance | rate | separation_distance | rate |"));
+  CHECK(contains(markdown, "| 4 | 1.25 | 1.25 | - | 1.25 | - |"));
+  CHECK(contains(markdown, "- fill_distance: 1.23 ± 0.01 (90% CI [1.2, 1.27]"));
+  CHECK(contains(markdown, "| kernel=bspline | 1.235 [1.200, 1.270] | 1.235 [1.200, 1.270] |"));
   CHECK_FALSE(contains(markdown, "95% CI"));
 
   const auto latex = latex_tables(record);
-  CHECK(contains(latex, "$h$ & fill\\_distance & rate"));
-  CHECK(contains(latex, "fitted rate: 1.23 $\\pm$ 0.01 (90\\% CI [1.2, 1.27]"));
+  CHECK(contains(latex, "{$n$} & {$h$} & {value} & {rate} & {value} & {rate}"));
+  CHECK(contains(latex, "fill\\_distance: fitted rate \\num{1.23} $\\pm$ \\num{0.01} "
+                        "(90\\,\\% CI [\\num{1.2}, \\num{1.27}]"));
+  CHECK(contains(latex, "\\num{1.235} [\\num{1.200}, \\num{1.270}]"));
 
   const auto html = html_report(record, {});
-  CHECK(contains(html, "<tr><th>h</th><th>fill_distance</th><th>rate</th></tr>"));
-  CHECK_FALSE(contains(html, "<th>n</th>"));
-  CHECK(contains(html, "<td>1.25</td>"));  // h of n = 4 on a domain of length 10
+  CHECK(contains(html, "<tr><th rowspan=\"2\">n</th><th rowspan=\"2\">h</th><th "
+                       "colspan=\"2\">fill_distance</th>"));
+  CHECK(contains(html, "<tr><td>4</td><td>1.25</td><td>1.25</td>"));  // h of n = 4, length 10
   CHECK(contains(html, "fitted rate 1.23 &plusmn; 0.01 (90% CI [1.2, 1.27]"));
+  CHECK(contains(html, "<td>1.235 [1.200, 1.270]</td>"));  // the fitted-rates table
   CHECK_FALSE(contains(html, "95% CI"));
 }
 

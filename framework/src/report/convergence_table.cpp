@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <set>
 #include <vector>
 
 #include "rkhs/rates/asymptotic.hpp"
@@ -110,6 +111,170 @@ std::string format_convergence_table(std::string_view metric, std::string_view g
                                         : pairwise_exponential_rates(x, y);
   return render_table(metric, group, abscissa_name, rows, rates, fit, flag_legend, pairwise_model,
                       no_fit_reason);
+}
+
+namespace {
+
+// A text table of right-aligned columns (left-aligned where `left` says), two spaces apart, its
+// first `fixed` columns repeated in every part when the others do not fit in `width`: the rest
+// is cut between blocks (block_sizes: how many columns each block holds, e.g. a metric's value
+// and rate) into parts, each as wide as fits, at least one block per part.
+std::string wrapped_table(const std::vector<std::vector<std::string>>& lines, std::size_t fixed,
+                          const std::vector<std::size_t>& block_sizes,
+                          const std::vector<bool>& left, std::size_t width) {
+  if (lines.empty()) return {};
+  const std::size_t columns = lines.front().size();
+  std::vector<std::size_t> widths(columns, 0);
+  for (const auto& line : lines)
+    for (std::size_t c = 0; c < columns && c < line.size(); ++c)
+      widths[c] = std::max(widths[c], line[c].size());
+  const auto span = [&](std::size_t from, std::size_t count) {
+    std::size_t total = 0;
+    for (std::size_t c = from; c < from + count; ++c) total += widths[c] + 2;
+    return total;
+  };
+  // Parts: [first block, end block).
+  std::vector<std::pair<std::size_t, std::size_t>> parts;
+  const std::size_t fixed_width = span(0, fixed);
+  for (std::size_t b = 0, column = fixed; b < block_sizes.size();) {
+    std::size_t end = b, used = fixed_width, end_column = column;
+    while (end < block_sizes.size() &&
+           (end == b || used + span(end_column, block_sizes[end]) <= width + 2)) {
+      used += span(end_column, block_sizes[end]);
+      end_column += block_sizes[end];
+      ++end;
+    }
+    parts.emplace_back(b, end);
+    b = end;
+    column = end_column;
+  }
+  if (parts.empty()) parts.emplace_back(0, 0);
+  std::string out;
+  std::size_t first_column = fixed;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    std::size_t last_column = first_column;
+    for (std::size_t b = parts[p].first; b < parts[p].second; ++b) last_column += block_sizes[b];
+    if (p > 0) out += '\n';
+    for (const auto& line : lines) {
+      std::string text;
+      const auto cell = [&](std::size_t c) {
+        const std::string& value = c < line.size() ? line[c] : std::string();
+        if (!text.empty()) text += "  ";
+        text += left[c] ? fmt::format("{:<{}}", value, widths[c])
+                        : fmt::format("{:>{}}", value, widths[c]);
+      };
+      for (std::size_t c = 0; c < fixed; ++c) cell(c);
+      for (std::size_t c = first_column; c < last_column; ++c) cell(c);
+      while (!text.empty() && text.back() == ' ') text.pop_back();
+      out += text + '\n';
+    }
+    first_column = last_column;
+  }
+  return out;
+}
+
+std::string fixed_rate(double rate, RateModel model) {
+  return fmt::format("{:.{}f}", rate, model == RateModel::power_law ? 2 : rate_decimals(rate));
+}
+
+}  // namespace
+
+std::string format_group_table(const GroupTable& group, const std::vector<RateTable>& tables,
+                               std::size_t width) {
+  bool any_flagged = false;
+  for (auto t : group.columns)
+    for (const auto& row : tables[t].rows) any_flagged = any_flagged || row.flagged;
+  const std::string marker_slot = any_flagged ? " " : "";
+
+  std::vector<std::vector<std::string>> lines(1);
+  std::vector<bool> left;
+  auto& header = lines.front();
+  header.push_back("n");
+  if (group.shows_h()) header.push_back("h");
+  const std::size_t fixed = header.size();
+  std::vector<std::size_t> blocks;
+  for (auto t : group.columns) {
+    header.push_back(tables[t].metric + marker_slot);
+    header.push_back(rate_heading(tables[t]));
+    blocks.push_back(2);
+  }
+  left.assign(header.size(), false);
+  for (std::size_t r = 0; r < group.n.size(); ++r) {
+    auto& line = lines.emplace_back();
+    line.push_back(fmt::format("{}", group.n[r]));
+    if (group.shows_h())
+      line.push_back(std::isfinite(group.h[r]) ? fmt::format("{:.4g}", group.h[r]) : "");
+    for (auto t : group.columns) {
+      const auto* row = row_at(tables[t], group.n[r]);
+      if (!row) {
+        line.insert(line.end(), {"", ""});
+        continue;
+      }
+      line.push_back(
+          (std::isnan(row->value) ? std::string("failed") : fmt::format("{:.3e}", row->value)) +
+          (row->flagged ? std::string("*") : marker_slot));
+      line.push_back(std::isfinite(row->rate) ? fixed_rate(row->rate, tables[t].model) : "-");
+    }
+  }
+  // The foot: each metric's fitted rate under its rate column.
+  auto& foot = lines.emplace_back();
+  foot.push_back("fit");
+  if (group.shows_h()) foot.push_back("");
+  for (auto t : group.columns) {
+    foot.push_back("");
+    foot.push_back(tables[t].fit ? fixed_rate(tables[t].fit->rate, tables[t].model) : "-");
+  }
+
+  std::string out = (group.label.empty() ? "group " + group.group : group.label) + '\n';
+  if (!group.label.empty()) out += "(group " + group.group + ")\n";
+  out += wrapped_table(lines, fixed, blocks, left, width);
+  for (auto t : group.columns) {
+    const auto& table = tables[t];
+    std::vector<TableRow> rows;
+    for (const auto& row : table.rows) rows.push_back({row.abscissa, row.value, row.flagged});
+    out += fmt::format("  {}, {}", table.metric,
+                       fit_footer(table.fit, rows, table.axis, table.no_fit_reason));
+    if (const auto window = window_text(table); !window.empty())
+      out += fmt::format("; window {}{}{}", window, table.window_note.empty() ? "" : "; ",
+                         table.window_note);
+    out += '\n';
+    if (table.fit && !table.fit->note.empty())
+      out += fmt::format("    note: {}\n", table.fit->note);
+    if (!table.note.empty()) out += fmt::format("    note: {}\n", table.note);
+  }
+  if (any_flagged) out += fmt::format("* {}\n", flagged_value_legend);
+  return out;
+}
+
+std::string format_fitted_rates(const std::vector<GroupTable>& groups,
+                                const std::vector<RateTable>& tables, std::size_t width) {
+  std::vector<std::string> metrics;  // in the tables' (the study's) order
+  for (const auto& table : tables)
+    if (std::find(metrics.begin(), metrics.end(), table.metric) == metrics.end())
+      metrics.push_back(table.metric);
+  std::set<double> levels;
+  for (const auto& table : tables)
+    if (table.fit && std::isfinite(table.fit->std_error)) levels.insert(table.fit->confidence);
+
+  std::vector<std::vector<std::string>> lines(1);
+  lines.front().push_back("group");
+  for (const auto& metric : metrics) lines.front().push_back(metric);
+  for (const auto& group : groups) {
+    auto& line = lines.emplace_back(metrics.size() + 1);
+    line[0] = group.label.empty() ? group.group : group.label;
+    for (auto t : group.columns) {
+      const auto m = static_cast<std::size_t>(
+          std::find(metrics.begin(), metrics.end(), tables[t].metric) - metrics.begin());
+      line[m + 1] = fit_cell(tables[t]);
+    }
+  }
+  std::vector<bool> left(metrics.size() + 1, false);
+  left[0] = true;
+  const std::string level =
+      levels.size() == 1 ? fmt::format("{:.4g}% confidence intervals", 100.0 * *levels.begin())
+                         : std::string("confidence intervals at the levels of the tables");
+  return fmt::format("fitted rates with {} (exp: exponential in n)\n", level) +
+         wrapped_table(lines, 1, std::vector<std::size_t>(metrics.size(), 1), left, width);
 }
 
 std::string format_convergence_table(const RateTable& table) {

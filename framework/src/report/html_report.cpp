@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <utility>
@@ -76,26 +78,137 @@ std::string html_text(std::string_view text) {
   return out;
 }
 
-// One rate table and its fit, window and notes.
-std::string rates_table(const RateTable& table) {
-  std::string out = fmt::format(
-      "<p>{}</p>\n<table class=\"rates\"><tr><th>{}</th><th>{}</th><th>rate</th></tr>\n",
-      escape_html(table.group), escape_html(table.axis), escape_html(table.metric));
-  bool any_flagged = false;
-  for (const auto& row : table.rows) {
-    any_flagged = any_flagged || row.flagged;
-    out += fmt::format("<tr{}><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-                       row.flagged ? " class=\"flagged\"" : "", document_abscissa(table, row),
-                       document_value(row), document_rate(row, "&ndash;"));
+// A number of a verdict for its table cell: 3 significant digits, "" for NaN.
+std::string verdict_number(double value) {
+  return std::isnan(value) ? std::string() : fmt::format("{:.3g}", value);
+}
+
+// The verdicts as a table, a row per test case coloured by its outcome: the fitted rate, its CI,
+// the accepted interval, the window and the reason, with what was expected and found below the
+// case's name.
+std::string verdicts_table(const std::vector<ExpectationOutcome>& verdicts,
+                           std::size_t deselected) {
+  std::string out =
+      "<table class=\"verdicts\"><tr><th>outcome</th><th>case</th><th>rate</th><th>CI</th>"
+      "<th>accepted</th><th>window</th><th>reason</th></tr>\n";
+  for (const auto& o : verdicts) {
+    const auto outcome = case_outcome(o);
+    const auto interval = [](double low, double high) {
+      if (std::isnan(low) && std::isnan(high)) return std::string();
+      return fmt::format("[{}, {}]", std::isfinite(low) ? fmt::format("{:.3g}", low) : "-&infin;",
+                         std::isfinite(high) ? fmt::format("{:.3g}", high) : "&infin;");
+    };
+    std::string detail = "expected: " + html_text(o.expected) + "<br>found: " + html_text(o.found);
+    if (!o.expectation->xfail.empty()) detail += "<br>xfail: " + html_text(o.expectation->xfail);
+    out += fmt::format(
+        "<tr class=\"{0}\"><td class=\"outcome\">{1}</td><td class=\"text\"><b>{2}</b> <span "
+        "class=\"where\">{3}</span><div class=\"detail\">{4}</div></td><td>{5}</td><td>{6}</td>"
+        "<td>{7}</td><td>{8}</td><td class=\"text\">{9}</td></tr>\n",
+        case_outcome_id(outcome), case_outcome_name(outcome), escape_html(o.name),
+        escape_html(o.expectation->location), detail, verdict_number(o.rate),
+        interval(o.ci_low, o.ci_high), interval(o.accepted_low, o.accepted_high),
+        o.window_points
+            ? fmt::format("n = {}..{} ({} points)", o.window_from, o.window_to, o.window_points)
+            : std::string(),
+        html_text(o.reason));
   }
-  out += "</table>\n";
-  std::string fit = (table.fit ? "fitted rate " : "") + html_text(document_fit(table));
-  if (const auto window = window_text(table); !window.empty())
-    fit += "; window " + html_text(window) +
-           (table.window_note.empty() ? "" : "; " + html_text(table.window_note));
-  if (!table.note.empty()) fit += "<br>" + html_text(table.note);
-  if (any_flagged) fit += "<br>* " + html_text(flagged_value_legend);
-  return out + "<p class=\"fit\">" + fit + "</p>\n";
+  auto counts = count_verdicts(verdicts);
+  counts.deselected = deselected;
+  return out + "</table>\n<p class=\"counts\">" + escape_html(format_counts(counts)) + "</p>\n";
+}
+
+// The fitted rates of every group and metric in one table.
+std::string fitted_rates_table(const std::vector<GroupTable>& groups,
+                               const std::vector<RateTable>& tables,
+                               const std::vector<std::string>& metrics) {
+  std::string out = "<div class=\"wide\"><table class=\"summary\"><tr><th>group</th>";
+  for (const auto& metric : metrics)
+    out += fmt::format("<th><a href=\"#{0}\">{0}</a></th>", escape_html(metric));
+  out += "</tr>\n";
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    const auto& group = groups[g];
+    out += fmt::format("<tr><td class=\"text\"><a href=\"#group{}\">{}</a></td>", g + 1,
+                       escape_html(group.label.empty() ? group.group : group.label));
+    for (const auto& metric : metrics) {
+      std::string cell;
+      for (auto t : group.columns)
+        if (tables[t].metric == metric) cell = html_text(fit_cell(tables[t]));
+      out += "<td>" + cell + "</td>";
+    }
+    out += "</tr>\n";
+  }
+  return out + "</table></div>\n";
+}
+
+// One group's convergence table: every metric's value and pairwise rate, the fits at the foot,
+// then each fit with its window and notes.
+std::string group_table(const GroupTable& group, const std::vector<RateTable>& tables,
+                        std::size_t number) {
+  std::string out = fmt::format(
+      "<h3 id=\"group{}\">{}</h3>\n<p class=\"group\">group {}</p>\n", number,
+      escape_html(group.label.empty() ? group.group : group.label), escape_html(group.group));
+  const std::string axes = group.shows_h() ? "<th rowspan=\"2\">n</th><th rowspan=\"2\">h</th>"
+                                           : "<th rowspan=\"2\">n</th>";
+  std::string metrics, headings;
+  for (auto t : group.columns) {
+    metrics += fmt::format("<th colspan=\"2\">{}</th>", escape_html(tables[t].metric));
+    headings += fmt::format("<th>value</th><th>{}</th>", escape_html(rate_heading(tables[t])));
+  }
+  out += fmt::format("<div class=\"wide\"><table class=\"rates\"><tr>{}{}</tr>\n<tr>{}</tr>\n",
+                     axes, metrics, headings);
+  bool any_flagged = false;
+  for (std::size_t r = 0; r < group.n.size(); ++r) {
+    out += fmt::format("<tr><td>{}</td>", group.n[r]);
+    if (group.shows_h())
+      out += std::isfinite(group.h[r]) ? fmt::format("<td>{:.4g}</td>", group.h[r]) : "<td></td>";
+    for (auto t : group.columns) {
+      const auto* row = row_at(tables[t], group.n[r]);
+      if (!row) {
+        out += "<td></td><td></td>";
+        continue;
+      }
+      any_flagged = any_flagged || row->flagged;
+      out += fmt::format("<td{}>{}</td><td>{}</td>", row->flagged ? " class=\"flagged\"" : "",
+                         document_value(*row), document_rate(*row, "&ndash;"));
+    }
+    out += "</tr>\n";
+  }
+  out += fmt::format("<tr class=\"fit\"><td{}>fit</td>", group.shows_h() ? " colspan=\"2\"" : "");
+  for (auto t : group.columns)
+    out += tables[t].fit
+               ? fmt::format("<td></td><td>{}</td>", document_rate({.rate = tables[t].fit->rate}))
+               : "<td></td><td>&ndash;</td>";
+  out += "</tr>\n</table></div>\n<ul class=\"fits\">\n";
+  for (auto t : group.columns) {
+    const auto& table = tables[t];
+    std::string fit = (table.fit ? "fitted rate " : "") + html_text(document_fit(table));
+    if (const auto window = window_text(table); !window.empty())
+      fit += "; window " + html_text(window) +
+             (table.window_note.empty() ? "" : "; " + html_text(table.window_note));
+    if (!table.note.empty()) fit += "<br>" + html_text(table.note);
+    out += fmt::format("<li><b>{}</b>: {}</li>\n", escape_html(table.metric), fit);
+  }
+  out += "</ul>\n";
+  if (any_flagged) out += "<p class=\"fit\">* " + html_text(flagged_value_legend) + "</p>\n";
+  return out;
+}
+
+// The convergence plots of a metric: convergence_<metric>.svg, or its parts
+// (convergence_<metric>_part<k>.svg) when it was split, in name order.
+std::vector<std::filesystem::path> convergence_plots(const std::filesystem::path& plots,
+                                                     const std::string& metric) {
+  std::vector<std::filesystem::path> out;
+  if (plots.empty() || !std::filesystem::exists(plots)) return out;
+  const std::string whole = "convergence_" + metric + ".svg",
+                    part = "convergence_" + metric + "_part";
+  for (const auto& entry : std::filesystem::directory_iterator(plots)) {
+    const auto name = entry.path().filename().string();
+    if (name == whole || (name.starts_with(part) && name.ends_with(".svg") &&
+                          std::isdigit(static_cast<unsigned char>(name[part.size()]))))
+      out.push_back(entry.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace
@@ -123,6 +236,21 @@ td.text {{ text-align: left; }}
 .fit {{ margin: 0 0 1.5em; }}
 img {{ max-width: 100%; border: 1px solid #ddd; }}
 pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
+table.rates tr.fit td {{ border-top: 2px solid #888; font-weight: bold; }}
+table.verdicts td {{ vertical-align: top; }}
+table.verdicts td:nth-child(n+3):nth-child(-n+6) {{ white-space: nowrap; }}
+table.verdicts th:nth-child(2), table.verdicts th:nth-child(7) {{ text-align: left; }}
+div.wide {{ overflow-x: auto; }}
+table.rates td, table.summary td {{ white-space: nowrap; }}
+table.summary th:first-child {{ text-align: left; }}
+table.verdicts td.outcome {{ font-weight: bold; text-align: center; }}
+table.verdicts .where, p.group {{ color: #666; font-size: 85%; }}
+table.verdicts .detail {{ color: #444; font-size: 85%; margin-top: 0.2em; }}
+tr.passed td.outcome {{ background: #c8e6c9; color: #1b5e20; }}
+tr.failed td.outcome {{ background: #ffcdd2; color: #b71c1c; }}
+tr.inconclusive td.outcome {{ background: #fff3c4; color: #7a5b00; }}
+tr.xfailed td.outcome {{ background: #e0e0e0; color: #424242; }}
+tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
 </style></head>
 <body>
 <h1>{0}</h1>
@@ -138,8 +266,9 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
 {12}</table>
 )",
       escape_html(study.name), escape_html(study.description), escape_html(study.source),
-      escape_html(std::string(study_kind_name(study.kind))), build.version, build.git_commit, build.compiler, build.build_type,
-      escape_html(run.started), run.threads, run.wall_seconds, run.trials.size(), mpi_rows);
+      escape_html(std::string(study_kind_name(study.kind))), build.version, build.git_commit,
+      build.compiler, build.build_type, escape_html(run.started), run.threads, run.wall_seconds,
+      run.trials.size(), mpi_rows);
 
   // Failed trials first: they are what a reader must not miss.
   std::string failed;
@@ -154,26 +283,38 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
 
   if (!study.expectations.empty()) {
     page += "<h2>Expectations</h2>\n";
-    page += verdicts
-                ? "<pre class=\"verdicts\">" +
-                      escape_html(format_verification(*verdicts, {}, run.deselected)) + "</pre>\n"
-                : "<p>Not judged in this report (<code>rkhs-study check</code> judges "
-                  "them).</p>\n";
+    page += verdicts ? verdicts_table(*verdicts, run.deselected)
+                     : "<p>Not judged in this report (<code>rkhs-study check</code> judges "
+                       "them).</p>\n";
   }
 
-  page += "<h2>Rates</h2>\n";
   const auto tables = rate_tables(run);
+  const auto groups = group_tables(run, tables);
+  std::vector<std::string> metrics;
+  for (const auto& metric : study.metrics)
+    if (std::any_of(tables.begin(), tables.end(),
+                    [&](const RateTable& t) { return t.metric == metric; }))
+      metrics.push_back(metric);
+  page += "<h2>Rates</h2>\n";
+  if (!groups.empty()) {
+    page +=
+        "<p>Fitted rate [confidence interval] of each metric and group (exp: exponential in "
+        "n); the groups' tables follow the plots.</p>\n" +
+        fitted_rates_table(groups, tables, metrics);
+  }
+  page += "<h2>Convergence plots</h2>\n";
   for (const auto& metric : study.metrics) {
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
-    const auto svg = plots / ("convergence_" + metric + ".svg");
-    if (!plots.empty() && std::filesystem::exists(svg))
+    const auto svgs = convergence_plots(plots, metric);
+    for (const auto& svg : svgs)
       page += fmt::format(
           "<p><img class=\"plot\" alt=\"convergence of {}\" "
           "src=\"data:image/svg+xml;base64,{}\"></p>\n",
           escape_html(metric), base64(read_file(svg)));
-    for (const auto& table : tables)
-      if (table.metric == metric) page += rates_table(table);
+    if (svgs.empty()) page += "<p>No plot.</p>\n";
   }
+  page += "<h2>Convergence tables</h2>\n";
+  for (std::size_t g = 0; g < groups.size(); ++g) page += group_table(groups[g], tables, g + 1);
   // Other plots (adaptive studies): work precision (a study with a reference integrator),
   // then estimates and state errors. In name order, so that panels come in a stable order.
   std::string work_precision, others;
@@ -190,16 +331,17 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
         escape_html(name), base64(read_file(svg)));
   }
   if (!work_precision.empty())
-    page += fmt::format(
-        "<h2 id=\"work-precision\">Work precision</h2>\n<p class=\"caption\">integration_error "
-        "(the relative L2 distance of fhat(T) from the reference integration with {}) against "
-        "each trial's wall time and against its accepted steps, one line per integrator, "
-        "points labelled with their rtol. Wall time is not deterministic: it depends on the "
-        "machine, its load and the {} threads the trials shared (and includes the trial's "
-        "static part; the reference integration is not counted in steps, but it is in wall "
-        "time); steps and errors are reproducible.</p>\n",
-        escape_html(study.reference.label()), run.threads) +
-            work_precision;
+    page +=
+        fmt::format(
+            "<h2 id=\"work-precision\">Work precision</h2>\n<p class=\"caption\">integration_error "
+            "(the relative L2 distance of fhat(T) from the reference integration with {}) against "
+            "each trial's wall time and against its accepted steps, one line per integrator, "
+            "points labelled with their rtol. Wall time is not deterministic: it depends on the "
+            "machine, its load and the {} threads the trials shared (and includes the trial's "
+            "static part; the reference integration is not counted in steps, but it is in wall "
+            "time); steps and errors are reproducible.</p>\n",
+            escape_html(study.reference.label()), run.threads) +
+        work_precision;
   if (!others.empty()) page += "<h2>Estimates and state errors</h2>\n" + others;
   // The page reports whether every plot loaded (read by the project's browser test).
   page += R"(<script>

@@ -2,10 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "rkhs/rates/asymptotic.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
 
 namespace rkhs {
 
@@ -22,7 +25,7 @@ std::vector<RateTable> rate_tables(const RunRecord& run) {
       table.model = series.analysis.reported;
       // An exponential fit is in n whatever the study's abscissa: the table's axis follows it.
       const bool in_n = table.model == RateModel::exponential || run.study.abscissa == Abscissa::n;
-      table.axis = in_n ? "n" : "h";
+      table.axis = std::string(in_n ? "n" : "h");
       for (std::size_t k = 0; k < series.trials.size(); ++k)
         table.rows.push_back(
             {in_n ? series.n[k] : series.abscissa[k], run.trials[series.trials[k]].n,
@@ -68,6 +71,92 @@ std::string window_text(const RateTable& table) {
   for (const auto& row : table.rows) n.push_back(static_cast<double>(row.n));
   return fmt::format("n = {}, {} of {} points", label_range(n, table.window), table.window.size(),
                      table.rows.size());
+}
+
+namespace {
+// `value` with `decimals` decimals, "0.000" rather than "-0.000".
+std::string fixed(double value, int decimals) {
+  auto text = fmt::format("{:.{}f}", value, decimals);
+  if (text.starts_with('-') && text.find_first_not_of("-0.") == std::string::npos) text.erase(0, 1);
+  return text;
+}
+}  // namespace
+
+std::optional<FitCell> fit_cell_parts(const RateTable& table) {
+  const auto& fit = table.fit;
+  if (!fit) return std::nullopt;
+  FitCell cell;
+  cell.exponential = fit->model == RateModel::exponential;
+  const double half_width = 0.5 * (fit->ci_high - fit->ci_low);
+  if (std::isfinite(fit->std_error) && std::isfinite(half_width) && half_width >= 0) {
+    const int decimals =
+        half_width > 0 ? std::clamp(1 - static_cast<int>(std::floor(std::log10(half_width))), 0, 3)
+                       : 3;
+    cell.rate = fixed(fit->rate, decimals);
+    cell.low = fixed(fit->ci_low, decimals);
+    cell.high = fixed(fit->ci_high, decimals);
+  } else {
+    const double magnitude = std::fabs(fit->rate);
+    const int decimals =
+        magnitude > 0 ? std::clamp(2 - static_cast<int>(std::floor(std::log10(magnitude))), 0, 3)
+                      : 3;
+    cell.rate = fixed(fit->rate, decimals);
+  }
+  return cell;
+}
+
+std::string fit_cell(const RateTable& table) {
+  const auto cell = fit_cell_parts(table);
+  if (!cell) return "no fit";
+  std::string out = cell->rate;
+  if (!cell->low.empty()) out += fmt::format(" [{}, {}]", cell->low, cell->high);
+  return cell->exponential ? out + " exp" : out;
+}
+
+std::vector<GroupTable> group_tables(const RunRecord& run, const std::vector<RateTable>& tables) {
+  const auto labels = group_labels(run.trials);
+  std::vector<GroupTable> out;
+  std::map<std::string, std::size_t> position;  // group key -> index in out
+  for (const auto& trial : run.trials)
+    if (!position.contains(trial.group_key)) {
+      position[trial.group_key] = out.size();
+      GroupTable table;
+      table.group = trial.group_key;
+      if (const auto label = labels.find(trial.group_key); label != labels.end())
+        table.label = label->second;
+      out.push_back(std::move(table));
+    }
+  for (std::size_t t = 0; t < tables.size(); ++t)
+    if (const auto found = position.find(tables[t].group); found != position.end())
+      out[found->second].columns.push_back(t);
+  std::erase_if(out, [](const GroupTable& table) { return table.columns.empty(); });
+  for (auto& group : out) {
+    std::map<std::size_t, double> h;  // n -> fill distance (NaN until a column on h has it)
+    bool any_h = false;
+    for (auto t : group.columns) {
+      const auto& table = tables[t];
+      any_h = any_h || !table.axis_is_n();
+      for (const auto& row : table.rows) {
+        auto& at = h.try_emplace(row.n, std::numeric_limits<double>::quiet_NaN()).first->second;
+        if (!table.axis_is_n()) at = row.abscissa;
+      }
+    }
+    for (const auto& [n, fill] : h) {
+      group.n.push_back(n);
+      if (any_h) group.h.push_back(fill);
+    }
+  }
+  return out;
+}
+
+const RateTableRow* row_at(const RateTable& table, std::size_t n) {
+  const auto found = std::find_if(table.rows.begin(), table.rows.end(),
+                                  [n](const RateTableRow& row) { return row.n == n; });
+  return found == table.rows.end() ? nullptr : &*found;
+}
+
+std::string rate_heading(const RateTable& table) {
+  return table.model == RateModel::exponential ? "rate (exp in n)" : "rate";
 }
 
 }  // namespace rkhs

@@ -16,6 +16,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "rkhs/rates/rates.hpp"
 
@@ -57,11 +58,44 @@ std::string format_convergence_table(
         "value flagged: at the round-off floor or from a singular Gram matrix",
     RateModel pairwise_model = RateModel::power_law, std::string_view no_fit_reason = {});
 
-struct RateTable;  // rkhs/report/rate_table.hpp
+struct RateTable;   // rkhs/report/rate_table.hpp
+struct GroupTable;  // rkhs/report/rate_table.hpp
 
 /// The table of one RateTable of a run, formatted as above with the model's axis, its pairwise
 /// rates (not recomputed: RateTableRow::rate, of the reported model), its fit or no-fit reason
 /// and flagged_value_legend. The window and notes lines are console_tables' (output.hpp).
 std::string format_convergence_table(const RateTable& table);
+
+/// All metrics of one group in one table, as deal.II's ConvergenceTable prints several error
+/// columns with a rate each:
+///
+///   kernel=bspline degree=1
+///   (group kernel=bspline degree=1 r=1 n0=4 J=8 | target=sine ... | centres=uniform offset=0)
+///    n  fill_distance   rate  power_function_sup   rate
+///   10      1.257e+00      -           5.109e-01      -
+///   20      6.283e-01  -1.00           3.612e-01  -0.50
+///   fit                -1.00                      -0.50
+///     fill_distance, fitted rate: -1.000 ± 0.000 (95% CI [...], R² = 1.000, 2 points); window ...
+///
+/// - Title: the group's label (GroupTable::label) and its key, or "group <key>" without a label.
+/// - Columns: n, the fill distance h when the group shows it (4 significant digits), then per
+///   metric of `group.columns` its value (scientific, 4 significant digits, "failed" for a failed
+///   trial, '*' when flagged) and its pairwise rate under rate_heading ('-' where undefined; a
+///   blank pair where the metric has no trial at that n). The last row, "fit", holds each
+///   metric's fitted rate under its rate column.
+/// - The columns are wrapped at `width` bytes: metrics that do not fit go to a further part of
+///   the table below, which repeats n (and h).
+/// - Then one line per metric: its fitted rate with the confidence interval (as in the one-metric
+///   table), its window and model choice; its notes on further lines; the '*' legend last.
+///
+/// `tables` is the rate_tables vector the group indexes. Never throws except std::bad_alloc.
+std::string format_group_table(const GroupTable& group, const std::vector<RateTable>& tables,
+                               std::size_t width = 120);
+
+/// The fitted rate of every group (rows, by label) and metric (columns, in study order) with its
+/// confidence interval (fit_cell), under a line naming the confidence level; wrapped at `width`
+/// as format_group_table, repeating the group column.
+std::string format_fitted_rates(const std::vector<GroupTable>& groups,
+                                const std::vector<RateTable>& tables, std::size_t width = 120);
 
 }  // namespace rkhs

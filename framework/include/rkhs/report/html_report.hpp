@@ -1,7 +1,10 @@
 #pragma once
 // report.html: one self-contained page per run (no external resources; plots embedded as
-// data URIs), with the study, provenance, the rate tables with fits, windows and notes, the
-// expectation verdicts, the plots, and the failed trials with their reasons.
+// data URIs): the study and its provenance, the failed trials with their reasons, the
+// expectation verdicts as a table coloured by outcome (fitted rate, CI, accepted interval,
+// window, reason, and what was expected and found), the fitted rates of every group and metric
+// in one table, the convergence plots of each metric (all parts of a plot split into several
+// files), and a convergence table per group (every metric's value and rate side by side).
 
 #include <filesystem>
 #include <string>
@@ -14,8 +17,8 @@ namespace rkhs {
 
 /// The page. `plots` is the folder write_plots rendered into (its SVGs are embedded; an empty
 /// path or a missing folder gives a page without plots). The rate tables render
-/// rate_tables(run) (rkhs/report/rate_table.hpp): the axis is n or h as the study fits, the
-/// confidence level is each fit's own.
+/// rate_tables(run) and group_tables (rkhs/report/rate_table.hpp): the axis is n or h as the
+/// study fits, the confidence level is each fit's own.
 ///
 /// `verdicts` are the study's expectation outcomes as the caller computed them
 /// (verify_expectations on this run's trials, results and rates); the page shows them and

@@ -45,14 +45,19 @@ std::string summary_json(const RunRecord& run);
 std::string estimates_csv(const RunRecord& run);
 /// Adaptive studies: |x - xhat| and V at the output samples of every trial.
 std::string timeseries_csv(const RunRecord& run);
-/// The rate tables as Markdown (one table per metric and group: the axis n or h, value,
-/// pairwise rate, then the fitted rate with its confidence interval) and as LaTeX (booktabs
-/// tables), written as rates.md and rates.tex. Flagged values carry a '*'. Both render
-/// rate_tables(run) (rkhs/report/rate_table.hpp), as console_tables and html_report do.
+/// The rate tables as Markdown and LaTeX, written as rates.md and rates.tex: first the fitted
+/// rates (a row per group, a column per metric, each rate with its confidence interval), then a
+/// convergence table per group in deal.II's ConvergenceTable layout (n, h when the study fits
+/// against it, a value and a pairwise-rate column per metric, the fitted rates at the foot),
+/// followed by each metric's fit, window and notes. Flagged values carry a '*'. The LaTeX
+/// tables use booktabs and siunitx (S columns aligned on the decimal point, real minus signs);
+/// wide groups stack tabulars of three metrics. Both render rate_tables(run) and group_tables
+/// (rkhs/report/rate_table.hpp), as console_tables and html_report do.
 std::string markdown_tables(const RunRecord& run);
 std::string latex_tables(const RunRecord& run);
-/// One ConvergenceTable per metric and group (format_convergence_table of each RateTable),
-/// each followed by its window and note lines.
+/// The console's view: the fitted rates of every group (format_fitted_rates) when there is more
+/// than one group, then each group's table (format_group_table), up to 12 groups; beyond, a line
+/// that points to rates.md, rates.tex and report.html.
 std::string console_tables(const RunRecord& run);
 
 /// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and

@@ -74,5 +74,48 @@ std::string document_rate(const RateTableRow& row, std::string_view missing = "-
 std::string document_fit(const RateTable& table);
 /// The window of the reported model: "n = 10..80, 4 of 4 points", "" when it is empty.
 std::string window_text(const RateTable& table);
+/// The fitted rate and its confidence interval rounded to the interval: as many decimals as
+/// show the interval's half-width to two significant digits, between 0 and 3 ("3.94", "[3.72,
+/// 4.15]"; "-21", "[-102, 61]"; a rate of 1e-15 with a CI of 1e-15 is "0.000"); without an
+/// interval, 3 significant digits up to 3 decimals. No "-0".
+struct FitCell {
+  std::string rate, low, high;  ///< low and high are "" without an interval
+  bool exponential = false;     ///< the exponential model's rate (in n)
+};
+/// The fit's FitCell; nullopt without a fit.
+std::optional<FitCell> fit_cell_parts(const RateTable& table);
+/// The fitted rate with its confidence interval in a few characters, for a cell of a table of
+/// fitted rates: "-1.47 [-1.52, -1.43]", "-1.47" without an interval, "-0.287 [-0.363, -0.211]
+/// exp" for the exponential model, "no fit" without a fit (fit_cell_parts).
+std::string fit_cell(const RateTable& table);
+
+/// All metrics of one group of trials side by side: the layout of deal.II's ConvergenceTable,
+/// one refinement column (n, and the fill distance h when the study fits against it), then a
+/// value and a rate column per metric, the fitted rates at the foot. It indexes the RateTables
+/// of the run and computes nothing of its own.
+struct GroupTable {
+  std::string group;  ///< the group's key (every axis but n)
+  /// The axes that tell this group from the study's other groups ("kernel=bspline degree=2";
+  /// group_labels of rkhs/verify/expectation_cases.hpp): the title a reader needs.
+  std::string label;
+  std::vector<std::size_t> n;  ///< the rows: every n a column has, increasing
+  /// The fill distance of each row when a column's axis is h (NaN where none has the row);
+  /// empty when every column's axis is n.
+  std::vector<double> h;
+  std::vector<std::size_t> columns;  ///< positions in the rate_tables vector, in metric order
+
+  bool shows_h() const { return !h.empty(); }
+};
+
+/// The group tables of `run` in the order of their groups' first trial; `tables` is
+/// rate_tables(run). Never throws except std::bad_alloc.
+std::vector<GroupTable> group_tables(const RunRecord& run, const std::vector<RateTable>& tables);
+
+/// The row of `table` at `n`; nullptr when the metric has no trial there.
+const RateTableRow* row_at(const RateTable& table, std::size_t n);
+
+/// The heading of a metric's rate column in a group table: "rate" for the study's axis, "rate
+/// (exp in n)" for a column whose reported model is exponential.
+std::string rate_heading(const RateTable& table);
 
 }  // namespace rkhs
