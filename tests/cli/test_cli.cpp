@@ -134,7 +134,7 @@ TEST_CASE("bad input exits with code 2 and says where", "[cli]") {
   CHECK(run("list nonsense").exit_code == 2);
 }
 
-TEST_CASE("list shows plugins with parameters and docs; --help works", "[cli]") {
+TEST_CASE("list shows plugins with parameters and docs: --help works", "[cli]") {
   auto outcome = run("list kernel");
   CHECK(outcome.exit_code == 0);
   for (const char* expected : {"bspline", "gaussian", "matern", "wendland", "sigma", "degree"})

@@ -172,7 +172,7 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   CHECK_THAT(third.output, !Catch::Contains("warning: " + store.string()));
 }
 
-TEST_CASE("store vacuum removes what does not verify; store export writes CSV and JSON",
+TEST_CASE("store vacuum removes what does not verify: store export writes CSV and JSON",
           "[cli][store][reliability]") {
   const auto dir = rkhs::test::scratch_directory("reliable_vacuum");
   std::ofstream(dir / "study.toml") << small_study;

@@ -84,7 +84,7 @@ TEST_CASE("a run killed with SIGKILL resumes and equals an uninterrupted run", "
   CHECK(read_text(dir / "resumed" / "rates.csv") == read_text(dir / "clean" / "rates.csv"));
 }
 
-TEST_CASE("SIGINT stops the run; what finished is stored, and it says how to resume",
+TEST_CASE("SIGINT stops the run: what finished is stored, and it says how to resume",
           "[cli][store]") {
   const auto dir = rkhs::test::scratch_directory("store_sigint");
   std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
@@ -133,7 +133,7 @@ TEST_CASE("a changed parameter re-runs only the affected trials", "[cli][store]"
              Catch::Contains("0 trials reused from " + store.string() + ", 10 run now"));
 }
 
-TEST_CASE("shards run disjoint subsets; merged stores reproduce a single run", "[cli][store]") {
+TEST_CASE("shards run disjoint subsets: merged stores reproduce a single run", "[cli][store]") {
   const auto dir = rkhs::test::scratch_directory("store_shards");
   std::ofstream(dir / "study.toml") << R"([study]
 name = "shards"

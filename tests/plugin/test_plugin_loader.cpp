@@ -233,7 +233,7 @@ TEST_CASE("a plugin unloaded by a test leaves the registries as they were and lo
   CHECK_FALSE(unload_plugin(module("inverse_multiquadric")));
 }
 
-TEST_CASE("a module may register plants and learning laws; a study runs with them", "[plugin]") {
+TEST_CASE("a module may register plants and learning laws: a study runs with them", "[plugin]") {
   const auto plants = plant_registry().names();
   const auto laws = law_registry().names();
   const auto plugin = load_plugin(module("adaptive_parts"));

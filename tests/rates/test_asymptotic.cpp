@@ -161,7 +161,7 @@ TEST_CASE("the Gaussian's power function without flags: its floor found from the
   CHECK(a.reported == rkhs::RateModel::exponential);
 }
 
-TEST_CASE("a NaN trial and unusable points are left out; the rest is fitted", "[asymptotic]") {
+TEST_CASE("a NaN trial and unusable points are left out: the rest is fitted", "[asymptotic]") {
   auto s = make_series(arithmetic(10, 100, 10), [](double n) { return std::pow(n, -1.5); });
   s.y[3] = quiet_nan;      // a failed trial
   s.usable[7] = false;     // a flagged value
@@ -176,7 +176,7 @@ TEST_CASE("a NaN trial and unusable points are left out; the rest is fitted", "[
   CHECK(std::isnan(a.power_law.pairwise[3]));
 }
 
-TEST_CASE("a window never has fewer than 3 points; short series are not trimmed", "[asymptotic]") {
+TEST_CASE("a window never has fewer than 3 points: short series are not trimmed", "[asymptotic]") {
   // Every pairwise rate differs from the next: the rule would trim all but it keeps 3.
   const std::vector<double> n{10, 20, 40, 80, 160};
   const std::vector<double> y{1.0, 0.9, 0.5, 0.1, 0.001};

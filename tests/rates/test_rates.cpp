@@ -215,7 +215,7 @@ TEST_CASE("non-positive abscissae are excluded by the power law, kept by the exp
   CHECK(exponential->note.empty());
 }
 
-TEST_CASE("two points give an exact slope without statistics; fewer give no fit", "[rates]") {
+TEST_CASE("two points give an exact slope without statistics: fewer give no fit", "[rates]") {
   const std::vector<double> x{10, 40};
   const std::vector<double> y{1.0, 1.0 / 64.0};
   const auto fit = rkhs::fit_power_law(x, y);

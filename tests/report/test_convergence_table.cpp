@@ -122,7 +122,7 @@ TEST_CASE("convergence table footers when the fit is exponential, exact or impos
   }
 }
 
-TEST_CASE("the pairwise column follows the footer's model; callers explain a missing fit",
+TEST_CASE("the pairwise column follows the footer's model: callers explain a missing fit",
           "[rates]") {
   Series s;
   for (double n : {4.0, 8.0, 12.0}) s.add(n, std::exp(-0.3 * n));

@@ -41,7 +41,7 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 
 }  // namespace
 
-TEST_CASE("a stored record verifies and reads back; its format is the documented one", "[store]") {
+TEST_CASE("a stored record verifies and reads back: its format is the documented one", "[store]") {
   const auto record = store_record(hash, result(), names);
   CHECK(record.rfind("rkhs-record 2\nmetric_names a b c\nrkhs-trial 1\n", 0) == 0);
   CHECK(sealed(body_of(record)) == record);

@@ -64,7 +64,7 @@ TEST_CASE("a grid beyond [limits] trials is refused before it is built", "[study
         "n; shorten these lists, or raise [limits] trials");
 }
 
-TEST_CASE("[limits] trials sets the cap; the count includes every axis", "[study][limits]") {
+TEST_CASE("[limits] trials sets the cap: the count includes every axis", "[study][limits]") {
   const std::string small = R"([study]
 name = "small"
 [domain]

@@ -423,7 +423,7 @@ TEST_CASE("summary.json: the tier is read back for `report`", "[verification][ch
   const Textbook textbook(
       "[[expect]]\nmetric = \"power_function_sup\"\ntheory = true\ntier = \"quick\"\n");
   const auto outcomes = textbook.verify();
-  RunRecord record{textbook.study, textbook.trials, textbook.results, textbook.rates};
+  RunRecord record{textbook.study, textbook.trials, textbook.results, textbook.rates, 1, 0.0, ""};
   record.tier = "quick";
   record.verdicts = &outcomes;
   record.deselected = 2;
