@@ -102,14 +102,15 @@ int rkhs_study_main(int argc, char** argv) {
 
   std::string report_dir, report_format = "html";
   auto* report = app.add_subcommand(
-      "report", "the rate tables of a run again: Markdown, LaTeX or report.html");
+      "report", "the rate tables of a run again: text, Markdown, LaTeX or report.html");
   report->add_option("directory", report_dir, "a results directory (with summary.json)")
       ->required()
       ->check(CLI::ExistingDirectory);
   report
       ->add_option("--format", report_format,
-                   "md, tex or html (default html: writes DIR/report.html)")
-      ->check(CLI::IsMember({"md", "tex", "html"}));
+                   "text (the console's tables, every group's), md, tex or html (default html: "
+                   "writes DIR/report.html)")
+      ->check(CLI::IsMember({"text", "md", "tex", "html"}));
   add_store_options(report, report_store);
 
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");

@@ -101,6 +101,11 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
   const auto markdown = run("report " + (dir / "out").string() + " --format md");
   CHECK(markdown.exit_code == 0);
   CHECK(markdown.output == read(dir / "out" / "rates.md"));
+  // --format text: the console's tables, every group's.
+  const auto text = run("report " + (dir / "out").string() + " --format text");
+  CHECK(text.exit_code == 0);
+  CHECK(text.output.find("power_function_sup, fitted rate: ") != std::string::npos);
+  CHECK(text.output.find("\nfit ") != std::string::npos);
   CHECK(read(dir / "out" / "report.html").find("<h2>Rates</h2>") != std::string::npos);
   CHECK(run("report " + (dir / "missing").string()).exit_code == 2);
   const int json_ok = std::system(("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "

@@ -2,6 +2,7 @@
 // summary.json names (restricted to its tier, if it ran one) and the result store (trials not
 // stored are run).
 #include <iostream>
+#include <limits>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
@@ -30,7 +31,9 @@ int command_report(const std::string& directory, const std::string& format,
   run.threads = 1;
   run.seconds = 0.0;
   const auto record = run.record();
-  if (format == "md") {
+  if (format == "text") {
+    std::cout << console_tables(record, std::numeric_limits<std::size_t>::max());
+  } else if (format == "md") {
     std::cout << markdown_tables(record);
   } else if (format == "tex") {
     std::cout << latex_tables(record);

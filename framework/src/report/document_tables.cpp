@@ -17,10 +17,6 @@ namespace rkhs {
 
 namespace {
 
-// More groups than this and the console shows the fitted rates alone, the group tables being
-// in rates.md, rates.tex and report.html.
-constexpr std::size_t console_group_tables = 12;
-
 // Metrics per LaTeX table (two columns each beside n, and h when shown): wider tables do not
 // fit the text width of a page, so a group with more metrics continues in further tables.
 constexpr std::size_t latex_metrics_per_table = 3, latex_metrics_per_table_with_h = 2;
@@ -371,12 +367,12 @@ std::string latex_tables(const RunRecord& run) {
   return out;
 }
 
-std::string console_tables(const RunRecord& run) {
+std::string console_tables(const RunRecord& run, std::size_t group_tables_shown) {
   const auto tables = rate_tables(run);
   const auto groups = group_tables(run, tables);
   std::string out;
   if (groups.size() > 1) out += format_fitted_rates(groups, tables) + "\n";
-  if (groups.size() > console_group_tables)
+  if (groups.size() > group_tables_shown)
     return out + fmt::format(
                      "The convergence table of each of the {} groups is in rates.md, "
                      "rates.tex and report.html.\n\n",

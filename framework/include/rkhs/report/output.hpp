@@ -56,9 +56,10 @@ std::string timeseries_csv(const RunRecord& run);
 std::string markdown_tables(const RunRecord& run);
 std::string latex_tables(const RunRecord& run);
 /// The console's view: the fitted rates of every group (format_fitted_rates) when there is more
-/// than one group, then each group's table (format_group_table), up to 12 groups; beyond, a line
-/// that points to rates.md, rates.tex and report.html.
-std::string console_tables(const RunRecord& run);
+/// than one group, then each group's table (format_group_table), up to `group_tables_shown` groups
+/// (`run` prints them for 12 at most, `report --format text` for all); beyond, a line that
+/// points to rates.md, rates.tex and report.html.
+std::string console_tables(const RunRecord& run, std::size_t group_tables_shown = 12);
 
 /// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and
 /// timeseries.csv) into `directory` (created if needed).
