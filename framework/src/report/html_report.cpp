@@ -165,12 +165,20 @@ pre {{ background: #f6f6f6; padding: 0.8em; overflow-x: auto; }}
   const auto tables = rate_tables(run);
   for (const auto& metric : study.metrics) {
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
-    const auto svg = plots / ("convergence_" + metric + ".svg");
-    if (!plots.empty() && std::filesystem::exists(svg))
-      page += fmt::format(
-          "<p><img class=\"plot\" alt=\"convergence of {}\" "
-          "src=\"data:image/svg+xml;base64,{}\"></p>\n",
-          escape_html(metric), base64(read_file(svg)));
+    // One figure, or its parts when the metric has too many panels for one
+    // (convergence_<metric>_part1.svg, ...).
+    std::vector<std::filesystem::path> figures{plots / ("convergence_" + metric + ".svg")};
+    for (std::size_t part = 1; !plots.empty(); ++part) {
+      auto file = plots / fmt::format("convergence_{}_part{}.svg", metric, part);
+      if (!std::filesystem::exists(file)) break;
+      figures.push_back(std::move(file));
+    }
+    for (const auto& svg : figures)
+      if (!plots.empty() && std::filesystem::exists(svg))
+        page += fmt::format(
+            "<p><img class=\"plot\" alt=\"convergence of {}\" "
+            "src=\"data:image/svg+xml;base64,{}\"></p>\n",
+            escape_html(metric), base64(read_file(svg)));
     for (const auto& table : tables)
       if (table.metric == metric) page += rates_table(table);
   }
