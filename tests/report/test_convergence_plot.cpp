@@ -196,8 +196,10 @@ name = "gaussian"
 sigma = 1.0
 )",
                 [](const TrialSpec& trial, const std::string&) {
-                  return std::pow(static_cast<double>(trial.n),
-                                  trial.kernel.name == "gaussian" ? -3.0 : -1.0);
+                  const double n = static_cast<double>(trial.n);
+                  if (trial.kernel.name == "gaussian") return std::exp(-0.3 * n);
+                  return std::pow(n,
+                                  -static_cast<double>(trial.kernel.parameters.integer("degree")));
                 });
   const auto plan = plot_scripts(run.record());
   REQUIRE(plan.scripts.size() == 1);
@@ -358,4 +360,34 @@ TEST_CASE("convergence plots rendered: SVG, PNG and PDF", "[report][plots][conve
     CHECK(std::filesystem::file_size(file) > 1000);
   }
   std::filesystem::remove_all(directory);
+}
+
+TEST_CASE("convergence plot: groups that differ only in axes the metric ignores are one curve",
+          "[report][plots][convergence]") {
+  // The value depends on the degree alone (as the power function ignores the target), except
+  // that one group of degree 2 differs: the amplitude then matters, and nothing is merged.
+  auto by_degree = [](const TrialSpec& trial, const std::string&) {
+    return std::pow(static_cast<double>(trial.n),
+                    -static_cast<double>(trial.kernel.parameters.integer("degree")));
+  };
+  const Run run(twelve_groups, by_degree);
+  const auto plan = plot_scripts(run.record());
+  REQUIRE(plan.scripts.size() == 1);
+  const auto& script = plan.scripts.front().second;
+  CHECK_THAT(script, !Catch::Contains("multiplot"));
+  const auto titles = curve_titles(script);
+  REQUIRE(titles.size() == 2);
+  CHECK_THAT(titles.at(0), Catch::StartsWith("degree=1, r=1: rate -1"));
+  CHECK_THAT(titles.at(1), Catch::StartsWith("degree=2, r=2: rate -2"));
+  CHECK_THAT(script, Catch::Contains("the same for every amplitude and cycles"));
+
+  const Run uneven(twelve_groups, [&](const TrialSpec& trial, const std::string& metric) {
+    const bool odd = trial.target.parameters.real("amplitude") == 3.0 &&
+                     trial.kernel.parameters.integer("degree") == 2;
+    return by_degree(trial, metric) * (odd ? 2.0 : 1.0);
+  });
+  const auto uneven_plan = plot_scripts(uneven.record());
+  REQUIRE(uneven_plan.scripts.size() == 1);
+  CHECK(curve_titles(uneven_plan.scripts.front().second).size() == 6);  // degree x amplitude
+  CHECK_THAT(uneven_plan.scripts.front().second, Catch::Contains("the same for every cycles"));
 }

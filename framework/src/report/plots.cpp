@@ -424,6 +424,78 @@ std::string curve_data(const Curve& curve, std::size_t c) {
   return data;
 }
 
+// Merges the curves that differ only in axes the metric does not depend on, and returns
+// `identity` (of every curve) reduced to the curves kept. A factor is such an axis when some
+// curves differ in it alone and every such pair has the same series (abscissa, values and
+// flags): the power function does not depend on the target, say. Merged curves must have the
+// same series, or nothing is merged. The title then says the curves are the same for every
+// value of the factors left out; a factor that no longer differs among the curves kept becomes
+// a constant of the title.
+Identity merge_identical(std::vector<Curve>& curves, const Identity& identity) {
+  const std::size_t count = curves.size(), factors = identity.factors.size();
+  std::vector<std::string> text(count);
+  for (std::size_t c = 0; c < count; ++c) {
+    const auto& series = *curves[c].series;
+    for (std::size_t k = 0; k < series.trials.size(); ++k)
+      text[c] += fmt::format("{} {} {};", format_real(curves[c].x[k]),
+                             format_real(series.values[k]), static_cast<int>(series.flagged[k]));
+  }
+  std::vector<bool> irrelevant(factors, false);
+  for (std::size_t f = 0; f < factors; ++f) {
+    bool pairs = false, same = true;
+    for (std::size_t a = 0; a < count && same; ++a)
+      for (std::size_t b = a + 1; b < count && same; ++b) {
+        bool only_f = identity.values[a][f] != identity.values[b][f];
+        for (std::size_t g = 0; g < factors && only_f; ++g)
+          if (g != f && identity.values[a][g] != identity.values[b][g]) only_f = false;
+        if (!only_f) continue;
+        pairs = true;
+        same = text[a] == text[b];
+      }
+    irrelevant[f] = pairs && same;
+  }
+  if (std::none_of(irrelevant.begin(), irrelevant.end(), [](bool b) { return b; })) return identity;
+  std::map<std::vector<std::string>, std::size_t> kept_of;  // relevant values -> curve kept
+  std::vector<std::size_t> kept;
+  for (std::size_t c = 0; c < count; ++c) {
+    std::vector<std::string> key;
+    for (std::size_t f = 0; f < factors; ++f)
+      if (!irrelevant[f]) key.push_back(identity.values[c][f]);
+    const auto [it, fresh] = kept_of.emplace(key, kept.size());
+    if (fresh)
+      kept.push_back(c);
+    else if (text[kept[it->second]] != text[c])
+      return identity;  // the axis matters somewhere after all
+  }
+  Identity out;
+  out.constants = identity.constants;
+  out.values.resize(kept.size());
+  std::vector<std::string> same_for;
+  for (std::size_t f = 0; f < factors; ++f) {
+    if (irrelevant[f]) {
+      same_for.push_back(identity.factors[f]);
+      continue;
+    }
+    std::set<std::string> seen;
+    for (auto c : kept) seen.insert(identity.values[c][f]);
+    if (seen.size() == 1) {
+      out.constants.push_back(*seen.begin());
+      continue;
+    }
+    out.factors.push_back(identity.factors[f]);
+    for (std::size_t k = 0; k < kept.size(); ++k)
+      out.values[k].push_back(identity.values[kept[k]][f]);
+  }
+  std::string same = "the same for every ";
+  for (std::size_t i = 0; i < same_for.size(); ++i)
+    same += (i == 0 ? "" : i + 1 == same_for.size() ? " and " : ", ") + same_for[i];
+  out.constants.push_back(same);
+  std::vector<Curve> remaining;
+  for (auto c : kept) remaining.push_back(std::move(curves[c]));
+  curves = std::move(remaining);
+  return out;
+}
+
 void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPlan& plan) {
   std::vector<Curve> curves;
   for (const auto& series : run.rates) {
@@ -456,10 +528,12 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
     return;
   }
 
-  // What tells the curves apart, and the panels that keep each plot readable.
+  // Groups with the same series (abscissa, values and flags: a metric that does not depend on
+  // some axis, such as the power function on the target) are one curve; what tells the curves
+  // apart, and the panels that keep each plot readable.
   std::vector<const TrialSpec*> groups;
   for (const auto& curve : curves) groups.push_back(&run.trials[curve.series->trials.front()]);
-  const auto identity = identify(groups);
+  const auto identity = merge_identical(curves, identify(groups));
   const auto chosen = panel_factors(identity, most_curves_per_panel);
   std::vector<std::size_t> others;  // the factors the curves of a panel differ in
   for (std::size_t f = 0; f < identity.factors.size(); ++f)
