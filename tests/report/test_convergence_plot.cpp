@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <regex>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/report/plots.hpp"
 #include "verify/synthetic_results.hpp"
@@ -390,4 +392,66 @@ TEST_CASE("convergence plot: groups that differ only in axes the metric ignores 
   REQUIRE(uneven_plan.scripts.size() == 1);
   CHECK(curve_titles(uneven_plan.scripts.front().second).size() == 6);  // degree x amplitude
   CHECK_THAT(uneven_plan.scripts.front().second, Catch::Contains("the same for every cycles"));
+}
+
+TEST_CASE("report.html embeds every part of a convergence figure", "[report][plots][convergence]") {
+  const Run run(twelve_groups, wobbly);
+  const auto plots = std::filesystem::temp_directory_path() / "rkhs_convergence_parts";
+  std::filesystem::remove_all(plots);
+  std::filesystem::create_directories(plots);
+  for (int part = 1; part <= 2; ++part)
+    std::ofstream(plots / ("convergence_l2_error_part" + std::to_string(part) + ".svg"))
+        << "<svg xmlns=\"http://www.w3.org/2000/svg\"><text>part " << part << "</text></svg>";
+  const auto page = html_report(run.record(), plots);
+  CHECK(count_of(page, "alt=\"convergence of l2_error\"") == 2);
+  std::filesystem::remove_all(plots);
+}
+
+TEST_CASE("convergence plot: a plugin's parameters go with it into panels and legends",
+          "[report][plots][convergence]") {
+  const Run run(R"([study]
+name = "plugins"
+metrics = ["l2_error"]
+[domain]
+radius = 4.0
+[grid]
+n = [10, 20, 40, 80]
+[[kernel]]
+name = "bspline"
+degree = [1, 2, 3]
+J = 8
+[[kernel]]
+name = "matern"
+nu = [0.5, 1.5, 2.5]
+[[target]]
+name = "sine"
+amplitude = [1.0, 2.0]
+)",
+                [](const TrialSpec& trial, const std::string&) {
+                  const auto& kernel = trial.kernel;
+                  const double order =
+                      kernel.name == "bspline"
+                          ? static_cast<double>(kernel.parameters.integer("degree"))
+                          : kernel.parameters.real("nu") + 0.5;
+                  return trial.target.parameters.real("amplitude") *
+                         std::pow(static_cast<double>(trial.n), -order);
+                });
+  const auto plan = plot_scripts(run.record());
+  REQUIRE(plan.scripts.size() == 1);
+  const auto& script = plan.scripts.front().second;
+  // 12 groups: one panel per kernel (degree or nu alone would not say which kernel).
+  CHECK_THAT(script, Catch::Contains("set multiplot layout 1,2"));
+  CHECK_THAT(script, Catch::Contains("set title \"kernel=bspline\" noenhanced"));
+  CHECK_THAT(script, Catch::Contains("set title \"kernel=matern\" noenhanced"));
+  const auto titles = curve_titles(script);
+  REQUIRE(titles.size() == 12);
+  for (const auto& [curve, title] : titles) {
+    INFO(title);
+    CHECK(std::regex_match(title,
+                           std::regex(curve < 6 ? R"(degree=([123]) r=\1, amplitude=[12]: rate -[0-9.]+)"
+                                                : R"(nu=[0-9.]+, amplitude=[12]: rate -[0-9.]+)")));
+  }
+  // Each kernel's constant parameters once, in the title.
+  CHECK_THAT(script,
+             Catch::Contains("bspline: n0=4 J=8") && Catch::Contains("matern: length_scale=1"));
 }

@@ -34,19 +34,32 @@ std::string gp_text(std::string_view text) {
 }
 
 // `items` joined by `separator`, broken into lines of about `width` characters (gnuplot does
-// not wrap).
+// not wrap); an item longer than a line is broken at its spaces.
 std::string wrapped(const std::vector<std::string>& items, std::size_t width,
                     std::string_view separator = ", ") {
   std::string out, line;
+  auto end_line = [&](std::string_view tail) {
+    out += line;
+    out += tail;
+    out += '\n';
+    line.clear();
+  };
   for (const auto& item : items) {
-    if (!line.empty() && line.size() + separator.size() + item.size() > width) {
-      out += line;
-      out += separator.substr(0, separator.find_last_not_of(' ') + 1);
-      out += '\n';
-      line.clear();
-    }
+    if (!line.empty() && line.size() + separator.size() + item.size() > width)
+      end_line(separator.substr(0, separator.find_last_not_of(' ') + 1));
     if (!line.empty()) line += separator;
-    line += item;
+    std::size_t start = 0;
+    while (start < item.size()) {
+      auto space = item.find(' ', start);
+      if (space == std::string::npos) space = item.size();
+      if (start > 0 && line.size() + space - start > width) {  // within the item
+        line.pop_back();                                       // its space
+        end_line("");
+      }
+      line += item.substr(start, space - start);
+      if (space < item.size()) line += ' ';
+      start = space + 1;
+    }
   }
   return out + line;
 }
@@ -85,8 +98,9 @@ constexpr double x_share = 0.03, x_least = 1.03, x_most = 1.3;
 constexpr double y_share = 0.05, y_least = 1.1, y_most = 2.0;
 
 // "set xrange [a:b]" for a logarithmic axis over `extent` with its margin. An axis spanning
-// less than about two decades gets labelled tics at 1, 2 and 5 times the powers of ten (the
-// decades alone would leave it with one or two labels).
+// less than about two and a half decades gets labelled tics at 1, 2 and 5 times the powers of
+// ten, one of less than a decade at every digit (the decades alone would leave it with one or
+// two labels, or none).
 std::string log_range(const char* axis, const Extent& extent, bool is_x) {
   if (extent.empty()) return "";
   const double m = is_x ? log_margin(extent, x_share, x_least, x_most)
@@ -94,10 +108,13 @@ std::string log_range(const char* axis, const Extent& extent, bool is_x) {
   const double low = extent.low / m, high = extent.high * m;
   auto out = fmt::format("set {}range [{}:{}]\n", axis, format_real(low), format_real(high));
   if (high / low > 300) return out;
+  // Within a decade, every digit; within two and a half, 1, 2 and 5.
+  const std::vector<int> mantissas =
+      high / low < 10 ? std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8, 9} : std::vector<int>{1, 2, 5};
   std::string tics;
   for (int decade = static_cast<int>(std::floor(std::log10(low))) - 1;
        decade <= static_cast<int>(std::ceil(std::log10(high))); ++decade)
-    for (int mantissa : {1, 2, 5}) {
+    for (int mantissa : mantissas) {
       const double tic = decade < 0 ? mantissa / std::pow(10.0, -decade)  // 0.005, not 0.0050..01
                                     : mantissa * std::pow(10.0, decade);
       if (tic >= low && tic <= high)
@@ -152,29 +169,50 @@ constexpr PluginAxis plugin_axes[] = {
     {"plant", &TrialSpec::plant},          {"law", &TrialSpec::law},
     {"integrator", &TrialSpec::integrator}};
 
-// The identity of each of a set of trials split into factors: the axes whose values differ
-// among them (a plugin axis whose plugin differs is one factor, "kernel=bspline degree=1",
-// holding the parameters that differ among the trials of the same plugin; a plugin axis with
-// one plugin gives a factor per parameter that differs, "class=A"; laps), and the text of
-// everything that is the same for all ("target=iso8608 n_max=10", "bspline: J=8").
+// The identity of each of a set of trials split into factors, the axes whose values differ
+// among them: a plugin axis whose plugin differs gives a factor for the plugin
+// ("kernel=bspline") and one per parameter that differs among the trials of one plugin
+// ("degree=1"; empty for a trial of another plugin, or of one where it does not differ); a
+// plugin axis with one plugin gives a factor per parameter that differs ("class=A"); laps one
+// more. The constants are the text of everything the same for all ("target=iso8608 n_max=10",
+// "bspline: J=8").
 struct Identity {
-  std::vector<std::string> factors;              ///< factor names, axis order
-  std::vector<std::vector<std::string>> values;  ///< [trial][factor]: "name=value" text
+  std::vector<std::string> factors;  ///< factor names, axis order
+  std::vector<std::string> axes;     ///< the axis of each factor ("kernel", ..., "laps")
+  /// The plugin factor a parameter factor belongs to (an axis with several plugins: a
+  /// parameter means nothing without its plugin), or npos.
+  std::vector<std::size_t> owner;
+  std::vector<std::vector<std::string>> values;  ///< [trial][factor]: "name=value" or ""
   std::vector<std::string> constants;
 };
 
-std::string parameter_text(const std::string& name, const ParameterValue& value) {
-  return name + "=" + format_value(value);
+// The text of `factors` of one trial: "name=value" pairs separated by commas, except that a
+// plugin's own parameters follow it after a space ("kernel=bspline degree=1, class=A").
+std::string identity_text(const Identity& identity, std::size_t trial,
+                          const std::vector<std::size_t>& factors) {
+  std::string out;
+  std::string_view last_axis;
+  for (auto f : factors) {
+    const auto& value = identity.values[trial][f];
+    if (value.empty()) continue;
+    if (!out.empty())
+      out += identity.owner[f] != std::string::npos && identity.axes[f] == last_axis ? " " : ", ";
+    out += value;
+    last_axis = identity.axes[f];
+  }
+  return out;
 }
 
 Identity identify(const std::vector<const TrialSpec*>& trials) {
   Identity out;
   out.values.resize(trials.size());
-  struct ParameterFactor {
-    std::string axis, parameter;
+  std::vector<std::pair<std::string, std::size_t>> parameter_factors;  // (parameter, factor)
+  auto add_factor = [&](const std::string& name, const std::string& axis, std::size_t owner) {
+    out.factors.push_back(name);
+    out.axes.push_back(axis);
+    out.owner.push_back(owner);
+    return out.factors.size() - 1;
   };
-  std::vector<ParameterFactor> parameter_factors;  // to name them once all are known
-  std::vector<std::size_t> parameter_slots;
   for (const auto& [axis, member] : plugin_axes) {
     std::vector<std::string> names;
     for (const auto* trial : trials)
@@ -199,63 +237,58 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
       }
       return parameters;
     };
-    if (names.size() == 1) {
-      std::string constant = std::string(axis) + "=" + names.front();
-      for (const auto& [parameter, values] : spread(names.front())) {
-        if (values.size() == 1) {
-          constant += " " + parameter + "=" + values.front();
-          continue;
-        }
-        parameter_factors.push_back({axis, parameter});
-        parameter_slots.push_back(out.factors.size());
-        out.factors.emplace_back();  // named below
-        for (std::size_t t = 0; t < trials.size(); ++t) {
-          std::string text;
-          for (const auto& [name, value] : ((*trials[t]).*member).parameters.values())
-            if (name == parameter) text = format_value(value);
-          out.values[t].push_back(text);
-        }
-      }
-      out.constants.push_back(constant);
-      continue;
-    }
-    // Several plugins: one factor, the plugin and what differs among its own trials.
-    std::map<std::string, std::vector<std::string>> varying;
+    // The parameters that differ within a plugin, in order of first appearance; the others
+    // are constants, of the axis (one plugin) or of their plugin.
+    std::vector<std::string> differing;
+    std::map<std::string, std::vector<std::string>> differing_in;
+    std::string single = std::string(axis) + "=" + names.front();
     for (const auto& name : names) {
       std::string constant;
-      for (const auto& [parameter, values] : spread(name))
-        if (values.size() > 1)
-          varying[name].push_back(parameter);
-        else
-          constant += " " + parameter + "=" + values.front();
-      if (!constant.empty()) out.constants.push_back(name + ":" + constant);
+      for (const auto& [parameter, values] : spread(name)) {
+        if (values.size() == 1) {
+          (((names.size() == 1 ? single : constant) += ' ') += parameter) += "=" + values.front();
+          continue;
+        }
+        differing_in[name].push_back(parameter);
+        if (std::find(differing.begin(), differing.end(), parameter) == differing.end())
+          differing.push_back(parameter);
+      }
+      if (names.size() > 1 && !constant.empty()) out.constants.push_back(name + ":" + constant);
     }
-    out.factors.push_back(axis);
-    for (std::size_t t = 0; t < trials.size(); ++t) {
-      const auto& choice = (*trials[t]).*member;
-      std::string text = std::string(axis) + "=" + choice.name;
-      for (const auto& [parameter, value] : choice.parameters.values())
-        if (std::find(varying[choice.name].begin(), varying[choice.name].end(), parameter) !=
-            varying[choice.name].end())
-          (text += ' ') += parameter_text(parameter, value);
-      out.values[t].push_back(text);
+    if (names.size() == 1) out.constants.push_back(single);
+    std::size_t plugin = std::string::npos;
+    if (names.size() > 1) {
+      plugin = add_factor(axis, axis, std::string::npos);
+      for (std::size_t t = 0; t < trials.size(); ++t)
+        out.values[t].push_back(std::string(axis) + "=" + ((*trials[t]).*member).name);
+    }
+    for (const auto& parameter : differing) {
+      parameter_factors.emplace_back(parameter, add_factor(parameter, axis, plugin));
+      for (std::size_t t = 0; t < trials.size(); ++t) {
+        const auto& choice = (*trials[t]).*member;
+        std::string text;
+        const auto& own = differing_in[choice.name];
+        if (std::find(own.begin(), own.end(), parameter) != own.end())
+          for (const auto& [name, value] : choice.parameters.values())
+            if (name == parameter) text = format_value(value);
+        out.values[t].push_back(text);
+      }
     }
   }
   // A parameter factor is named by its parameter ("class"), or by its column of trials.csv
   // ("target_seed") when two axes share the parameter name.
-  for (std::size_t f = 0; f < parameter_factors.size(); ++f) {
-    const auto& [axis, parameter] = parameter_factors[f];
+  for (const auto& [parameter, f] : parameter_factors) {
     const bool shared = std::count_if(parameter_factors.begin(), parameter_factors.end(),
-                                      [&](const auto& p) { return p.parameter == parameter; }) > 1;
+                                      [&](const auto& p) { return p.first == parameter; }) > 1;
     std::string name = parameter;
-    if (shared && axis != "kernel") {
-      name = axis;  // (operator+ here trips GCC 12's -Wrestrict false positive)
+    if (shared && out.axes[f] != "kernel") {
+      name = out.axes[f];  // (operator+ here trips GCC 12's -Wrestrict false positive)
       name += '_';
       name += parameter;
     }
-    out.factors[parameter_slots[f]] = name;
+    out.factors[f] = name;
     for (auto& values : out.values)
-      values[parameter_slots[f]] = name + "=" + values[parameter_slots[f]];
+      if (!values[f].empty()) values[f] = name + "=" + values[f];
   }
   // Laps, nested just outside n.
   std::vector<std::string> laps;
@@ -267,7 +300,7 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
     }
   if (laps.size() == 1) out.constants.push_back(laps.front());
   if (laps.size() > 1) {
-    out.factors.push_back("laps");
+    add_factor("laps", "laps", std::string::npos);
     for (std::size_t t = 0; t < trials.size(); ++t)
       out.values[t].push_back("laps=" + laps_text(*trials[t]->laps));
   }
@@ -276,8 +309,9 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
 
 // The factors (indices into identity.factors) whose values split `identity`'s trials into
 // panels of at most `most` each: none when all fit one plot; otherwise the set giving the
-// fewest panels, then the one with fewer factors, then the one of earlier factors. Every set
-// of factors is tried (up to 16 factors; beyond, factors are added greedily).
+// fewest panels, then the one with fewer factors, then the one of earlier factors, a
+// parameter's plugin always with it. Every set of factors is tried (up to 16 factors; beyond,
+// factors are added greedily).
 std::vector<std::size_t> panel_factors(const Identity& identity, std::size_t most) {
   const std::size_t k = identity.factors.size();
   if (identity.values.size() <= most || k == 0) return {};
@@ -307,6 +341,10 @@ std::vector<std::size_t> panel_factors(const Identity& identity, std::size_t mos
         }
       }
       chosen.push_back(best);
+      if (const auto owner = identity.owner[best];
+          owner != std::string::npos &&
+          std::find(chosen.begin(), chosen.end(), owner) == chosen.end())
+        chosen.push_back(owner);
     }
     std::sort(chosen.begin(), chosen.end());
     return chosen;
@@ -315,8 +353,14 @@ std::vector<std::size_t> panel_factors(const Identity& identity, std::size_t mos
   std::size_t best_panels = std::numeric_limits<std::size_t>::max();
   for (std::size_t mask = 1; mask < (std::size_t{1} << k); ++mask) {
     std::vector<std::size_t> chosen;
+    bool complete = true;  // a parameter with its plugin
     for (std::size_t f = 0; f < k; ++f)
-      if (mask & (std::size_t{1} << f)) chosen.push_back(f);
+      if (mask & (std::size_t{1} << f)) {
+        chosen.push_back(f);
+        if (const auto owner = identity.owner[f]; owner != std::string::npos)
+          complete = complete && (mask & (std::size_t{1} << owner));
+      }
+    if (!complete) continue;
     std::size_t panels = 0;
     if (largest_panel(chosen, &panels) > most) continue;
     const bool better =
@@ -471,6 +515,7 @@ Identity merge_identical(std::vector<Curve>& curves, const Identity& identity) {
   out.constants = identity.constants;
   out.values.resize(kept.size());
   std::vector<std::string> same_for;
+  std::vector<std::size_t> index(factors, std::string::npos);  // old factor -> new
   for (std::size_t f = 0; f < factors; ++f) {
     if (irrelevant[f]) {
       same_for.push_back(identity.factors[f]);
@@ -479,10 +524,14 @@ Identity merge_identical(std::vector<Curve>& curves, const Identity& identity) {
     std::set<std::string> seen;
     for (auto c : kept) seen.insert(identity.values[c][f]);
     if (seen.size() == 1) {
-      out.constants.push_back(*seen.begin());
+      if (!seen.begin()->empty()) out.constants.push_back(*seen.begin());
       continue;
     }
+    index[f] = out.factors.size();
     out.factors.push_back(identity.factors[f]);
+    out.axes.push_back(identity.axes[f]);
+    const auto owner = identity.owner[f];
+    out.owner.push_back(owner == std::string::npos ? owner : index[owner]);
     for (std::size_t k = 0; k < kept.size(); ++k)
       out.values[k].push_back(identity.values[kept[k]][f]);
   }
@@ -620,7 +669,7 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
     drawing += fmt::format(
         "set xlabel {} noenhanced\nset ylabel {} noenhanced\nset logscale xy\n"
         "set format y '10^{{%L}}'\nset grid\nset datafile missing 'nan'\n{}{}"
-        "set key noenhanced outside below left Left reverse maxcols 2 samplen 2.5 spacing 1.1\n",
+        "set key noenhanced outside below left Left reverse samplen 2.5 spacing 1.1\n",
         gp_text(against_n ? "n" : "fill distance h"), gp_text(metric), log_range("x", xs, true),
         log_range("y", ys, false));
     if (grid)
@@ -629,22 +678,22 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
     for (std::size_t p = begin; p < end; ++p) {
       const auto& members = panels[p];
       // Legend: the factors that differ within the panel; the rest names the panel.
-      std::vector<std::size_t> legend_factors;
-      std::vector<std::string> panel_title;
-      for (auto f : chosen) panel_title.push_back(identity.values[members.front()][f]);
-      for (auto f : others) {
+      std::vector<std::size_t> legend_factors, title_factors;
+      for (std::size_t f = 0; f < identity.factors.size(); ++f) {
         std::set<std::string> seen;
         for (auto c : members) seen.insert(identity.values[c][f]);
-        if (seen.size() > 1)
-          legend_factors.push_back(f);
-        else
-          panel_title.push_back(identity.values[members.front()][f]);
+        const bool panel = std::find(chosen.begin(), chosen.end(), f) != chosen.end();
+        (panel || seen.size() == 1 ? title_factors : legend_factors).push_back(f);
       }
-      drawing += grid ? fmt::format("set title {} noenhanced\n",
-                                    gp_text(wrapped(panel_title, panel_width / 7)))
-                      : fmt::format("set title {} noenhanced\n", gp_text(title));
+      drawing +=
+          grid ? fmt::format(
+                     "set title {} noenhanced\n",
+                     gp_text(wrapped({identity_text(identity, members.front(), title_factors)},
+                                     panel_width / 7)))
+               : fmt::format("set title {} noenhanced\n", gp_text(title));
       std::string bands, fits, points, theories;
       std::set<std::string> theory_titles;
+      std::size_t longest = 0;  // characters of the longest key entry
       for (std::size_t position = 0; position < members.size(); ++position) {
         const auto c = members[position];
         const auto& curve = curves[c];
@@ -652,16 +701,24 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
         data += curve_data(curve, c);
         const std::size_t lt =
             1 + (colour_by_identity ? colour_of.at(values_of(c, others)) : position) % palette_size;
-        std::string label;
-        for (auto f : legend_factors) label += (label.empty() ? "" : ", ") + identity.values[c][f];
+        auto label = identity_text(identity, c, legend_factors);
         const bool fitted = series.fit && !series.fit->used.empty();
         if (fitted) label += (label.empty() ? "" : ": ") + rate_text(*series.fit);
         if (label.empty()) label = metric;
-        points += fmt::format("$c{0} using 1:2 with linespoints lt {1} title {2}, ", c, lt,
-                              gp_text(label));
-        if (std::find(series.flagged.begin(), series.flagged.end(), true) != series.flagged.end())
-          points += fmt::format("$c{} using 1:3 with points lt {} pt {} notitle, ", c, lt,
-                                filled_point[lt - 1] - 1);
+        longest = std::max(longest, label.size());
+        // Unflagged values (the key's entry), then flagged ones hollow; a series whose every
+        // value is flagged has its entry on the hollow points (gnuplot skips an empty column).
+        bool unflagged = false, flagged = false;
+        for (std::size_t k = 0; k < series.trials.size(); ++k)
+          if (usable_on_log_axis(series.values[k]))
+            (series.flagged[k] ? flagged : unflagged) = true;
+        if (unflagged)
+          points += fmt::format("$c{0} using 1:2 with linespoints lt {1} title {2}, ", c, lt,
+                                gp_text(label));
+        if (flagged)
+          points += fmt::format("$c{} using 1:3 with points lt {} pt {} {}, ", c, lt,
+                                filled_point[lt - 1] - 1,
+                                unflagged ? std::string("notitle") : "title " + gp_text(label));
         if (!fitted) continue;
         bands += fmt::format(
             "$f{} using 1:3:4 with filledcurves fc lt {} fs transparent solid 0.15 noborder "
@@ -677,7 +734,11 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
       }
       auto plot = bands + fits + points + theories;
       plot.erase(plot.size() - 2);
-      drawing += "plot " + plot + "\n";
+      // Two key columns when two entries fit side by side (about 7 pixels a character and 60
+      // for the sample), else one.
+      const int key_width = grid ? panel_width : single_width;
+      drawing += fmt::format("set key maxcols {}\nplot {}\n",
+                             2 * (7 * static_cast<int>(longest) + 60) < key_width ? 2 : 1, plot);
     }
     if (grid) drawing += "unset multiplot\n";
     const auto stem = parts == 1 ? "convergence_" + metric
@@ -833,8 +894,10 @@ PlotPlan plot_scripts(const RunRecord& run) {
     const auto& members = groups[order[g]];
     const auto& last = run.results[members.back()];
     const auto& trial = run.trials[members.back()];
-    std::vector<std::string> names = identity.values[g];
-    const auto group_name = names.empty() ? legend(trial) : wrapped(names, 100);
+    std::vector<std::size_t> every(identity.factors.size());
+    for (std::size_t f = 0; f < every.size(); ++f) every[f] = f;
+    const auto name = identity_text(identity, g, every);
+    const auto group_name = name.empty() ? legend(trial) : wrapped({name}, 100);
     if (last.ok && !last.snapshots.empty()) {
       std::string data = "$estimates << EOD\n";
       for (std::size_t m = 0; m < grid.size() && m < last.road.size(); ++m) {
