@@ -6,20 +6,25 @@
 // the fitted values, within a factor 2), the kernel's power-law theory slope as a dotted line
 // over the same window through the fitted line at the window's geometric centre, flagged values
 // hollow. The x and y ranges are the plotted values' with a small margin (at most 30% on x, a
-// factor 2 on y; labelled 1-2-5 tics on an axis of less than about two decades).
-//   Legends name exactly the axes that differ among the curves: a plugin axis whose plugin
-// differs is one factor ("kernel=bspline degree=1", with the parameters that differ among that
-// plugin's own groups), a plugin axis with one plugin gives a factor per parameter that
-// differs ("class=A"), and a laps axis one more. What every curve shares is said once, in the
-// title. The key lies below the plot.
-//   Small multiples: a metric with more than 8 groups is drawn as a grid of panels (gnuplot
+// factor 2 on y); an axis of less than about two and a half decades gets labelled tics at 1, 2
+// and 5 times the powers of ten, one of less than a decade at every digit.
+//   Legends name exactly the axes that differ among the curves of a panel, each curve with its
+// rate: a plugin axis whose plugin differs is a factor ("kernel=bspline") with a factor per
+// parameter that differs among that plugin's own groups, written after it ("kernel=bspline
+// degree=1"); a plugin axis with one plugin gives a factor per parameter that differs
+// ("class=A"); a laps axis one more. What every curve shares is said once, in the title. Groups
+// that differ only in axes the metric does not depend on (their series equal wherever those
+// axes alone change, e.g. the power function and the target) are one curve, and the title says
+// "the same for every ...". The key lies below the plot.
+//   Small multiples: a metric with more than 8 curves is drawn as a grid of panels (gnuplot
 // multiplot), one panel per value of the factors chosen so that no panel holds more than 8
-// curves, with the fewest panels, then the fewest factors, then the earliest factors (e.g.
-// iso8608: kernel and seed, 12 panels of 7 road classes and wavinesses). Panel titles name the
-// panel's values; x and y ranges are shared by all panels of a metric. A curve keeps its
-// colour in every panel when the curves' identities within panels number 8 or fewer. Canvas
-// size grows with the panels (480 x 480 pixels each); beyond 12 panels the figure is split
-// into files convergence_<metric>_part1, _part2, ... of at most 12 panels.
+// curves, with the fewest panels, then the fewest factors, then the earliest factors, a
+// parameter always with its plugin (e.g. iso8608's l2_error: kernel and seed, 12 panels of 7
+// road classes and wavinesses). Panel titles name the panel's values; x and y ranges are shared
+// by all panels of a metric; a curve keeps its colour in every panel when the curves'
+// identities within panels number 8 or fewer. The canvas grows with the panels (480 x 480
+// pixels each, up to 4 columns); beyond 12 panels the figure is split into files
+// convergence_<metric>_part1, _part2, ... of at most 12 panels.
 //
 // For adaptive studies: the estimate against the road at each snapshot lap and |x - xhat| and
 // V against time, per group (titled by what sets the group apart); for adaptive studies with a
