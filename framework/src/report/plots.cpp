@@ -125,7 +125,8 @@ std::string log_range(const char* axis, const Extent& extent, bool is_x) {
 
 // The script that renders `drawing` (every setting and plot command; the data blocks come
 // first, outside) to <stem>.svg, <stem>.png and <stem>.pdf in the current directory, on a
-// canvas of width x height pixels (the PDF at 100 pixels to the inch, fonts scaled alike).
+// canvas of width x height pixels (the PDF at 150 pixels to the inch, 900 pixels a 6-inch
+// figure, its fonts, points and lines scaled alike).
 std::string rendered(const std::string& stem, int width, int height, const std::string& data,
                      const std::string& drawing) {
   return data + fmt::format(
@@ -136,12 +137,12 @@ std::string rendered(const std::string& stem, int width, int height, const std::
                     "if (ext eq \"png\") {{ set terminal pngcairo size {0},{1} enhanced font "
                     "'sans,10' }}\n"
                     "if (ext eq \"pdf\") {{ set terminal pdfcairo size {2}in,{3}in enhanced font "
-                    "'sans,7' }}\n"
+                    "'sans,7' pointscale 0.5 linewidth 0.7 }}\n"
                     "set output '{4}.'.ext\n"
                     "{5}"
                     "unset output\n"
                     "}}\n",
-                    width, height, format_real(width / 100.0), format_real(height / 100.0), stem,
+                    width, height, format_real(width / 150.0), format_real(height / 150.0), stem,
                     drawing);
 }
 
@@ -577,9 +578,9 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
     return;
   }
 
-  // Groups with the same series (abscissa, values and flags: a metric that does not depend on
-  // some axis, such as the power function on the target) are one curve; what tells the curves
-  // apart, and the panels that keep each plot readable.
+  // What tells the curves apart (groups that differ only in axes the metric does not depend
+  // on, such as the power function and the target, made one curve), and the panels that keep
+  // each plot readable.
   std::vector<const TrialSpec*> groups;
   for (const auto& curve : curves) groups.push_back(&run.trials[curve.series->trials.front()]);
   const auto identity = merge_identical(curves, identify(groups));

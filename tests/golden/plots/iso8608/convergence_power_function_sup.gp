@@ -117,7 +117,7 @@ do for [ext in "svg png pdf"] {
 reset
 if (ext eq "svg") { set terminal svg size 900,748 dynamic enhanced font 'sans,11' }
 if (ext eq "png") { set terminal pngcairo size 900,748 enhanced font 'sans,10' }
-if (ext eq "pdf") { set terminal pdfcairo size 9in,7.48in enhanced font 'sans,7' }
+if (ext eq "pdf") { set terminal pdfcairo size 6in,4.986666666666666in enhanced font 'sans,7' pointscale 0.5 linewidth 0.7 }
 set output 'convergence_power_function_sup.'.ext
 set linetype 1 lc rgb '#0072B2' lw 1.5 pt 7 ps 0.8
 set linetype 2 lc rgb '#D55E00' lw 1.5 pt 5 ps 0.8

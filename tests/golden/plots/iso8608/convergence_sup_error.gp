@@ -3195,7 +3195,7 @@ do for [ext in "svg png pdf"] {
 reset
 if (ext eq "svg") { set terminal svg size 1920,1512 dynamic enhanced font 'sans,11' }
 if (ext eq "png") { set terminal pngcairo size 1920,1512 enhanced font 'sans,10' }
-if (ext eq "pdf") { set terminal pdfcairo size 19.2in,15.12in enhanced font 'sans,7' }
+if (ext eq "pdf") { set terminal pdfcairo size 12.8in,10.08in enhanced font 'sans,7' pointscale 0.5 linewidth 0.7 }
 set output 'convergence_sup_error.'.ext
 set linetype 1 lc rgb '#0072B2' lw 1.5 pt 7 ps 0.8
 set linetype 2 lc rgb '#D55E00' lw 1.5 pt 5 ps 0.8
