@@ -855,18 +855,20 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
     plan.scripts.emplace_back(
         time_stem,
         rendered(time_stem, single_width, single_height, data,
-                 header(title,
-                        fmt::format("wall time of the trial, s (not deterministic: machine, "
-                                    "load, {} threads); labels: rtol",
-                                    run.threads),
-                        ylabel, true, true) +
+                 line_types() +
+                     header(title,
+                            fmt::format("wall time of the trial, s (not deterministic: machine, "
+                                        "load, {} threads); labels: rtol",
+                                        run.threads),
+                            ylabel, true, true) +
                      log_range("x", seconds, true) + log_range("y", errors, false) +
-                     "set key inside bottom left box\nplot " + plot_time + "\n"));
+                     "set key outside below\nplot " + plot_time + "\n"));
     plan.scripts.emplace_back(
-        steps_stem, rendered(steps_stem, single_width, single_height, data,
-                             header(title, "accepted steps; labels: rtol", ylabel, true, true) +
-                                 log_range("x", steps, true) + log_range("y", errors, false) +
-                                 "set key inside bottom left box\nplot " + plot_steps + "\n"));
+        steps_stem,
+        rendered(steps_stem, single_width, single_height, data,
+                 line_types() + header(title, "accepted steps; labels: rtol", ylabel, true, true) +
+                     log_range("x", steps, true) + log_range("y", errors, false) +
+                     "set key outside below\nplot " + plot_steps + "\n"));
   }
 }
 
