@@ -19,16 +19,31 @@ Usage:
   check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --stale         only: no golden files
                                                                           for a study not shipped
   check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --record        write the golden files
+  check_shipped_studies.py RKHS_STUDY SOURCE_DIR WORK_DIR --study NAME --record
+                                                                          write NAME's only
+
+The plots are rendered too (the run is made with plots), and every one is checked: each
+plots/<stem>.gp has its .svg (well-formed XML), .png (a valid PNG of sane size, not one
+uniform colour: decoded here, zlib and the PNG filters) and .pdf (a PDF whose cross-reference
+offset points at its table). For the studies in PLOT_GOLDEN_STUDIES the gnuplot scripts
+themselves are pinned as well, against tests/golden/plots/<study>/<stem>.gp: the same files,
+numbers within 1e-9 relative, the rest exactly. Without gnuplot on PATH the plots are not
+checked (a note says so).
 
 Record only when a change of behaviour is intended, and say why in the commit.
 Standard library only.
 """
+import collections
 import csv
+import itertools
 import pathlib
 import re
 import shutil
+import struct
 import subprocess
 import sys
+import xml.etree.ElementTree
+import zlib
 
 # The first line of `check` output: "<study>: 8 trials, 8 ok, 0 failed in 0.24 s".
 WALL_TIME = re.compile(r" in [0-9.e+-]+ s$")
@@ -65,7 +80,7 @@ def run_study(exe, source, work, study):
     out = work / name
     shutil.rmtree(out, ignore_errors=True)
     result = subprocess.run(
-        [exe, "check", "--no-store", "--no-plots", "--quiet", "--threads", "2", "--out", name,
+        [exe, "check", "--no-store", "--quiet", "--threads", "2", "--out", name,
          "--data-dir", str(source / "studies" / "data"), definition.name],
         cwd=work, capture_output=True, text=True, check=False)
     # 0 all pass, 1 a failure, 3 inconclusive: short horizons fail some expectations, and that
@@ -134,14 +149,195 @@ def compare_csv(golden_path, actual_path):
     return problems
 
 
+# The studies whose gnuplot scripts are pinned (tests/golden/plots/<study>/): iso8608 has the
+# grid of panels (84 groups), legends and ranges of a real study.
+PLOT_GOLDEN_STUDIES = {"iso8608"}
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def compare_script(golden_path, actual_path):
+    """Differences between two gnuplot scripts: numbers within RELATIVE_TOLERANCE, the rest
+    exactly, line by line."""
+    golden = golden_path.read_text().splitlines()
+    actual = actual_path.read_text().splitlines()
+    if len(golden) != len(actual):
+        return [f"{actual_path}: {len(actual)} lines, golden has {len(golden)}"]
+    problems = []
+    for number, (want, got) in enumerate(zip(golden, actual), start=1):
+        if want == got:
+            continue
+        want_numbers, got_numbers = NUMBER.findall(want), NUMBER.findall(got)
+        same = (NUMBER.sub("#", want) == NUMBER.sub("#", got)
+                and len(want_numbers) == len(got_numbers)
+                and all(same_value(a, b) for a, b in zip(want_numbers, got_numbers)))
+        if not same:
+            at = next((i for i, (a, b) in enumerate(zip(want, got)) if a != b),
+                      min(len(want), len(got)))
+            start = max(0, at - 60)
+            problems.append(f"{actual_path}:{number}, column {at + 1}: found "
+                            f"'...{got[start:at + 80]}', golden '...{want[start:at + 80]}'")
+            if len(problems) >= 10:
+                return problems + ["(more differences not shown)"]
+    return problems
+
+
+def add_bytes(a, b):
+    """(a + b) mod 256 byte by byte, in one big-integer operation (no carries between bytes)."""
+    n = len(a)
+    low, high = int.from_bytes(b"\x7f" * n, "big"), int.from_bytes(b"\x80" * n, "big")
+    x, y = int.from_bytes(a, "big"), int.from_bytes(b, "big")
+    return (((x & low) + (y & low)) ^ ((x ^ y) & high)).to_bytes(n, "big")
+
+
+def png_image(path):
+    """(width, height, channels, pixel bytes) of an 8-bit PNG (grey, RGB, palette, with or
+    without alpha, not interlaced): chunks and CRCs checked, zlib, the five PNG filters undone."""
+    data = path.read_bytes()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError("no PNG signature")
+    position, chunks, idat = 8, {}, b""
+    while position < len(data):
+        length, kind = struct.unpack(">I4s", data[position:position + 8])
+        body = data[position + 8:position + 8 + length]
+        crc, = struct.unpack(">I", data[position + 8 + length:position + 12 + length])
+        if zlib.crc32(kind + body) != crc:
+            raise ValueError(f"bad CRC in chunk {kind!r}")
+        if kind == b"IDAT":
+            idat += body
+        else:
+            chunks.setdefault(kind, body)
+        position += 12 + length
+        if kind == b"IEND":
+            break
+    if b"IHDR" not in chunks or b"IEND" not in chunks or not idat:
+        raise ValueError("IHDR, IDAT or IEND missing")
+    width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", chunks[b"IHDR"])
+    channels = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}.get(colour)
+    if depth != 8 or channels is None or interlace != 0:
+        raise ValueError(f"unsupported PNG: depth {depth}, colour type {colour}, interlace {interlace}")
+    raw = zlib.decompress(idat)
+    stride = width * channels
+    if len(raw) != height * (stride + 1):
+        raise ValueError(f"{len(raw)} bytes of image data, {height * (stride + 1)} expected")
+    pixels, previous = bytearray(), bytes(stride)
+    for y in range(height):
+        kind = raw[y * (stride + 1)]
+        row = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        if kind == 1:  # Sub: a running sum per channel
+            for c in range(channels):
+                row[c::channels] = bytes(map((255).__and__, itertools.accumulate(row[c::channels])))
+        elif kind == 2:  # Up
+            row = bytearray(add_bytes(row, previous))
+        elif kind in (3, 4):  # Average, Paeth: byte by byte
+            for i in range(stride):
+                left = row[i - channels] if i >= channels else 0
+                up = previous[i]
+                if kind == 3:
+                    row[i] = (row[i] + (left + up) // 2) & 255
+                    continue
+                corner = previous[i - channels] if i >= channels else 0
+                estimate = left + up - corner
+                pa, pb, pc = abs(estimate - left), abs(estimate - up), abs(estimate - corner)
+                predictor = left if pa <= pb and pa <= pc else up if pb <= pc else corner
+                row[i] = (row[i] + predictor) & 255
+        elif kind != 0:
+            raise ValueError(f"unknown filter {kind} in row {y}")
+        pixels += row
+        previous = bytes(row)
+    return width, height, channels, bytes(pixels)
+
+
+# A plot is not blank: more than this share of its pixels differ from the commonest colour.
+LEAST_INK = 0.01
+
+
+def check_png(path):
+    width, height, channels, pixels = png_image(path)
+    if not (200 <= width <= 8000 and 150 <= height <= 8000):
+        return [f"{path}: {width} x {height} pixels is not a sane plot size"]
+    # The background: the commonest colour of a sample of pixels; then every pixel of that
+    # colour counted, channel by channel, as bits of big integers.
+    sample = collections.Counter(pixels[i:i + channels]
+                                 for i in range(0, len(pixels), channels * 101))
+    background = sample.most_common(1)[0][0]
+    same = -1
+    for c in range(channels):
+        table = bytes(1 if value == background[c] else 0 for value in range(256))
+        bits = int.from_bytes(pixels[c::channels].translate(table), "big")
+        same = bits if same < 0 else same & bits
+    ink = 1 - same.bit_count() / (width * height)
+    if ink <= LEAST_INK:
+        return [f"{path}: blank ({ink:.2%} of the pixels differ from the background)"]
+    return []
+
+
+def check_pdf(path):
+    data = path.read_bytes()
+    if not data.startswith(b"%PDF-1.") or b"%%EOF" not in data[-64:]:
+        return [f"{path}: not a PDF (header or %%EOF missing)"]
+    found = re.search(rb"startxref\s+(\d+)\s+%%EOF\s*$", data)
+    if not found:
+        return [f"{path}: no startxref"]
+    offset = int(found.group(1))
+    if not (data[offset:offset + 4] == b"xref" or re.match(rb"\d+ \d+ obj", data[offset:offset + 32])):
+        return [f"{path}: startxref {offset} does not point at a cross-reference table"]
+    if not re.search(rb"/Type\s*/Page[^s]", data):
+        return [f"{path}: no page"]
+    return []
+
+
+def check_plots(out, study, source, record):
+    """The rendered plots of a run (and, for PLOT_GOLDEN_STUDIES, their scripts)."""
+    plots = out / "plots"
+    if shutil.which("gnuplot") is None:
+        print(f"{study}: note: gnuplot is not installed, the plots were not checked")
+        return []
+    scripts = sorted(plots.glob("*.gp")) if plots.is_dir() else []
+    if not scripts:
+        return [f"{plots}: no plot"]
+    problems = [f"{log}: gnuplot failed: {log.read_text()[:300]}" for log in plots.glob("*.log")]
+    for script in scripts:
+        for extension in (".svg", ".png", ".pdf"):
+            image = script.with_suffix(extension)
+            if not image.exists():
+                problems.append(f"{image}: missing")
+                continue
+            try:
+                if extension == ".svg":
+                    if not xml.etree.ElementTree.parse(image).getroot().tag.endswith("svg"):
+                        problems.append(f"{image}: not an SVG document")
+                elif extension == ".png":
+                    problems += check_png(image)
+                else:
+                    problems += check_pdf(image)
+            except (ValueError, zlib.error, struct.error, xml.etree.ElementTree.ParseError) as e:
+                problems.append(f"{image}: {e}")
+    if study not in PLOT_GOLDEN_STUDIES:
+        return problems
+    golden = source / "tests" / "golden" / "plots" / study
+    if record:
+        shutil.rmtree(golden, ignore_errors=True)
+        golden.mkdir(parents=True)
+        for script in scripts:
+            shutil.copyfile(script, golden / script.name)
+        print(f"recorded {golden}")
+        return problems
+    names, expected = {s.name for s in scripts}, {s.name for s in golden.glob("*.gp")}
+    if names != expected:
+        problems.append(f"{plots}: scripts {sorted(names)}, golden has {sorted(expected)}")
+    for name in sorted(names & expected):
+        problems += compare_script(golden / name, plots / name)
+    return problems
+
+
 def main(argv):
     options = argv[4:]
     if len(argv) < 4 or options not in ([], ["--record"], ["--stale"]) and not (
-            len(options) == 2 and options[0] == "--study"):
+            len(options) in (2, 3) and options[0] == "--study" and options[2:] in ([], ["--record"])):
         raise SystemExit(__doc__)
     exe = str(pathlib.Path(argv[1]).resolve())
     source, work = pathlib.Path(argv[2]).resolve(), pathlib.Path(argv[3]).resolve()
-    record = options == ["--record"]
+    record = options[-1:] == ["--record"]
     golden_root = source / "tests" / "golden" / "studies"
     shipped = sorted((source / "studies").glob("*.toml"))
     if not shipped:
@@ -163,6 +359,7 @@ def main(argv):
                 shutil.copyfile(out / name, golden / name)
             (golden / "verdicts.txt").write_text("\n".join(verdicts) + "\n")
             print(f"recorded {golden}")
+            failures += [f"{study.stem}: {p}" for p in check_plots(out, study.stem, source, True)]
             continue
         if not golden.is_dir():
             failures.append(f"{study.stem}: no golden files in {golden} (record them with --record)")
@@ -178,6 +375,7 @@ def main(argv):
                     break
             if len(verdicts) != len(expected):
                 problems.append(f"verdicts: {len(verdicts)} lines, golden has {len(expected)}")
+        problems += check_plots(out, study.stem, source, False)
         status = "ok" if not problems else "DIFFERS"
         print(f"{study.stem}: {status}")
         failures += [f"{study.stem}: {p}" for p in problems]

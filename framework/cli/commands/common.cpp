@@ -90,7 +90,7 @@ std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bo
   try {
     const auto outcome = write_plots(record, out_dir);
     if (!quiet) {
-      std::cerr << fmt::format("  {} in {}/plots (SVG and PNG)\n",
+      std::cerr << fmt::format("  {} in {}/plots (SVG, PNG and PDF)\n",
                                counted(outcome.rendered.size(), "plot", "plots"), out_dir);
       for (const auto& note : outcome.notes) std::cerr << "  note: " << note << "\n";
     }

@@ -193,21 +193,19 @@ std::string group_table(const GroupTable& group, const std::vector<RateTable>& t
   return out;
 }
 
-// The convergence plots of a metric: convergence_<metric>.svg, or its parts
-// (convergence_<metric>_part<k>.svg) when it was split, in name order.
+// The convergence plots of a metric: convergence_<metric>.svg, or its parts in order
+// (convergence_<metric>_part1.svg, part2, ...) when it has too many panels for one figure.
 std::vector<std::filesystem::path> convergence_plots(const std::filesystem::path& plots,
                                                      const std::string& metric) {
   std::vector<std::filesystem::path> out;
-  if (plots.empty() || !std::filesystem::exists(plots)) return out;
-  const std::string whole = "convergence_" + metric + ".svg",
-                    part = "convergence_" + metric + "_part";
-  for (const auto& entry : std::filesystem::directory_iterator(plots)) {
-    const auto name = entry.path().filename().string();
-    if (name == whole || (name.starts_with(part) && name.ends_with(".svg") &&
-                          std::isdigit(static_cast<unsigned char>(name[part.size()]))))
-      out.push_back(entry.path());
+  if (plots.empty()) return out;
+  if (auto whole = plots / ("convergence_" + metric + ".svg"); std::filesystem::exists(whole))
+    out.push_back(std::move(whole));
+  for (std::size_t part = 1;; ++part) {
+    auto file = plots / fmt::format("convergence_{}_part{}.svg", metric, part);
+    if (!std::filesystem::exists(file)) break;
+    out.push_back(std::move(file));
   }
-  std::sort(out.begin(), out.end());
   return out;
 }
 

@@ -1,8 +1,33 @@
 #pragma once
-// Plots of a finished run with gnuplot (SVG and PNG, no display needed): one convergence plot
-// per metric (log-log points per group, the fitted rate as a line with its 95% confidence band,
-// flagged values hollow), and for adaptive studies the estimate against the road at each
-// snapshot lap and |x - xhat| and V against time, per group; for adaptive studies with a
+// Plots of a finished run with gnuplot (SVG, PNG and PDF, no display needed).
+//
+// Convergence plots, one figure per metric (convergence_<metric>): log-log points per group,
+// the fitted rate as a dashed line over its fit window with its 95% confidence band (clipped to
+// the fitted values, within a factor 2), the kernel's power-law theory slope as a dotted line
+// over the same window through the fitted line at the window's geometric centre, flagged values
+// hollow. The x and y ranges are the plotted values' with a small margin (at most 30% on x, a
+// factor 2 on y); an axis of less than about two and a half decades gets labelled tics at 1, 2
+// and 5 times the powers of ten, one of less than a decade at every digit.
+//   Legends name exactly the axes that differ among the curves of a panel, each curve with its
+// rate: a plugin axis whose plugin differs is a factor ("kernel=bspline") with a factor per
+// parameter that differs among that plugin's own groups, written after it ("kernel=bspline
+// degree=1"); a plugin axis with one plugin gives a factor per parameter that differs
+// ("class=A"); a laps axis one more. What every curve shares is said once, in the title. Groups
+// that differ only in axes the metric does not depend on (their series equal wherever those
+// axes alone change, e.g. the power function and the target) are one curve, and the title says
+// "the same for every ...". The key lies below the plot.
+//   Small multiples: a metric with more than 8 curves is drawn as a grid of panels (gnuplot
+// multiplot), one panel per value of the factors chosen so that no panel holds more than 8
+// curves, with the fewest panels, then the fewest factors, then the earliest factors, a
+// parameter always with its plugin (e.g. iso8608's l2_error: kernel and seed, 12 panels of 7
+// road classes and wavinesses). Panel titles name the panel's values; x and y ranges are shared
+// by all panels of a metric; a curve keeps its colour in every panel when the curves'
+// identities within panels number 8 or fewer. The canvas grows with the panels (480 x 480
+// pixels each, up to 4 columns); beyond 12 panels the figure is split into files
+// convergence_<metric>_part1, _part2, ... of at most 12 panels.
+//
+// For adaptive studies: the estimate against the road at each snapshot lap and |x - xhat| and
+// V against time, per group (titled by what sets the group apart); for adaptive studies with a
 // reference integrator ([adaptive] reference), work-precision plots: per panel (every axis but
 // the integrator and its tolerances), integration_error against each trial's wall time
 // (work_precision_time_panelK; not deterministic) and against its steps
@@ -17,9 +42,11 @@
 namespace rkhs {
 
 /// The plots of a run, before rendering: gnuplot scripts with their data inline, by output file
-/// stem ("convergence_l2_error", ...), and a note for each plot left out because it would have
-/// nothing to show (a metric with no finite positive value in any trial, a group whose trials
-/// all failed).
+/// stem ("convergence_l2_error", ...), each rendering itself to <stem>.svg, <stem>.png and
+/// <stem>.pdf in the current directory (no paths: a script is the same wherever the run
+/// writes it; deterministic, except the work-precision time plots' wall times), and a note for each
+/// plot left out because it would have nothing to show (a metric with no finite positive value in
+/// any trial, a group whose trials all failed).
 struct PlotPlan {
   std::vector<std::pair<std::string, std::string>> scripts;  ///< (stem, script)
   std::vector<std::string> notes;                            ///< "<stem>: not plotted: <why>"
@@ -29,14 +56,15 @@ PlotPlan plot_scripts(const RunRecord& run);
 /// What write_plots did. A plot that gnuplot could not render is a failure of that plot alone:
 /// the others are still rendered.
 struct PlotOutcome {
-  std::vector<std::string> rendered;  ///< stems rendered to .svg and .png
+  std::vector<std::string> rendered;  ///< stems rendered to .svg, .png and .pdf
   std::vector<std::string> notes;     ///< plots left out, and why (PlotPlan::notes)
   std::vector<std::string> failures;  ///< "<stem>.gp: <gnuplot's own message>"; or that
                                       ///< gnuplot is not installed (then nothing is rendered)
 };
 
-/// Writes plots/<stem>.gp and renders plots/<stem>.svg and .png with `gnuplot` (found on PATH),
-/// each plot on its own, after removing the plot files (.gp, .svg, .png, .log) an earlier run
+/// Writes plots/<stem>.gp and renders plots/<stem>.svg, .png and .pdf with `gnuplot` (found on
+/// PATH, run in plots/), each plot on its own, after removing the plot files (.gp, .svg, .png,
+/// .pdf, .log) an earlier run
 /// left in plots/. A failed plot keeps its script and its log (plots/<stem>.log). Throws only
 /// when the plots folder cannot be written.
 PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory);
