@@ -220,7 +220,8 @@ tier = "quick"
   }
 }
 
-TEST_CASE("test cases: names that would be shared say what they expect", "[verification][check]") {
+TEST_CASE("test cases: names that would be shared say what they expect and where",
+          "[verification][check]") {
   const auto study = parse_study(base + R"([[expect]]
 metric = "power_function_sup"
 degree = 1
@@ -229,6 +230,11 @@ theory = true
 metric = "power_function_sup"
 degree = 1
 rate = { max = -0.3 }
+[[expect]]
+metric = "power_function_sup"
+degree = 1
+rate = { max = -0.3 }
+last = 4
 [[expect]]
 metric = "power_function_sup"
 kernel = "bspline"
@@ -248,6 +254,8 @@ tolerance = 0.2
         std::vector<std::string>{
             "power_function_sup degree=1 (theory = true) [kernel=bspline degree=1 r=1]",
             "power_function_sup degree=1 (rate = { max = -0.3 }) [kernel=bspline degree=1 r=1]",
+            "power_function_sup degree=1 (rate = { max = -0.3 }, last = 4) [kernel=bspline "
+            "degree=1 r=1]",
             "power_function_sup kernel=bspline (rate = -0.5, tolerance = 0.2) [kernel=bspline "
             "degree=1 r=1] #1",
             "power_function_sup kernel=bspline (rate = -0.5, tolerance = 0.2) [kernel=bspline "

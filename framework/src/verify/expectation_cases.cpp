@@ -14,7 +14,14 @@ namespace {
 
 // What the expectation expects, as the study file writes it: tells apart two expectations of
 // the same metric and groups.
+std::string expected_form(const Expectation& e);
+
+// The same with the points it judges (n_from, n_to, h_from, h_to, last) when they are set.
 std::string written_form(const Expectation& e) {
+  return e.window.empty() ? expected_form(e) : expected_form(e) + ", " + e.window.text();
+}
+
+std::string expected_form(const Expectation& e) {
   const auto model = [&] {
     return e.model == RateModel::exponential ? std::string("model = \"exponential\"")
                                              : std::string("model = \"power_law\"");

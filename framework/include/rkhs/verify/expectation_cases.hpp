@@ -19,9 +19,9 @@ struct ExpectationCase {
   std::string group;                         ///< the group's key (every axis but n)
   std::string group_label;                   ///< the axes that tell it from the study's others
   /// Unique within the study: "<expectation.id()> [<group_label>]". Where two cases would
-  /// share it, both add what they expect, as written in the file ("power_function_sup
-  /// (theory = true) [kernel=bspline]"); where even that is shared, " #1", " #2", ... follow in
-  /// file order.
+  /// share it, both add what they expect and the points they judge, as written in the file
+  /// ("power_function_sup (theory = true) [kernel=bspline]", "... (rate = -1, last = 4) [...]");
+  /// where even that is shared, " #1", " #2", ... follow in file order.
   std::string name;
   /// What `-k` matches: the name, the metric, the expectation's `name`, the study's name and
   /// its file's stem, the kind (theory, rate, model, bound), its tiers, and "xfail" when marked.
