@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <set>
 #include <vector>
 
 #include "rkhs/rates/asymptotic.hpp"
@@ -248,20 +247,15 @@ std::string format_group_table(const GroupTable& group, const std::vector<RateTa
 
 std::string format_fitted_rates(const std::vector<GroupTable>& groups,
                                 const std::vector<RateTable>& tables, std::size_t width) {
-  std::vector<std::string> metrics;  // in the tables' (the study's) order
-  for (const auto& table : tables)
-    if (std::find(metrics.begin(), metrics.end(), table.metric) == metrics.end())
-      metrics.push_back(table.metric);
-  std::set<double> levels;
-  for (const auto& table : tables)
-    if (table.fit && std::isfinite(table.fit->std_error)) levels.insert(table.fit->confidence);
+  const auto metrics = table_metrics(tables);
+  const auto confidence = shared_confidence(tables);
 
   std::vector<std::vector<std::string>> lines(1);
   lines.front().push_back("group");
   for (const auto& metric : metrics) lines.front().push_back(metric);
   for (const auto& group : groups) {
     auto& line = lines.emplace_back(metrics.size() + 1);
-    line[0] = group.label.empty() ? group.group : group.label;
+    line[0] = group.title();
     for (auto t : group.columns) {
       const auto m = static_cast<std::size_t>(
           std::find(metrics.begin(), metrics.end(), tables[t].metric) - metrics.begin());
@@ -270,9 +264,9 @@ std::string format_fitted_rates(const std::vector<GroupTable>& groups,
   }
   std::vector<bool> left(metrics.size() + 1, false);
   left[0] = true;
-  const std::string level =
-      levels.size() == 1 ? fmt::format("{:.4g}% confidence intervals", 100.0 * *levels.begin())
-                         : std::string("confidence intervals at the levels of the tables");
+  const std::string level = confidence
+                                ? fmt::format("{:.4g}% confidence intervals", 100.0 * *confidence)
+                                : std::string("confidence intervals at the levels of the tables");
   return fmt::format("fitted rates with {} (exp: exponential in n)\n", level) +
          wrapped_table(lines, 1, std::vector<std::size_t>(metrics.size(), 1), left, width);
 }

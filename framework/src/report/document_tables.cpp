@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <set>
 #include <string>
 #include <utility>
 
@@ -55,15 +54,6 @@ std::string markdown_escape(std::string_view text) {
   return out;
 }
 
-// The metrics of the tables in their (the study's) order.
-std::vector<std::string> metric_order(const std::vector<RateTable>& tables) {
-  std::vector<std::string> metrics;
-  for (const auto& table : tables)
-    if (std::find(metrics.begin(), metrics.end(), table.metric) == metrics.end())
-      metrics.push_back(table.metric);
-  return metrics;
-}
-
 // The column of `group` that holds `metric`, or nullptr.
 const RateTable* column(const GroupTable& group, const std::vector<RateTable>& tables,
                         const std::string& metric) {
@@ -72,16 +62,10 @@ const RateTable* column(const GroupTable& group, const std::vector<RateTable>& t
   return nullptr;
 }
 
-std::string group_title(const GroupTable& group) {
-  return group.label.empty() ? group.group : group.label;
-}
-
 // The confidence level the fits share, as "95%"; "" when they differ or none has one.
 std::string shared_level(const std::vector<RateTable>& tables) {
-  std::set<double> levels;
-  for (const auto& table : tables)
-    if (table.fit && std::isfinite(table.fit->std_error)) levels.insert(table.fit->confidence);
-  return levels.size() == 1 ? fmt::format("{:.4g}%", 100.0 * *levels.begin()) : "";
+  const auto level = shared_confidence(tables);
+  return level ? fmt::format("{:.4g}%", 100.0 * *level) : "";
 }
 
 // --- LaTeX ---------------------------------------------------------------------------------
@@ -224,7 +208,7 @@ std::string latex_tabular(const GroupTable& group, const std::vector<RateTable>&
 std::string markdown_tables(const RunRecord& run) {
   const auto tables = rate_tables(run);
   const auto groups = group_tables(run, tables);
-  const auto metrics = metric_order(tables);
+  const auto metrics = table_metrics(tables);
   std::string out = fmt::format("# {}: rates\n\n", run.study.name);
   if (groups.empty()) return out + "No rate table: no metric has a series.\n";
 
@@ -239,7 +223,7 @@ std::string markdown_tables(const RunRecord& run) {
   for (std::size_t m = 0; m < metrics.size(); ++m) out += "---:|";
   out += "\n";
   for (const auto& group : groups) {
-    out += fmt::format("| {} |", markdown_escape(group_title(group)));
+    out += fmt::format("| {} |", markdown_escape(group.title()));
     for (const auto& metric : metrics) {
       const auto* table = column(group, tables, metric);
       out += fmt::format(" {} |", table ? fit_cell(*table) : std::string());
@@ -249,8 +233,8 @@ std::string markdown_tables(const RunRecord& run) {
 
   // The convergence table of each group: every metric's value and pairwise rate.
   for (const auto& group : groups) {
-    out += fmt::format("\n## {}\n\nGroup `{}`\n\n| n |", markdown_escape(group_title(group)),
-                       group.group);
+    out +=
+        fmt::format("\n## {}\n\nGroup `{}`\n\n| n |", markdown_escape(group.title()), group.group);
     std::string align = "|---:|";
     if (group.shows_h()) {
       out += " h |";
@@ -295,7 +279,7 @@ std::string markdown_tables(const RunRecord& run) {
 std::string latex_tables(const RunRecord& run) {
   const auto tables = rate_tables(run);
   const auto groups = group_tables(run, tables);
-  const auto metrics = metric_order(tables);
+  const auto metrics = table_metrics(tables);
   std::string out = fmt::format(
       "% {}: convergence tables (needs \\usepackage{{booktabs}} and \\usepackage{{siunitx}})\n",
       latex_escape(run.study.name));
@@ -315,7 +299,7 @@ std::string latex_tables(const RunRecord& run) {
     for (std::size_t m = from; m < to; ++m) out += " & " + latex_escape(metrics[m]);
     out += " \\\\\n\\midrule\n";
     for (const auto& group : groups) {
-      out += latex_escape(group_title(group));
+      out += latex_escape(group.title());
       for (std::size_t m = from; m < to; ++m) {
         const auto* table = column(group, tables, metrics[m]);
         out += " & " + (table ? latex_fit_cell(*table) : std::string());
@@ -345,7 +329,7 @@ std::string latex_tables(const RunRecord& run) {
                                   : fmt::format("group{}", g + 1);
       out += fmt::format(
           "% group {}\n\\begin{{table}}[ht]\n\\centering\n\\caption{{{}: {}{}}}\n\\label{{{}}}\n",
-          group.group, latex_escape(run.study.name), latex_escape(group_title(group)),
+          group.group, latex_escape(run.study.name), latex_escape(group.title()),
           from > 0 ? " (continued)" : "", latex_label(run.study.name, label));
       out += latex_tabular(group, tables, part) + "\\par\\smallskip\n{\\footnotesize\n";
       bool any_flagged = false, any_exponential = false;

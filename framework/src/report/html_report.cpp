@@ -128,7 +128,7 @@ std::string fitted_rates_table(const std::vector<GroupTable>& groups,
   for (std::size_t g = 0; g < groups.size(); ++g) {
     const auto& group = groups[g];
     out += fmt::format("<tr><td class=\"text\"><a href=\"#group{}\">{}</a></td>", g + 1,
-                       escape_html(group.label.empty() ? group.group : group.label));
+                       escape_html(group.title()));
     for (const auto& metric : metrics) {
       std::string cell;
       for (auto t : group.columns)
@@ -144,9 +144,8 @@ std::string fitted_rates_table(const std::vector<GroupTable>& groups,
 // then each fit with its window and notes.
 std::string group_table(const GroupTable& group, const std::vector<RateTable>& tables,
                         std::size_t number) {
-  std::string out = fmt::format(
-      "<h3 id=\"group{}\">{}</h3>\n<p class=\"group\">group {}</p>\n", number,
-      escape_html(group.label.empty() ? group.group : group.label), escape_html(group.group));
+  std::string out = fmt::format("<h3 id=\"group{}\">{}</h3>\n<p class=\"group\">group {}</p>\n",
+                                number, escape_html(group.title()), escape_html(group.group));
   const std::string axes = group.shows_h() ? "<th rowspan=\"2\">n</th><th rowspan=\"2\">h</th>"
                                            : "<th rowspan=\"2\">n</th>";
   std::string metrics, headings;
@@ -288,11 +287,7 @@ tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
 
   const auto tables = rate_tables(run);
   const auto groups = group_tables(run, tables);
-  std::vector<std::string> metrics;
-  for (const auto& metric : study.metrics)
-    if (std::any_of(tables.begin(), tables.end(),
-                    [&](const RateTable& t) { return t.metric == metric; }))
-      metrics.push_back(metric);
+  const auto metrics = table_metrics(tables);
   page += "<h2>Rates</h2>\n";
   if (!groups.empty()) {
     page +=

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 
 #include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/verify/expectation_cases.hpp"
@@ -147,6 +148,22 @@ std::vector<GroupTable> group_tables(const RunRecord& run, const std::vector<Rat
     }
   }
   return out;
+}
+
+std::vector<std::string> table_metrics(const std::vector<RateTable>& tables) {
+  std::vector<std::string> metrics;
+  for (const auto& table : tables)
+    if (std::find(metrics.begin(), metrics.end(), table.metric) == metrics.end())
+      metrics.push_back(table.metric);
+  return metrics;
+}
+
+std::optional<double> shared_confidence(const std::vector<RateTable>& tables) {
+  std::set<double> levels;
+  for (const auto& table : tables)
+    if (table.fit && std::isfinite(table.fit->std_error)) levels.insert(table.fit->confidence);
+  if (levels.size() != 1) return std::nullopt;
+  return *levels.begin();
 }
 
 const RateTableRow* row_at(const RateTable& table, std::size_t n) {

@@ -105,11 +105,20 @@ struct GroupTable {
   std::vector<std::size_t> columns;  ///< positions in the rate_tables vector, in metric order
 
   bool shows_h() const { return !h.empty(); }
+  /// What to call the group: its label, or its key when it has none.
+  const std::string& title() const { return label.empty() ? group : label; }
 };
 
 /// The group tables of `run` in the order of their groups' first trial; `tables` is
 /// rate_tables(run). Never throws except std::bad_alloc.
 std::vector<GroupTable> group_tables(const RunRecord& run, const std::vector<RateTable>& tables);
+
+/// The metrics of `tables`, each once, in their (the study's) order.
+std::vector<std::string> table_metrics(const std::vector<RateTable>& tables);
+
+/// The confidence level every fit with an interval shares (0.95); nullopt when they differ or
+/// none has one.
+std::optional<double> shared_confidence(const std::vector<RateTable>& tables);
 
 /// The row of `table` at `n`; nullptr when the metric has no trial there.
 const RateTableRow* row_at(const RateTable& table, std::size_t n);
