@@ -214,7 +214,10 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
     out.owner.push_back(owner);
     return out.factors.size() - 1;
   };
-  for (const auto& [axis, member] : plugin_axes) {
+  for (const auto& axis_and_member : plugin_axes) {
+    // Named copies, not structured bindings: clang 14 cannot capture those in a lambda.
+    const auto axis = axis_and_member.first;
+    const auto member = axis_and_member.second;
     std::vector<std::string> names;
     for (const auto* trial : trials)
       if (const auto& name = ((*trial).*member).name;
@@ -227,7 +230,9 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
       for (const auto* trial : trials) {
         const auto& choice = (*trial).*member;
         if (choice.name != name) continue;
-        for (const auto& [parameter, value] : choice.parameters.values()) {
+        for (const auto& parameter_and_value : choice.parameters.values()) {
+          const auto& parameter = parameter_and_value.first;
+          const auto& value = parameter_and_value.second;
           auto it = std::find_if(parameters.begin(), parameters.end(),
                                  [&](const auto& p) { return p.first == parameter; });
           if (it == parameters.end()) it = parameters.insert(parameters.end(), {parameter, {}});
@@ -278,7 +283,9 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
   }
   // A parameter factor is named by its parameter ("class"), or by its column of trials.csv
   // ("target_seed") when two axes share the parameter name.
-  for (const auto& [parameter, f] : parameter_factors) {
+  for (const auto& parameter_and_factor : parameter_factors) {
+    const auto& parameter = parameter_and_factor.first;
+    const auto f = parameter_and_factor.second;
     const bool shared = std::count_if(parameter_factors.begin(), parameter_factors.end(),
                                       [&](const auto& p) { return p.first == parameter; }) > 1;
     std::string name = parameter;
