@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <limits>
 
 #include "rkhs/kernel/kernel_algorithms.hpp"
@@ -12,11 +13,12 @@ PluginInfo MultiscaleBSpline::info() {
   // r defaults to the degree: the declared default is a placeholder (NaN, printed as "= degree")
   // and the constructor reads r only when the study gave it.
   auto r = positive_parameter("r", std::numeric_limits<double>::quiet_NaN(),
-                              "smoothness r: level j is weighted by 2^{j (1 - 2r)}; Sobolev order tau = r for 1/2 < r < degree + 1/2");
+                              "smoothness r: level j is weighted by 2^{j (d - 2r)}; Sobolev order tau = r for d/2 < r < degree + 1/2");
   r.default_doc = "= degree";
   return {
       "bspline",
-      "multiscale B-spline kernel sum_j 2^{j(1-2r)} sum_k N_p(2^j u/h0 - k) N_p(2^j v/h0 - k)",
+      "multiscale B-spline kernel sum_j 2^{j(d-2r)} sum_k N_p(2^j u/h0 - k) N_p(2^j v/h0 - k) "
+      "(tensor-product splines in d = 2, 3)",
       {integer_parameter("degree", 1, "spline degree p (1: hat, 2: quadratic)", 0, max_degree), r,
        integer_parameter("n0", 4, "cells on level 0, h0 = L / n0 (periodic: n0 >= degree + 1)", 1,
                          max_n0),
@@ -27,7 +29,8 @@ PluginInfo MultiscaleBSpline::info() {
 }
 
 MultiscaleBSpline::MultiscaleBSpline(const ParameterSet& parameters, const Domain& domain)
-    : length_(domain.length), periodic_(domain.periodic) {
+    : length_(domain.length), periodic_(domain.periodic), dimension_(domain.dimension) {
+  for (int a = 0; a < dimension_; ++a) axis_length_[static_cast<std::size_t>(a)] = domain.extent(a);
   const auto degree = parameters.integer("degree");
   if (degree < 0 || degree > max_degree)
     throw ParameterError("degree", fmt::format("parameter 'degree' must be in [0, {}], found {}",
@@ -70,15 +73,21 @@ MultiscaleBSpline::MultiscaleBSpline(const ParameterSet& parameters, const Domai
     weight_[j] = std::exp2(0.5 * j * (1.0 - 2.0 * r_));
     slope_weight_[j] = weight_[j] * scale_[j] * n0_ / length_;
     offset_[j + 1] = offset_[j] + (n0_ << j) + (periodic_ ? 0 : degree_);
+    point_weight_[j] = std::exp2(j * (dimension_ - 2.0 * r_));
   }
 }
 
 KernelProperties MultiscaleBSpline::properties() const noexcept {
   KernelProperties p;
   p.positive_definite = false;
-  if (r_ > 0.5 && r_ < degree_ + 0.5) p.sobolev_order = r_;
+  if (r_ > 0.5 * dimension_ && r_ < degree_ + 0.5) p.sobolev_order = r_;
   p.analytic = false;
-  p.support_radius = (degree_ + 1) * length_ / n0_;
+  double longest = 0.0;
+  for (int a = 0; a < dimension_; ++a)
+    longest = std::max(longest, axis_length_[static_cast<std::size_t>(a)]);
+  p.support_radius = dimension_ == 1 ? (degree_ + 1) * length_ / n0_
+                                     : std::sqrt(double(dimension_)) * (degree_ + 1) * longest / n0_;
+  p.dimension = dimension_;
   p.stationary = false;
   p.periodic = periodic_;
   return p;

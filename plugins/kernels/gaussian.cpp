@@ -26,6 +26,10 @@ Gaussian::Gaussian(const ParameterSet& parameters, const Domain& domain)
   if (domain_.periodic)
     images_ = rkhs::kernels::image_count([this](double r) { return profile(r); }, domain_.length,
                                          image_tolerance);
+  if (domain_.periodic && domain_.dimension > 1)
+    for (int a = 0; a < domain_.dimension; ++a)
+      axis_images_[a] = rkhs::kernels::image_count([this](double r) { return profile(r); },
+                                                   domain_.extent(a), image_tolerance);
 }
 
 KernelProperties Gaussian::properties() const noexcept {
@@ -35,6 +39,7 @@ KernelProperties Gaussian::properties() const noexcept {
   p.support_radius = 0.0;
   p.stationary = true;
   p.periodic = domain_.periodic;
+  p.dimension = domain_.dimension;
   return p;
 }
 

@@ -7,7 +7,7 @@
 namespace rkhs::kernels {
 
 PluginInfo Matern::info() {
-  auto nu = real_parameter("nu", 1.5, "smoothness nu (half-integer); Sobolev order tau = nu + 1/2");
+  auto nu = real_parameter("nu", 1.5, "smoothness nu (half-integer); Sobolev order tau = nu + d/2");
   nu.allowed = {0.5, 1.5, 2.5};
   return {
       "matern",
@@ -31,6 +31,10 @@ Matern::Matern(const ParameterSet& parameters, const Domain& domain)
   if (!(length_scale_ > 0) || !std::isfinite(length_scale_))
     throw ParameterError("length_scale", "parameter 'length_scale' must be > 0 and finite");
   rate_ = std::sqrt(2.0 * nu_) / length_scale_;
+  if (domain_.periodic && domain_.dimension > 1)
+    throw ParameterError("nu", fmt::format("the Matern kernel is not periodised on a torus "
+                                           "(d = {}); use a box (periodic = false)",
+                                           domain_.dimension));
   if (domain_.periodic) {
     period_ = rate_ * domain_.length;
     const double q = std::exp(-period_), one_minus_q = -std::expm1(-period_);
@@ -43,7 +47,8 @@ Matern::Matern(const ParameterSet& parameters, const Domain& domain)
 KernelProperties Matern::properties() const noexcept {
   KernelProperties p;
   p.positive_definite = true;
-  p.sobolev_order = nu_ + 0.5;
+  p.sobolev_order = nu_ + 0.5 * domain_.dimension;
+  p.dimension = domain_.dimension;
   p.analytic = false;
   p.support_radius = 0.0;
   p.stationary = true;

@@ -7,8 +7,9 @@ namespace rkhs::kernels {
 PluginInfo Wendland::info() {
   return {
       "wendland",
-      "Wendland's compactly supported function phi_{1,k}(|x - y| / radius)",
-      {integer_parameter("k", 1, "smoothness k (phi is C^{2k}); Sobolev order tau = k + 1", 0, 3),
+      "Wendland's compactly supported function phi_{d,k}(|x - y| / radius), d = 1, 2, 3",
+      {integer_parameter("k", 1,
+                         "smoothness k (phi is C^{2k}); Sobolev order tau = k + (d + 1)/2", 0, 3),
        positive_parameter("radius", 1.0, "support radius rho, metres")},
       {{"periodic", "by images (finite sum, exact)"}},
   };
@@ -24,12 +25,16 @@ Wendland::Wendland(const ParameterSet& parameters, const Domain& domain)
     throw ParameterError("radius", "parameter 'radius' must be > 0 and finite");
   // Image m is at distance >= (|m| - 1/2) L from x when |d| <= L/2: beyond this none reaches.
   if (domain_.periodic) images_ = static_cast<int>(std::ceil(radius_ / domain_.length + 0.5));
+  if (domain_.periodic && domain_.dimension > 1)
+    for (int a = 0; a < domain_.dimension; ++a)
+      axis_images_[a] = static_cast<int>(std::ceil(radius_ / domain_.extent(a) + 0.5));
 }
 
 KernelProperties Wendland::properties() const noexcept {
   KernelProperties p;
   p.positive_definite = true;
-  p.sobolev_order = smoothness_ + 1.0;
+  p.sobolev_order = smoothness_ + (domain_.dimension + 1) / 2.0;
+  p.dimension = domain_.dimension;
   p.support_radius = radius_;
   p.stationary = true;
   p.periodic = domain_.periodic;

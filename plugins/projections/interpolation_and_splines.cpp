@@ -44,7 +44,8 @@ class Interpolation final : public Projection {
     return {ProjectionResolution::centres, true, true, 1.0, {}};
   }
   void build(const ProjectionRequest& request, ProjectionOperator& out) const override {
-    const auto n = request.centres.size();
+    const std::size_t d = static_cast<std::size_t>(request.kernel.domain().dimension);
+    const auto n = request.centres.size() / d;
     if (n == 0) throw std::invalid_argument("projection 'interpolation' needs centres");
     const Eigen::MatrixXd gram = request.kernel.gram(request.centres);
     const GramSolver solver(gram, request.solver);
@@ -68,7 +69,7 @@ class Interpolation final : public Projection {
       W = solver.solve(E);
     }
     if (W.size() == 0) W = E.transpose();
-    out.resize(static_cast<std::size_t>(E.cols()), n, n);
+    out.resize(static_cast<std::size_t>(E.cols()), n, n, d);
     std::copy(request.centres.begin(), request.centres.end(), out.samples().begin());
     std::copy(request.centres.begin(), request.centres.end(), out.basis_points().begin());
     out.basis_coefficients() = E;
@@ -85,6 +86,10 @@ class SplineLevel {
  public:
   SplineLevel(const ProjectionRequest& request, std::string_view projection) {
     const AnyKernel& kernel = request.kernel;
+    if (kernel.domain().dimension != 1)
+      throw std::invalid_argument(fmt::format(
+          "projection '{}' is defined on tracks and intervals (d = 1); this domain has d = {}",
+          projection, kernel.domain().dimension));
     const ParameterSet& p = kernel.parameters();
     degree_ = static_cast<int>(p.integer("degree"));
     const auto n0 = p.integer("n0");

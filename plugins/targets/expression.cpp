@@ -37,6 +37,15 @@ namespace {
 /// derivative() throw std::domain_error, naming s and the value).
 ///
 /// f'(s) is a difference quotient of order 4 (derivative()).
+///
+/// On a domain of d = 2 or 3 (a box or a torus, core/domain.hpp) f is a function of the point
+/// x = (x1, ..., xd) and reads the constants L1, ..., Ld (the extents of the axes) instead of
+/// s and L:
+///
+///   f = "sin(2 * pi * x1 / L1) * cos(2 * pi * x2 / L2)"
+///
+/// It is checked for finite values at about `check_points` grid points of the domain (not for
+/// periodicity on a torus); derivative() is defined on tracks and intervals only (d = 1).
 class ExpressionTarget final : public TargetFunction {
  public:
   /// The step h of derivative(), metres: 2^-14, about 6.1e-5 (a power of two, so that s + k h
@@ -49,7 +58,8 @@ class ExpressionTarget final : public TargetFunction {
     auto f = text_parameter(
         "f", "",
         "f(s), an expression of the arc length s, e.g. \"2 * sin(2 * pi * s / L)\"; it may read "
-        "L (the domain's length), pi and the target's own parameters (docs/study-files.md)");
+        "L (the domain's length), pi and the target's own parameters (docs/study-files.md); in "
+        "d = 2, 3 an expression of x1, ..., xd reading L1, ..., Ld");
     f.default_doc = "none: required";
     return {"expression",
             "f(s) written in the study file as an expression of the arc length s",
@@ -68,8 +78,9 @@ class ExpressionTarget final : public TargetFunction {
 
   void evaluate(std::span<const double> points, std::span<double> out) const override {
     expression_.evaluate(points, out);
-    for (std::size_t m = 0; m < points.size(); ++m)
-      if (!std::isfinite(out[m])) throw not_finite(points[m], out[m]);
+    const auto d = static_cast<std::size_t>(domain_.dimension);
+    for (std::size_t m = 0; m < out.size(); ++m)
+      if (!std::isfinite(out[m])) throw not_finite(points.subspan(m * d, d), out[m]);
   }
 
   /// f'(s) by the 5-point central difference
@@ -92,6 +103,8 @@ class ExpressionTarget final : public TargetFunction {
   /// two), and always within u |s + k h|, which adds at most 1.5 u (|s| + 2h) |f'| / h
   /// (central; 10.7 u (|s| + 4h) |f'| / h one-sided): 2.7e-11 |f'| per 10 m of s.
   void derivative(std::span<const double> points, std::span<double> out) const override {
+    if (domain_.dimension != 1)
+      throw std::logic_error("the expression target's derivative is defined for d = 1 only");
     for (std::size_t m = 0; m < points.size(); ++m) out[m] = slope_at(points[m]);
   }
 
@@ -104,24 +117,54 @@ class ExpressionTarget final : public TargetFunction {
   }
 
  private:
-  // The expression of `p`, with s the variable and L, pi and the user's parameters constants.
+  // The variables f reads: s in d = 1, x1..xd otherwise.
+  static std::vector<std::string> variables(const Domain& domain) {
+    if (domain.dimension == 1) return {"s"};
+    std::vector<std::string> out;
+    for (int a = 1; a <= domain.dimension; ++a) out.push_back("x" + std::to_string(a));
+    return out;
+  }
+  // The domain's constants: L in d = 1, L1..Ld otherwise; then pi.
+  static std::vector<NamedValue> domain_constants(const Domain& domain) {
+    std::vector<NamedValue> out;
+    if (domain.dimension == 1) {
+      out.push_back({"L", domain.length});
+    } else {
+      for (int a = 0; a < domain.dimension; ++a)
+        out.push_back({"L" + std::to_string(a + 1), domain.extent(a)});
+    }
+    out.push_back({"pi", std::numbers::pi});
+    return out;
+  }
+
+  // The expression of `p`, with s (or x1..xd) the variables and L (or L1..Ld), pi and the
+  // user's parameters constants.
   static Expression compile(const ParameterSet& p, const Domain& domain) {
     const std::string& text = p.text("f");
     if (!p.given("f"))
-      throw ParameterError("f",
-                           "parameter 'f' is required: f(s) as an expression of the arc "
-                           "length s, e.g. f = \"2 * sin(2 * pi * s / L)\"");
-    std::vector<NamedValue> constants{{"L", domain.length}, {"pi", std::numbers::pi}};
+      throw ParameterError("f", domain.dimension == 1
+                                    ? "parameter 'f' is required: f(s) as an expression of the "
+                                      "arc length s, e.g. f = \"2 * sin(2 * pi * s / L)\""
+                                    : "parameter 'f' is required: f(x1, ..., xd) as an expression "
+                                      "of the point, e.g. f = \"sin(2 * pi * x1 / L1) * x2\"");
+    const auto names = variables(domain);
+    std::vector<NamedValue> constants = domain_constants(domain);
+    const std::size_t own_constants = constants.size();
     for (const auto& [name, value] : p.values()) {
       if (name == "f") continue;
-      if (name == "s" || name == "L" || name == "pi")
+      const bool is_variable = std::find(names.begin(), names.end(), name) != names.end();
+      const auto taken = std::find_if(constants.begin(), constants.begin() + own_constants,
+                                      [&](const NamedValue& c) { return c.name == name; });
+      if (is_variable || taken != constants.begin() + own_constants)
         throw ParameterError(name,
                              fmt::format("parameter name '{}' is taken: f reads {} as {}; name the "
                                          "parameter otherwise",
                                          name, name,
                                          name == "s"   ? "the arc length"
+                                         : is_variable ? "a coordinate of the point"
                                          : name == "L" ? "the domain's length"
-                                                       : "3.14159..."));
+                                         : name == "pi" ? "3.14159..."
+                                                        : "an extent of the domain"));
       if (const auto why = Expression::check_name(name); !why.empty())
         throw ParameterError(name, fmt::format("parameter name '{}' {}: f could not read it; name "
                                                "the parameter otherwise",
@@ -129,8 +172,8 @@ class ExpressionTarget final : public TargetFunction {
       constants.push_back({name, p.real(name)});
     }
     try {
-      Expression expression(text, {"s"}, constants);
-      for (std::size_t c = 2; c < constants.size(); ++c)
+      Expression expression(text, names, constants);
+      for (std::size_t c = own_constants; c < constants.size(); ++c)
         if (!expression.uses(constants[c].name))
           throw ParameterError(constants[c].name,
                                fmt::format("parameter '{}' is not read by f = \"{}\": use it in "
@@ -153,28 +196,39 @@ class ExpressionTarget final : public TargetFunction {
     }
   }
 
-  std::domain_error not_finite(double s, double value) const {
+  std::domain_error not_finite(std::span<const double> point, double value) const {
+    std::string where;
+    if (point.size() == 1) {
+      where = "s = " + format_real(point[0]);
+    } else {
+      for (std::size_t a = 0; a < point.size(); ++a)
+        where += fmt::format("{}x{} = {}", a ? ", " : "", a + 1, format_real(point[a]));
+    }
     return std::domain_error(fmt::format(
-        "f = \"{}\" is {} at s = {}: f must be finite on the domain (look for a logarithm or "
+        "f = \"{}\" is {} at {}: f must be finite on the domain (look for a logarithm or "
         "square root of a negative number, or a division by zero)",
-        expression_.text(), format_real(value), format_real(s)));
+        expression_.text(), format_real(value), where));
   }
 
   // f at the check points (a ParameterError for a value that is not finite there), and on a
   // closed track the seam: f and f' at L against 0.
   void check_finite_and_periodic() {
     const auto points = domain_.uniform_points(check_points);
-    std::vector<double> values(points.size());
+    const auto d = static_cast<std::size_t>(domain_.dimension);
+    std::vector<double> values(domain_.point_count(points));
     expression_.evaluate(points, values);
     double scale = 0;
-    for (std::size_t m = 0; m < points.size(); ++m) {
+    for (std::size_t m = 0; m < values.size(); ++m) {
       if (!std::isfinite(values[m]))
         throw ParameterError(
             "f", fmt::format("{} (found when f was checked at {} uniform points of the domain)",
-                             not_finite(points[m], values[m]).what(), check_points));
+                             not_finite(std::span<const double>(points).subspan(m * d, d),
+                                        values[m])
+                                 .what(),
+                             values.size()));
       scale = std::max(scale, std::abs(values[m]));
     }
-    if (!domain_.periodic) return;
+    if (!domain_.periodic || d > 1) return;
     const double length = domain_.length;
     const double start = values.front(), end = expression_(std::span<const double>(&length, 1));
     // Values to 1e-9 of f's scale; slopes to 1e-6 of the slope scale, far above the difference

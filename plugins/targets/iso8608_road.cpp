@@ -108,6 +108,7 @@ class Iso8608Road final : public TargetFunction {
   }
 
   Iso8608Road(const ParameterSet& p, const Domain& domain) : length_(domain.length) {
+    require_track(domain, "iso8608");
     Iso8608Settings settings;
     settings.level =
         p.real("gd_n0") > 0 ? p.real("gd_n0") : iso8608_class_level(p.choice("class")[0]);

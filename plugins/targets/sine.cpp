@@ -23,6 +23,7 @@ class SineTarget final : public TargetFunction {
       : amplitude_(p.real("amplitude")),
         wavenumber_(2.0 * std::numbers::pi * p.real("cycles") / domain.length),
         phase_(p.real("phase")) {
+    require_track(domain, "sine");
     const double cycles = p.real("cycles");
     if (domain.periodic && cycles != std::round(cycles))
       throw ParameterError("cycles", "parameter 'cycles' must be a whole number on a closed "

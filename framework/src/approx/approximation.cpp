@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <array>
 #include <limits>
+#include <queue>
 
 #include "rkhs/core/cancellation.hpp"
 
@@ -21,8 +23,70 @@ std::vector<double> sorted_wrapped(std::span<const double> centres, const Domain
 }
 }  // namespace
 
+namespace {
+// dist(x, X) = min_i |x - c_i| (the torus distance when periodic), by brute force.
+double distance_to_set(const double* x, std::span<const double> centres, const Domain& domain) {
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < centres.size(); i += d)
+    best = std::min(best, domain.squared_distance(x, centres.data() + i));
+  return std::sqrt(best);
+}
+
+// sup_{x in Omega} dist(x, X) in d > 1 by branch and bound over boxes: dist(., X) is
+// 1-Lipschitz, so over a box of centre c and half-diagonal r it is at most dist(c, X) + r.
+// Boxes whose bound exceeds the best value found are split in 2^d; the search stops when no
+// box can beat the best value by more than `relative_tolerance` of it.
+double fill_distance_boxes(std::span<const double> centres, const Domain& domain) {
+  constexpr double relative_tolerance = 1e-9;
+  constexpr std::size_t initial_per_axis = 16;
+  const int d = domain.dimension;
+  struct Box {
+    double bound;
+    std::array<double, Domain::max_dimension> centre, half;
+    bool operator<(const Box& other) const { return bound < other.bound; }
+  };
+  std::priority_queue<Box> queue;
+  double best = 0.0;
+  auto push = [&](const std::array<double, Domain::max_dimension>& centre,
+                  const std::array<double, Domain::max_dimension>& half) {
+    const double value = distance_to_set(centre.data(), centres, domain);
+    best = std::max(best, value);
+    double diagonal = 0.0;
+    for (int a = 0; a < d; ++a) diagonal += half[a] * half[a];
+    queue.push(Box{value + std::sqrt(diagonal), centre, half});
+  };
+  std::array<double, Domain::max_dimension> half{}, centre{};
+  for (int a = 0; a < d; ++a) half[a] = 0.5 * domain.extent(a) / initial_per_axis;
+  std::size_t total = 1;
+  for (int a = 0; a < d; ++a) total *= initial_per_axis;
+  for (std::size_t p = 0; p < total; ++p) {
+    std::size_t rest = p;
+    for (int a = 0; a < d; ++a) {
+      centre[a] = (2.0 * static_cast<double>(rest % initial_per_axis) + 1.0) * half[a];
+      rest /= initial_per_axis;
+    }
+    push(centre, half);
+  }
+  while (!queue.empty() && queue.top().bound > best * (1.0 + relative_tolerance)) {
+    const Box box = queue.top();
+    queue.pop();
+    std::array<double, Domain::max_dimension> child_half{};
+    for (int a = 0; a < d; ++a) child_half[a] = 0.5 * box.half[a];
+    for (int corner = 0; corner < (1 << d); ++corner) {
+      std::array<double, Domain::max_dimension> child{};
+      for (int a = 0; a < d; ++a)
+        child[a] = box.centre[a] + ((corner >> a) & 1 ? child_half[a] : -child_half[a]);
+      push(child, child_half);
+    }
+  }
+  return best;
+}
+}  // namespace
+
 double fill_distance(std::span<const double> centres, const Domain& domain) {
   if (centres.empty()) return std::numeric_limits<double>::infinity();
+  if (domain.dimension > 1) return fill_distance_boxes(centres, domain);
   const auto c = sorted_wrapped(centres, domain);
   double largest_gap = 0;
   for (std::size_t i = 1; i < c.size(); ++i) largest_gap = std::max(largest_gap, c[i] - c[i - 1]);
@@ -34,7 +98,16 @@ double fill_distance(std::span<const double> centres, const Domain& domain) {
 }
 
 double separation_distance(std::span<const double> centres, const Domain& domain) {
-  if (centres.size() < 2) return nan;
+  if (domain.point_count(centres) < 2) return nan;
+  if (domain.dimension > 1) {
+    const auto d = static_cast<std::size_t>(domain.dimension);
+    double smallest = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < centres.size(); i += d)
+      for (std::size_t j = i + d; j < centres.size(); j += d)
+        smallest = std::min(smallest, domain.squared_distance(centres.data() + i,
+                                                              centres.data() + j));
+    return 0.5 * std::sqrt(smallest);
+  }
   const auto c = sorted_wrapped(centres, domain);
   double smallest_gap = std::numeric_limits<double>::infinity();
   for (std::size_t i = 1; i < c.size(); ++i) smallest_gap = std::min(smallest_gap, c[i] - c[i - 1]);
@@ -92,8 +165,9 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const GramSolver& solver,
                                                Eigen::MatrixXd* cross_out) {
   const Domain& domain = kernel.domain();
-  const auto n = static_cast<Eigen::Index>(centres.size());
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
   const auto points = domain.uniform_points(evaluation_points);
+  const std::size_t point_count = domain.point_count(points);
 
   ApproximationMeasurement out;
   using M = ApproximationMetric;
@@ -121,12 +195,12 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
 
   // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
-  Eigen::VectorXd at_centres(n), at_points(static_cast<Eigen::Index>(points.size()));
-  target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
-  target.evaluate(points, std::span<double>(at_points.data(), points.size()));
+  Eigen::VectorXd at_centres(n), at_points(static_cast<Eigen::Index>(point_count));
+  target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
+  target.evaluate(points, std::span<double>(at_points.data(), point_count));
   const Eigen::VectorXd alpha = solver.solve(at_centres);
   const Eigen::VectorXd residual = at_points - cross * alpha;
-  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), points.size()));
+  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
   const double sup = residual.cwiseAbs().maxCoeff();
   const double error_floor =
       round_off * std::sqrt(solution_norm_squared.maxCoeff()) * alpha.norm();
@@ -135,7 +209,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   metrics[M::error_floor] = error_floor;
   metrics[M::interpolant_native_norm] = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
   if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
-  if (l2 <= error_floor * std::sqrt(domain.length)) out.flags.push_back("l2_error_at_floor");
+  if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
   if (cross_out) *cross_out = std::move(data.cross);
   return out;
 }
@@ -192,13 +266,14 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
 
   // Pi f = sum_i c_i b_i, c = W f(S).
   const auto samples = op.samples();
-  Eigen::VectorXd at_samples(static_cast<Eigen::Index>(samples.size()));
-  Eigen::VectorXd at_points(static_cast<Eigen::Index>(points.size()));
-  target.evaluate(samples, std::span<double>(at_samples.data(), samples.size()));
-  target.evaluate(points, std::span<double>(at_points.data(), points.size()));
+  const std::size_t sample_count = op.sample_count(), point_count = domain.point_count(points);
+  Eigen::VectorXd at_samples(static_cast<Eigen::Index>(sample_count));
+  Eigen::VectorXd at_points(static_cast<Eigen::Index>(point_count));
+  target.evaluate(samples, std::span<double>(at_samples.data(), sample_count));
+  target.evaluate(points, std::span<double>(at_points.data(), point_count));
   const Eigen::VectorXd coefficients = op.weights() * at_samples;
   const Eigen::VectorXd residual = at_points - values * coefficients;
-  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), points.size()));
+  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
   const double sup = residual.cwiseAbs().maxCoeff();
   const double error_floor =
       round_off * std::sqrt(solution_norm_squared.maxCoeff()) * coefficients.norm();
@@ -208,7 +283,7 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
   metrics[M::interpolant_native_norm] =
       std::sqrt(std::max(0.0, coefficients.dot(gram * coefficients)));
   if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
-  if (l2 <= error_floor * std::sqrt(domain.length)) out.flags.push_back("l2_error_at_floor");
+  if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
   measure_projection_norms(kernel, op, evaluation_points, out);
   return out;
 }

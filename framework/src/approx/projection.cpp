@@ -14,10 +14,10 @@
 namespace rkhs {
 
 void ProjectionOperator::resize(std::size_t dimension, std::size_t samples,
-                                std::size_t basis_points) {
+                                std::size_t basis_points, std::size_t point_dimension) {
   const auto dim = static_cast<Eigen::Index>(dimension);
-  samples_.assign(samples, 0.0);
-  basis_points_.assign(basis_points, 0.0);
+  samples_.assign(samples * point_dimension, 0.0);
+  basis_points_.assign(basis_points * point_dimension, 0.0);
   weights_ = Eigen::MatrixXd::Zero(dim, static_cast<Eigen::Index>(samples));
   basis_coefficients_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(basis_points), dim);
   mesh_.clear();
@@ -65,7 +65,7 @@ ProjectionOperator build_projection(std::string_view name, const ParameterSet& p
     throw std::logic_error(
         fmt::format("projection '{}' built an empty or inconsistent operator "
                     "({} basis functions, {} samples, {} basis points)",
-                    name, dim, out.samples().size(), out.basis_points().size()));
+                    name, dim, out.sample_count(), out.basis_coefficients().rows()));
   if (!out.weights().allFinite() || !out.basis_coefficients().allFinite())
     throw std::runtime_error(
         fmt::format("projection '{}' built a non-finite operator (n = {})", name, request.n));
@@ -80,7 +80,7 @@ Eigen::MatrixXd projection_basis_values(const AnyKernel& kernel, const Projectio
 Eigen::VectorXd apply_projection(const AnyKernel& kernel, const ProjectionOperator& op,
                                  const Eigen::VectorXd& at_samples,
                                  std::span<const double> points) {
-  if (at_samples.size() != static_cast<Eigen::Index>(op.samples().size()))
+  if (at_samples.size() != static_cast<Eigen::Index>(op.sample_count()))
     throw std::invalid_argument("apply_projection: one value per sample point is needed");
   const Eigen::VectorXd coefficients = op.weights() * at_samples;
   return kernel.cross(points, op.basis_points()) * (op.basis_coefficients() * coefficients);
@@ -111,7 +111,7 @@ Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const Project
   const Eigen::MatrixXd V = op.weights() * kernel.cross(op.samples(), points);
   const Eigen::MatrixXd AD = functional_gram(kernel, op) * D;
   const Eigen::VectorXd diagonal = kernel.diagonal(points);
-  Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
+  Eigen::VectorXd out(static_cast<Eigen::Index>(kernel.domain().point_count(points)));
   for (Eigen::Index m = 0; m < out.size(); ++m) {
     // k - 2 D.V + D.AD, summed as (k - D.V) + D.(AD - V): for an H-orthogonal projection
     // AD = V, so the second term is round-off and the first is the power function's own
@@ -125,7 +125,7 @@ Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const Project
 
 double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& op,
                              std::span<const double> points) {
-  return std::sqrt(static_cast<double>(op.samples().size()) *
+  return std::sqrt(static_cast<double>(op.sample_count()) *
                    std::numeric_limits<double>::epsilon() * kernel.diagonal(points).maxCoeff());
 }
 

@@ -246,7 +246,7 @@ PowerFunctionSquared power_function_squared(const AnyKernel& kernel,
                                             const std::vector<double>& centres,
                                             const std::vector<double>& points) {
   const Eigen::MatrixXd gram = kernel.gram(centres);
-  const auto n = static_cast<double>(centres.size());
+  const auto n = static_cast<double>(kernel.domain().point_count(centres));
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram);
   const Eigen::VectorXd& lambda = eigen.eigenvalues();
   const double lambda_max = lambda.maxCoeff();
@@ -270,25 +270,55 @@ PowerFunctionSquared power_function_squared(const AnyKernel& kernel,
   return out;
 }
 
+std::vector<double> scattered_points(const Domain& domain, std::size_t count, double start) {
+  if (domain.dimension == 1) return golden_ratio_points(count, domain.length, start);
+  // The Kronecker sequence of the generalised golden ratio phi_d (x^(d+1) = x + 1):
+  // u_p = frac(start + p / phi_d^a), a = 1..d; every prefix is spread out.
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  double phi = 2.0;
+  for (int i = 0; i < 64; ++i) phi = std::pow(1.0 + phi, 1.0 / static_cast<double>(d + 1));
+  std::vector<double> out(count * d);
+  for (std::size_t p = 0; p < count; ++p)
+    for (std::size_t a = 0; a < d; ++a) {
+      double u = start + static_cast<double>(p + 1) / std::pow(phi, static_cast<double>(a + 1));
+      u -= std::floor(u);
+      out[p * d + a] = u * domain.extent(static_cast<int>(a));
+    }
+  return out;
+}
+
 ContractReport check_kernel_contract(const AnyKernel& kernel) {
   ContractReport report;
   Checks checks(report);
   const Domain& domain = kernel.domain();
   const double length = domain.length;
-  const auto points = golden_ratio_points(61, length);
+  const auto d_points = static_cast<std::size_t>(domain.dimension);
+  const auto points = scattered_points(domain, 61, 0.1234);
+  const std::size_t point_count = domain.point_count(points);
+  // Point p of a flat set, and k of two such points.
+  auto at = [d_points](const std::vector<double>& set, std::size_t p) {
+    return std::span<const double>(set).subspan(p * d_points, d_points);
+  };
+  auto k = [&](std::span<const double> x, std::span<const double> y) {
+    return kernel.evaluate_point(x, y);
+  };
   const auto props = kernel.properties();
 
   std::vector<std::string> metadata_problems;
   if (props.analytic && props.sobolev_order)
     metadata_problems.push_back("both analytic and a Sobolev order");
-  if (props.sobolev_order && !(*props.sobolev_order > 0.5))  // H^tau in C(Omega) needs tau > d/2
-    metadata_problems.push_back(fmt::format("Sobolev order {} <= 1/2", g(*props.sobolev_order)));
+  const int d = kernel.domain().dimension;
+  // H^tau in C(Omega) needs tau > d/2.
+  if (props.sobolev_order && !(*props.sobolev_order > 0.5 * d))
+    metadata_problems.push_back(
+        fmt::format("Sobolev order {} <= d/2 = {}", g(*props.sobolev_order), g(0.5 * d)));
   if (!(props.support_radius >= 0)) metadata_problems.push_back("negative support radius");
   if (kernel.feature_count() > 0 && props.positive_definite)  // rank <= features
     metadata_problems.push_back("positive definite with a finite feature map");
-  if (props.dimension != 1)
+  if (props.dimension != d)
     metadata_problems.push_back(fmt::format(
-        "dimension {} (every domain of this version is one-dimensional: d = 1)", props.dimension));
+        "dimension {} on a domain of dimension {} (properties().dimension must be the domain's)",
+        props.dimension, d));
   checks.add("metadata", metadata_problems.empty(),
              metadata_problems.empty() ? "consistent" : fmt::format("{}", fmt::join(metadata_problems, "; ")));
 
@@ -299,23 +329,41 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
              fmt::format("k(x, x) in [{}, {}]", g(diagonal.minCoeff()), g(scale)));
   if (!(scale > 0)) return report;  // every other tolerance is relative to it
 
-  // Symmetry, periodicity, compact support, stationarity on pairs of scattered points.
+  // Symmetry, periodicity, compact support, stationarity on pairs of scattered points. In
+  // d > 1 the periods are shifts along each axis, the stationarity shift is 0.3 of every extent.
   double asymmetry = 0, aperiodicity = 0, outside_support = 0, nonstationarity = 0;
-  for (double x : points) {
-    for (double y : points) {
-      const double kxy = kernel.evaluate(x, y);
-      asymmetry = std::max(asymmetry, std::abs(kxy - kernel.evaluate(y, x)));
+  std::vector<double> moved_x(d_points), moved_y(d_points);
+  for (std::size_t i = 0; i < point_count; ++i) {
+    const auto x = at(points, i);
+    for (std::size_t j = 0; j < point_count; ++j) {
+      const auto y = at(points, j);
+      const double kxy = k(x, y);
+      asymmetry = std::max(asymmetry, std::abs(kxy - k(y, x)));
       if (domain.periodic) {
-        aperiodicity = std::max(aperiodicity, std::abs(kernel.evaluate(x + length, y) - kxy));
-        aperiodicity = std::max(aperiodicity, std::abs(kernel.evaluate(x, y - 2 * length) - kxy));
+        for (std::size_t a = 0; a < d_points; ++a) {
+          const double period = domain.extent(static_cast<int>(a));
+          std::copy(x.begin(), x.end(), moved_x.begin());
+          std::copy(y.begin(), y.end(), moved_y.begin());
+          moved_x[a] += period;
+          moved_y[a] -= 2 * period;
+          aperiodicity = std::max(aperiodicity, std::abs(k(moved_x, y) - kxy));
+          aperiodicity = std::max(aperiodicity, std::abs(k(x, moved_y) - kxy));
+        }
       }
-      if (props.support_radius > 0 && domain.distance(x, y) >= props.support_radius)
+      if (props.support_radius > 0 &&
+          std::sqrt(domain.squared_distance(x.data(), y.data())) >= props.support_radius)
         outside_support = std::max(outside_support, std::abs(kxy));
       if (props.stationary) {
-        const double shift = 0.3 * length;
-        if (domain.periodic || (x + shift <= length && y + shift <= length))
-          nonstationarity =
-              std::max(nonstationarity, std::abs(kernel.evaluate(x + shift, y + shift) - kxy));
+        bool inside = true;
+        for (std::size_t a = 0; a < d_points; ++a) {
+          const double shift = 0.3 * domain.extent(static_cast<int>(a));
+          moved_x[a] = x[a] + shift;
+          moved_y[a] = y[a] + shift;
+          inside = inside && moved_x[a] <= domain.extent(static_cast<int>(a)) &&
+                   moved_y[a] <= domain.extent(static_cast<int>(a));
+        }
+        if (domain.periodic || inside)
+          nonstationarity = std::max(nonstationarity, std::abs(k(moved_x, moved_y) - kxy));
       }
     }
   }
@@ -342,7 +390,7 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
     checks.skip("stationarity", "not declared stationary");
 
   // Gram matrix: symmetric positive semidefinite, diagonal = diagonal(), entries = evaluate().
-  const auto centres = golden_ratio_points(40, length, 0.77);
+  const auto centres = scattered_points(domain, 40, 0.77);
   const Eigen::MatrixXd gram = kernel.gram(centres);
   if (gram.rows() != 40 || gram.cols() != 40) {
     checks.add("Gram matrix size", false,
@@ -363,8 +411,9 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
     std::string where = "none negative";
     for (std::size_t count : {10u, 25u, 50u}) {
       for (int set = 0; set < 3; ++set) {
-        std::vector<double> random_points(count);
-        for (auto& s : random_points) s = random.uniform() * length;
+        std::vector<double> random_points(count * d_points);
+        for (std::size_t c = 0; c < random_points.size(); ++c)
+          random_points[c] = random.uniform() * domain.extent(static_cast<int>(c % d_points));
         const auto random_spectrum = spectrum_of(kernel.gram(random_points));
         const double ratio = -random_spectrum.lambda.minCoeff() / random_spectrum.allowed_negative;
         if (ratio > worst) {
@@ -392,39 +441,55 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
   }
 
   const Eigen::MatrixXd cross = kernel.cross(points, centres);
-  if (cross.rows() != static_cast<Eigen::Index>(points.size()) || cross.cols() != 40) {
+  if (cross.rows() != static_cast<Eigen::Index>(point_count) || cross.cols() != 40) {
     checks.add("cross matrix size", false, fmt::format("{} x {}", cross.rows(), cross.cols()));
     return report;
   }
   double cross_error = 0;
   for (Eigen::Index m = 0; m < cross.rows(); ++m)
     for (Eigen::Index i = 0; i < cross.cols(); ++i)
-      cross_error =
-          std::max(cross_error, std::abs(cross(m, i) - kernel.evaluate(points[m], centres[i])));
+      cross_error = std::max(
+          cross_error, std::abs(cross(m, i) - k(at(points, static_cast<std::size_t>(m)),
+                                                at(centres, static_cast<std::size_t>(i)))));
   checks.at_most("cross matrix", "max |K_mi - k(s_m, c_i)| / max k", cross_error / scale, 1e-14);
 
-  check_derivatives(kernel, scale, checks);
+  if (domain.dimension == 1) {
+    check_derivatives(kernel, scale, checks);
+  } else {
+    checks.skip("derivative", "defined for sections along a track (d = 1)");
+    checks.skip("basis derivative", "defined for sections along a track (d = 1)");
+  }
 
-  // Power function on nested uniform centres 4 -> 8 -> 16: >= 0, ~0 at the centres,
-  // non-increasing as centres are added.
-  auto evaluation = golden_ratio_points(257, length, 0.31);
-  const auto finest = nested_uniform_centres(16, length);
+  // Power function on nested centres 4 -> 8 -> 16 (uniform in d = 1, the first n scattered
+  // points in d > 1): >= 0, ~0 at the centres, non-increasing as centres are added.
+  auto evaluation = scattered_points(domain, 257, 0.31);
+  const auto finest = domain.dimension == 1 ? nested_uniform_centres(16, length)
+                                            : scattered_points(domain, 16, 0.59);
   evaluation.insert(evaluation.end(), finest.begin(), finest.end());
+  // The centres of n among the 16: every (16/n)-th uniform one, or the first n scattered ones.
+  auto nested_centres = [&](std::size_t n) {
+    if (domain.dimension == 1) return nested_uniform_centres(n, length);
+    return std::vector<double>(finest.begin(), finest.begin() + static_cast<long>(n * d_points));
+  };
+  auto is_centre_of = [&](std::size_t i, std::size_t n) {
+    return domain.dimension == 1 ? i % (16 / n) == 0 : i < n;
+  };
   PowerFunctionSquared previous;
   double worst_negative = 0, worst_at_centres = 0, worst_increase = 0;
   bool nonnegative = true, zero_at_centres = true, nonincreasing = true;
   std::string skipped_because;
   for (std::size_t n : {4u, 8u, 16u}) {
-    const auto nested = nested_uniform_centres(n, length);
+    const auto nested = nested_centres(n);
     const auto power = power_function_squared(kernel, nested, evaluation);
     const double negative = -power.squared.minCoeff();
     worst_negative = std::max(worst_negative, negative / std::max(power.tolerance, 1e-300));
     if (negative > power.tolerance) nonnegative = false;
     // Evaluation points 257 + 16j are the uniform centres of 16; every n-th of them is a centre.
     double at_centres = 0;
-    for (std::size_t i = 0; i < 16; i += 16 / n)
-      at_centres =
-          std::max(at_centres, std::abs(power.squared(static_cast<Eigen::Index>(257 + i))));
+    for (std::size_t i = 0; i < 16; ++i)
+      if (is_centre_of(i, n))
+        at_centres =
+            std::max(at_centres, std::abs(power.squared(static_cast<Eigen::Index>(257 + i))));
     worst_at_centres = std::max(worst_at_centres, at_centres / scale);
     if (at_centres > power.tolerance + 1e-14 * scale) zero_at_centres = false;
     if (n > 4) {

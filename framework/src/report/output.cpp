@@ -293,8 +293,17 @@ std::string summary_json(const RunRecord& run) {
       json_string(build.version), json_string(build.git_commit), json_string(build.compiler),
       json_string(build.build_type), run.threads, json_string(run.started),
       json_number(std::round(run.wall_seconds * 1000) / 1000), mpi);
-  out += fmt::format("  \"domain\": {{\"length\": {}, \"periodic\": {}}},\n",
-                     json_number(study.domain.length), study.domain.periodic ? "true" : "false");
+  if (study.domain.dimension == 1) {
+    out += fmt::format("  \"domain\": {{\"length\": {}, \"periodic\": {}}},\n",
+                       json_number(study.domain.length), study.domain.periodic ? "true" : "false");
+  } else {
+    std::vector<std::string> lengths;
+    for (int a = 0; a < study.domain.dimension; ++a)
+      lengths.push_back(json_number(study.domain.extent(a)));
+    out += fmt::format(
+        "  \"domain\": {{\"dimension\": {}, \"lengths\": [{}], \"periodic\": {}}},\n",
+        study.domain.dimension, fmt::join(lengths, ", "), study.domain.periodic ? "true" : "false");
+  }
   std::vector<std::string> n_values;
   for (auto n : study.n_values) n_values.push_back(std::to_string(n));
   out += fmt::format("  \"n\": [{}],\n  \"evaluation_points\": {},\n  \"abscissa\": {},\n",

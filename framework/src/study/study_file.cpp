@@ -777,7 +777,38 @@ void check_evaluation_grid(const Reporter& report, const toml::table& header,
     if (measured_on_grid(metric)) on_grid.push_back(metric);
   if (on_grid.empty() || study.n_values.empty()) return;
   const std::size_t largest_n = study.n_values.back();
+  // In d > 1: per axis, the grid's m points against the centres' n^(1/d) (4 per centre spacing
+  // asks for 4^d n grid points); in d = 1 simply M against n.
+  const int d = study.domain.dimension;
+  const std::size_t per_axis = study.domain.points_per_axis(study.evaluation_points);
+  const double centres_per_axis = std::pow(static_cast<double>(largest_n), 1.0 / d);
   const std::size_t points = study.evaluation_points;
+  const double spacing = std::pow(4.0, d);
+  if (d > 1) {
+    const auto* node = header.get("evaluation_points");
+    const auto where = node ? node->source() : header.source();
+    const std::string given = node ? "" : " (the default)";
+    const auto advised =
+        static_cast<std::size_t>(std::ceil(spacing * static_cast<double>(largest_n)));
+    if (static_cast<double>(per_axis) <= centres_per_axis)
+      report.fail(where, "study.evaluation_points",
+                  fmt::format("{} evaluation points{} ({} per axis of d = {}) for up to n = {} "
+                              "centres ({:.4g} per axis): the grid is no finer than the centres, "
+                              "so {} would be measured at or next to the centres, where they "
+                              "vanish (round-off), not over the domain; use evaluation_points "
+                              ">= {} (4 per centre spacing on every axis) or leave these metrics "
+                              "out of study.metrics",
+                              points, given, per_axis, d, largest_n, centres_per_axis,
+                              fmt::join(on_grid, ", "), advised));
+    if (static_cast<double>(per_axis) < 4.0 * centres_per_axis)
+      study.warnings.push_back(report.locate(
+          where, "study.evaluation_points",
+          fmt::format("warning: {} evaluation points{} ({} per axis) give fewer than 4 per "
+                      "centre spacing for n = {}: {} are taken on the grid and may miss the "
+                      "peaks between centres; evaluation_points >= {} avoids it",
+                      points, given, per_axis, largest_n, fmt::join(on_grid, ", "), advised)));
+    return;
+  }
   const auto* node = header.get("evaluation_points");
   const auto where = node ? node->source() : header.source();
   const std::string given = node ? "" : " (the default)";
@@ -873,22 +904,53 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   }
 
   const auto* domain = optional_table(report, root, "domain");
-  if (!domain) report.fail({}, "domain", "missing [domain] table (length = ... or radius = ...)");
-  check_keys(report, *domain, "domain.", {"length", "radius", "periodic"});
-  if (domain->contains("length") == domain->contains("radius"))
+  if (!domain)
+    report.fail({}, "domain",
+                "missing [domain] table (length = ..., radius = ... or lengths = [...])");
+  check_keys(report, *domain, "domain.", {"length", "radius", "lengths", "periodic"});
+  const int given = int(domain->contains("length")) + int(domain->contains("radius")) +
+                    int(domain->contains("lengths"));
+  if (given != 1)
     report.fail(domain->source(), "domain",
-                "give exactly one of 'length' (metres) or 'radius' (a closed track of length "
-                "2 pi radius)");
-  study.domain.length = domain->contains("length")
-                            ? get_number(report, *domain, "length", "domain.", 0, 0)
-                            : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
-  if (!std::isfinite(study.domain.length))  // 2 pi radius beyond the largest double
-    report.fail(domain->get("radius")->source(), "domain.radius",
-                fmt::format("must be at most {} (the track's length, 2 pi radius, must be a finite "
-                            "number), found {}",
-                            format_real(std::numeric_limits<double>::max() / (2 * std::numbers::pi)),
-                            show(*domain->get("radius"))));
+                "give exactly one of 'length' (metres), 'radius' (a closed track of length "
+                "2 pi radius) or 'lengths' (a box or torus in R^d: its extents in metres, e.g. "
+                "lengths = [1.0, 1.0] for d = 2)");
+  if (const auto* lengths = domain->get("lengths")) {
+    const auto* list = lengths->as_array();
+    if (!list || list->empty() || list->size() > std::size_t{Domain::max_dimension})
+      report.fail(lengths->source(), "domain.lengths",
+                  fmt::format("expected a list of 1 to {} extents in metres (one per axis), "
+                              "found {}",
+                              Domain::max_dimension, show(*lengths)));
+    study.domain.dimension = static_cast<int>(list->size());
+    for (std::size_t a = 0; a < list->size(); ++a) {
+      const auto& item = *list->get(a);
+      const auto value = item.value<double>();
+      if (!item.is_number() || !value || !(*value > 0) || !std::isfinite(*value))
+        report.fail(item.source(), "domain.lengths",
+                    fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1,
+                                show(item)));
+      (a == 0 ? study.domain.length : a == 1 ? study.domain.width : study.domain.height) = *value;
+    }
+  } else {
+    study.domain.length =
+        domain->contains("length")
+            ? get_number(report, *domain, "length", "domain.", 0, 0)
+            : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
+    if (!std::isfinite(study.domain.length))  // 2 pi radius beyond the largest double
+      report.fail(domain->get("radius")->source(), "domain.radius",
+                  fmt::format("must be at most {} (the track's length, 2 pi radius, must be a "
+                              "finite number), found {}",
+                              format_real(std::numeric_limits<double>::max() /
+                                          (2 * std::numbers::pi)),
+                              show(*domain->get("radius"))));
+  }
   study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
+  if (study.domain.dimension > 1 && study.kind == StudyKind::adaptive)
+    report.fail(domain->get("lengths")->source(), "domain.lengths",
+                fmt::format("an adaptive study runs along a track (d = 1); a domain of d = {} is "
+                            "for approximation studies so far",
+                            study.domain.dimension));
 
   const auto* grid = optional_table(report, root, "grid");
   if (!grid || !grid->contains("n"))
@@ -1001,6 +1063,20 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     for (const auto& note : target->notes())
       study.warnings.push_back(report.locate(entry.where, "target", "note: " + note));
   });
+  // In d > 1 every placement must place every n in this domain (a grid needs n = m^d): an n it
+  // cannot place is reported at grid.n.
+  if (study.domain.dimension > 1)
+    check_instances(axes[2], [&](const PluginChoice& c, const PluginEntry&) {
+      const auto placement = centre_registry().find(c.name)->factory(c.parameters);
+      for (const auto n : study.n_values) {
+        try {
+          placement->place(n, study.domain, 0);
+        } catch (const std::invalid_argument& e) {
+          report.fail(grid->get("n")->source(), "grid.n",
+                      fmt::format("{}: {}", c.label(), e.what()));
+        }
+      }
+    });
   // Every kernel with every projection and n: a projection that cannot be built for one (a
   // spline space of another kernel, an n that is not a level) is an input error.
   const PluginAxis none;  // an axis this study does not have: nothing to check

@@ -179,6 +179,26 @@ KernelVerification verify_kernel(std::string_view name) {
     }
     out.contract.emplace_back(where, std::move(report));
   }
+  // The dimensions beyond 1 the kernel is defined on: a box and a torus in d = 2 and 3. A
+  // kernel that is one-dimensional says so when it is built there, and is not checked there.
+  for (int d = 2; d <= Domain::max_dimension; ++d) {
+    for (const bool periodic : {false, true}) {
+      Domain domain{2.0, periodic};
+      domain.dimension = d;
+      domain.width = 1.5;
+      domain.height = 1.0;
+      std::unique_ptr<AnyKernel> kernel;
+      try {
+        kernel = entry->factory(defaults, domain);
+      } catch (const std::exception& e) {
+        out.not_defined_on.push_back(fmt::format("{}: {}", domain.describe(), e.what()));
+        continue;
+      }
+      out.contract.emplace_back(fmt::format("{} of d = {}", periodic ? "torus" : "box", d) +
+                                    " " + domain.describe(),
+                                check_kernel_contract(*kernel));
+    }
+  }
   if (!on_track) {
     out.theory.push_back({"theory", false, false, "not checked: no kernel on the closed track"});
     return out;
@@ -233,6 +253,7 @@ std::string format_verification(const PluginVerification& v) {
         count(c);
       }
     }
+    for (const auto& why : k.not_defined_on) out += "  not defined on " + why + "\n";
     out += "  theory (closed track)\n";
     for (const auto& c : k.theory) {
       out += format_check(c);

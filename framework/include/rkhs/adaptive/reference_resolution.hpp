@@ -34,6 +34,9 @@ class ReferenceResolvedKernel final : public AnyKernel {
   const Domain& domain() const noexcept override { return kernel_.domain(); }
   const KernelProperties& properties() const noexcept override { return kernel_.properties(); }
   double evaluate(double x, double y) const override { return kernel_.evaluate(x, y); }
+  double evaluate_point(std::span<const double> x, std::span<const double> y) const override {
+    return kernel_.evaluate_point(x, y);
+  }
   double derivative(double x, double y) const override { return kernel_.derivative(x, y); }
   bool has_exact_derivative() const noexcept override { return kernel_.has_exact_derivative(); }
   void gram_into(std::span<const double> centres, Eigen::Ref<Eigen::MatrixXd> out) const override {

@@ -14,14 +14,17 @@ namespace rkhs {
 class CentrePlacement {
  public:
   virtual ~CentrePlacement() = default;
-  /// Writes out.size() centres in the domain into `out` (the caller's storage), sorted
+  /// Writes n = out.size() / d centres in the domain into `out` (the caller's storage), a flat
+  /// point set of d = domain.dimension coordinates per centre (core/domain.hpp); in d = 1 sorted
   /// increasingly. `trial_seed` is derived from the trial's key (random placements seed from
   /// it, deterministic ones ignore it). Nothing crosses the plugin boundary but the values.
+  /// A placement that cannot place n centres in this domain (a grid needs n = m^d; a
+  /// one-dimensional placement in d > 1) throws std::invalid_argument saying why.
   virtual void place_into(const Domain& domain, std::uint64_t trial_seed,
                           std::span<double> out) const = 0;
-  /// n centres (place_into, allocated on the caller's side).
+  /// n centres (place_into, allocated on the caller's side): n d values.
   std::vector<double> place(std::size_t n, const Domain& domain, std::uint64_t trial_seed) const {
-    std::vector<double> out(n);
+    std::vector<double> out(n * static_cast<std::size_t>(domain.dimension));
     place_into(domain, trial_seed, out);
     return out;
   }

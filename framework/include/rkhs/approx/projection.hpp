@@ -87,8 +87,13 @@ struct ProjectionRequest {
 /// caller's side of the plugin boundary.
 class ProjectionOperator {
  public:
-  /// Sizes S, W, Y and E (entries zero) and clears the rest.
-  void resize(std::size_t dimension, std::size_t samples, std::size_t basis_points);
+  /// Sizes S, W, Y and E (entries zero) and clears the rest. S and Y are flat point sets of
+  /// `point_dimension` coordinates per point (the domain's d, core/domain.hpp): samples() holds
+  /// samples x point_dimension values.
+  void resize(std::size_t dimension, std::size_t samples, std::size_t basis_points,
+              std::size_t point_dimension = 1);
+  /// |S|, the number of sample points (samples().size() / point dimension).
+  std::size_t sample_count() const noexcept { return static_cast<std::size_t>(weights_.cols()); }
 
   std::size_t dimension() const noexcept { return static_cast<std::size_t>(weights_.rows()); }
   std::span<double> samples() noexcept { return samples_; }

@@ -4,6 +4,7 @@
 #include <functional>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -92,6 +93,17 @@ class TargetFunction {
     return out;
   }
 };
+
+/// For a target of the arc length alone (a road profile): throws std::invalid_argument naming
+/// `target` when the domain has d > 1. Called by such targets' constructors.
+inline void require_track(const Domain& domain, std::string_view target) {
+  if (domain.dimension != 1)
+    throw std::invalid_argument(
+        std::string("target '") + std::string(target) +
+        "' is a function of the arc length s (d = 1); this domain has d = " +
+        std::to_string(domain.dimension) +
+        ": write f(x1, ..., xd) with the expression target (name = \"expression\")");
+}
 
 using TargetRegistry = Registry<TargetFunction, const Domain&>;
 TargetRegistry& target_registry();

@@ -44,8 +44,8 @@ struct KernelProperties {
   bool stationary = true;       ///< k(x, y) depends on x - y only
   bool periodic = false;        ///< periodised on a periodic domain
   /// d, the dimension of the domain the kernel is defined on: what the rates theory predicts
-  /// depends on it (h ~ n^-1/d, tau - d/2). 1 for every built-in kernel (tracks and intervals);
-  /// read it from here, never assume it.
+  /// depends on it (h ~ n^-1/d, tau - d/2). A kernel reports its domain's dimension (1 for a
+  /// track or an interval); read it from here, never assume it.
   int dimension = 1;
 };
 
@@ -69,6 +69,15 @@ concept KernelFunction = requires(const K& k, double x, double y) {
   { k(x, y) } -> std::convertible_to<double>;
   { k.properties() } -> std::convertible_to<KernelProperties>;
   { K::info() } -> std::convertible_to<PluginInfo>;
+};
+
+/// A kernel defined on domains of more than one dimension: `k(x, y)` with x and y pointers to
+/// d = domain.dimension coordinates each (periodised per axis on a torus). Its properties()
+/// give the `dimension` of the domain it was made for and tau for that d. A kernel without it
+/// is one-dimensional: KernelModel refuses a domain with d > 1 for it.
+template <class K>
+concept PointKernel = KernelFunction<K> && requires(const K& k, const double* x, const double* y) {
+  { k(x, y) } -> std::convertible_to<double>;
 };
 
 /// A kernel with a finite sparse feature map: `features(x, f)` clears f and appends the
@@ -141,8 +150,12 @@ class AnyKernel {
   virtual const Domain& domain() const noexcept = 0;
   virtual const KernelProperties& properties() const noexcept = 0;
 
-  /// k(x, y). A virtual call per value: use the matrix methods in loops.
+  /// k(x, y) on a one-dimensional domain. A virtual call per value: use the matrix methods in
+  /// loops. On a domain of d > 1 it throws std::logic_error (use evaluate_point).
   virtual double evaluate(double x, double y) const = 0;
+  /// k(x, y) for two points of d = domain().dimension coordinates each (x.size() == y.size()
+  /// == d, std::invalid_argument otherwise); in d = 1 the same as evaluate(x[0], y[0]).
+  virtual double evaluate_point(std::span<const double> x, std::span<const double> y) const = 0;
   /// d/dy k(x, y), the derivative of the section k(x, .) (periodised on a periodic domain). A
   /// virtual call per value, for tests and contracts: use KernelBasis along a path. The kernel's
   /// closed form when has_exact_derivative(), otherwise a difference quotient with step
@@ -151,20 +164,24 @@ class AnyKernel {
   /// True when the kernel type gives its derivatives in closed form (DifferentiableKernel or
   /// DifferentiableFeatureMapKernel).
   virtual bool has_exact_derivative() const noexcept = 0;
-  /// out(i, j) = k(c_i, c_j): `out` is n x n (n = centres.size()), sized by the caller; the
+  /// Point sets (centres, points) are flat: N points of d = domain().dimension coordinates
+  /// each, N d values (core/domain.hpp); in d = 1 a list of arc lengths.
+  ///
+  /// out(i, j) = k(c_i, c_j): `out` is n x n (n centres), sized by the caller; the
   /// result is symmetric. Throws std::invalid_argument when `out` has another size.
   virtual void gram_into(std::span<const double> centres,
                          Eigen::Ref<Eigen::MatrixXd> out) const = 0;
-  /// out(m, i) = k(s_m, c_i): `out` is points.size() x centres.size(), sized by the caller.
+  /// out(m, i) = k(s_m, c_i): `out` is (points) x (centres), sized by the caller.
   /// Throws std::invalid_argument when `out` has another size.
   virtual void cross_into(std::span<const double> points, std::span<const double> centres,
                           Eigen::Ref<Eigen::MatrixXd> out) const = 0;
-  /// out[m] = k(s_m, s_m); out.size() == points.size() (std::invalid_argument otherwise).
+  /// out[m] = k(s_m, s_m); one value per point (std::invalid_argument otherwise).
   virtual void diagonal_into(std::span<const double> points, std::span<double> out) const = 0;
   /// Number of features of a finite feature map, 0 when the kernel has none.
   virtual std::size_t feature_count() const noexcept = 0;
   /// The sections k(c_i, .) at `centres`, for evaluation along a path. Made and destroyed by
-  /// the kernel's own code (the virtual destructor), so it may cross the boundary.
+  /// the kernel's own code (the virtual destructor), so it may cross the boundary. One-dimensional
+  /// domains only (std::logic_error otherwise), like derivative() and feature_basis().
   virtual std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const = 0;
   /// The features psi_f of a finite feature map themselves as a basis of size
   /// feature_count(): evaluate(s, phi) writes phi[f] = psi_f(s), zero but for the few features
@@ -182,22 +199,23 @@ class AnyKernel {
 
   /// G_ij = k(c_i, c_j), n x n, symmetric.
   Eigen::MatrixXd gram(std::span<const double> centres) const {
-    const auto n = static_cast<Eigen::Index>(centres.size());
+    const auto n = static_cast<Eigen::Index>(domain().point_count(centres));
     Eigen::MatrixXd out(n, n);
     gram_into(centres, out);
     return out;
   }
   /// K_mi = k(s_m, c_i), points.size() x centres.size().
   Eigen::MatrixXd cross(std::span<const double> points, std::span<const double> centres) const {
-    Eigen::MatrixXd out(static_cast<Eigen::Index>(points.size()),
-                        static_cast<Eigen::Index>(centres.size()));
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(domain().point_count(points)),
+                        static_cast<Eigen::Index>(domain().point_count(centres)));
     cross_into(points, centres, out);
     return out;
   }
   /// k(s_m, s_m) for each point.
   Eigen::VectorXd diagonal(std::span<const double> points) const {
-    Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
-    diagonal_into(points, std::span<double>(out.data(), points.size()));
+    const std::size_t count = domain().point_count(points);
+    Eigen::VectorXd out(static_cast<Eigen::Index>(count));
+    diagonal_into(points, std::span<double>(out.data(), count));
     return out;
   }
   /// The kink points of list_kink_points, sorted. Empty when smooth.

@@ -88,6 +88,25 @@ void for_each_pair_within(const Domain& domain, double radius, std::span<const d
   }
 }
 
+/// K_mi = k(x_m, c_i) for flat point sets in d > 1 dimensions: the dense double loop, one
+/// inlined k(x, y) per entry (a compactly supported kernel returns 0 beyond its radius at the
+/// cost of a distance).
+template <PointKernel K>
+Eigen::MatrixXd assemble_point_cross(const K& kernel, const Domain& domain,
+                                     std::span<const double> points,
+                                     std::span<const double> centres) {
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const auto rows = static_cast<Eigen::Index>(domain.point_count(points));
+  const auto cols = static_cast<Eigen::Index>(domain.point_count(centres));
+  Eigen::MatrixXd out(rows, cols);
+  for (Eigen::Index i = 0; i < cols; ++i) {
+    const double* c = centres.data() + static_cast<std::size_t>(i) * d;
+    for (Eigen::Index m = 0; m < rows; ++m)
+      out(m, i) = kernel(points.data() + static_cast<std::size_t>(m) * d, c);
+  }
+  return out;
+}
+
 }  // namespace detail
 
 /// The difference quotient that stands in for d/ds where a kernel type has no closed form:
@@ -195,6 +214,9 @@ class DerivativeStencil {
 template <KernelFunction K>
 Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
                                std::span<const double> points, std::span<const double> centres) {
+  if constexpr (PointKernel<K>) {
+    if (domain.dimension > 1) return detail::assemble_point_cross(kernel, domain, points, centres);
+  }
   const auto rows = static_cast<Eigen::Index>(points.size());
   const auto cols = static_cast<Eigen::Index>(centres.size());
   if constexpr (FeatureMapKernel<K>) {
@@ -226,9 +248,11 @@ Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
 template <KernelFunction K>
 Eigen::MatrixXd assemble_gram(const K& kernel, const Domain& domain,
                               std::span<const double> centres) {
-  const auto n = static_cast<Eigen::Index>(centres.size());
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
   Eigen::MatrixXd gram;
-  if constexpr (FeatureMapKernel<K>) {
+  if (domain.dimension > 1) {
+    gram = assemble_cross(kernel, domain, centres, centres);
+  } else if constexpr (FeatureMapKernel<K>) {
     gram = assemble_cross(kernel, domain, centres, centres);
   } else if (kernel.properties().support_radius > 0) {
     gram = assemble_cross(kernel, domain, centres, centres);
@@ -493,7 +517,7 @@ template <KernelFunction K>
 class KernelModel final : public AnyKernel {
  public:
   KernelModel(const ParameterSet& parameters, const Domain& domain)
-      : kernel_(parameters, domain),
+      : kernel_(checked_domain(domain, parameters), domain),
         name_(K::info().name),
         parameters_(parameters),
         domain_(domain),
@@ -512,8 +536,22 @@ class KernelModel final : public AnyKernel {
   const Domain& domain() const noexcept override { return domain_; }
   const KernelProperties& properties() const noexcept override { return properties_; }
 
-  double evaluate(double x, double y) const override { return kernel_(x, y); }
+  double evaluate(double x, double y) const override {
+    require_one_dimensional("evaluate");
+    return kernel_(x, y);
+  }
+  double evaluate_point(std::span<const double> x, std::span<const double> y) const override {
+    const auto d = static_cast<std::size_t>(domain_.dimension);
+    if (x.size() != d || y.size() != d)
+      throw std::invalid_argument("AnyKernel::evaluate_point: points of " +
+                                  std::to_string(x.size()) + " and " + std::to_string(y.size()) +
+                                  " coordinates on a domain of dimension " + std::to_string(d));
+    if (d == 1) return kernel_(x[0], y[0]);
+    if constexpr (PointKernel<K>) return kernel_(x.data(), y.data());
+    else throw std::logic_error("unreachable: a one-dimensional kernel on a domain of d > 1");
+  }
   double derivative(double x, double y) const override {
+    require_one_dimensional("derivative");
     if constexpr (DifferentiableKernel<K>) {
       return kernel_.derivative(x, y);
     } else if constexpr (DifferentiableFeatureMapKernel<K>) {
@@ -532,29 +570,46 @@ class KernelModel final : public AnyKernel {
   }
   bool has_exact_derivative() const noexcept override { return exact_derivative; }
   void gram_into(std::span<const double> centres, Eigen::Ref<Eigen::MatrixXd> out) const override {
-    require_size(out.rows(), out.cols(), centres.size(), centres.size(), "gram_into");
+    const std::size_t n = domain_.point_count(centres);
+    require_flat(centres, "gram_into");
+    require_size(out.rows(), out.cols(), n, n, "gram_into");
     out = assemble_gram(kernel_, domain_, centres);
   }
   void cross_into(std::span<const double> points, std::span<const double> centres,
                   Eigen::Ref<Eigen::MatrixXd> out) const override {
-    require_size(out.rows(), out.cols(), points.size(), centres.size(), "cross_into");
+    require_flat(points, "cross_into");
+    require_flat(centres, "cross_into");
+    require_size(out.rows(), out.cols(), domain_.point_count(points),
+                 domain_.point_count(centres), "cross_into");
     out = assemble_cross(kernel_, domain_, points, centres);
   }
   void diagonal_into(std::span<const double> points, std::span<double> out) const override {
-    require_size(static_cast<Eigen::Index>(out.size()), 1, points.size(), 1, "diagonal_into");
-    for (std::size_t m = 0; m < points.size(); ++m) out[m] = kernel_(points[m], points[m]);
+    require_flat(points, "diagonal_into");
+    const std::size_t count = domain_.point_count(points);
+    require_size(static_cast<Eigen::Index>(out.size()), 1, count, 1, "diagonal_into");
+    if (domain_.dimension == 1) {
+      for (std::size_t m = 0; m < count; ++m) out[m] = kernel_(points[m], points[m]);
+      return;
+    }
+    if constexpr (PointKernel<K>) {
+      const auto d = static_cast<std::size_t>(domain_.dimension);
+      for (std::size_t m = 0; m < count; ++m)
+        out[m] = kernel_(points.data() + m * d, points.data() + m * d);
+    }
   }
   std::size_t feature_count() const noexcept override {
     if constexpr (FeatureMapKernel<K>) return kernel_.feature_count();
     else return 0;
   }
   std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const override {
+    require_one_dimensional("basis");
     if constexpr (FeatureMapKernel<K>)
       return std::make_unique<FeatureBasis<K>>(kernel_, centres, stencil_);
     else
       return std::make_unique<DirectBasis<K>>(kernel_, centres, stencil_);
   }
   std::unique_ptr<KernelBasis> feature_basis() const override {
+    require_one_dimensional("feature_basis");
     if constexpr (FeatureMapKernel<K>)
       return std::make_unique<FeatureCoordinateBasis<K>>(kernel_, stencil_);
     else
@@ -575,6 +630,29 @@ class KernelModel final : public AnyKernel {
     std::sort(kinks.begin(), kinks.end());
     kinks.erase(std::unique(kinks.begin(), kinks.end()), kinks.end());
     return kinks;
+  }
+  // The domain, after checking that K is defined on it: a kernel without the point form
+  // k(const double*, const double*) is one-dimensional.
+  static const ParameterSet& checked_domain(const Domain& domain, const ParameterSet& parameters) {
+    domain.validate();
+    if (domain.dimension > 1 && !PointKernel<K>)
+      throw std::invalid_argument("kernel '" + K::info().name +
+                                  "' is defined on one-dimensional domains only; this domain has "
+                                  "d = " + std::to_string(domain.dimension));
+    return parameters;
+  }
+  void require_one_dimensional(const char* method) const {
+    if (domain_.dimension != 1)
+      throw std::logic_error(std::string("AnyKernel::") + method +
+                             " is defined on one-dimensional domains only (d = " +
+                             std::to_string(domain_.dimension) + ")");
+  }
+  void require_flat(std::span<const double> points, const char* method) const {
+    if (points.size() % static_cast<std::size_t>(domain_.dimension) != 0)
+      throw std::invalid_argument(std::string("AnyKernel::") + method + ": " +
+                                  std::to_string(points.size()) +
+                                  " coordinates are not whole points of dimension " +
+                                  std::to_string(domain_.dimension));
   }
   static void require_size(Eigen::Index rows, Eigen::Index cols, std::size_t expected_rows,
                            std::size_t expected_cols, const char* method) {

@@ -4,10 +4,12 @@
 // on every registered kernel; `rkhs-study verify-plugin` runs it on a plugin's kernels
 // (plugin_verification.hpp).
 //
-// Checked on one kernel instance, on its own domain:
-//   metadata            tau > 1/2 when a Sobolev order is declared, not both analytic and
+// Checked on one kernel instance, on its own domain (a track, an interval, or a box or torus in
+// R^d: there with points of d coordinates, periods and shifts along every axis, and the
+// derivative checks skipped):
+//   metadata            tau > d/2 when a Sobolev order is declared, not both analytic and
 //                       Sobolev, support radius >= 0, a finite feature map is not strictly
-//                       positive definite
+//                       positive definite, dimension = the domain's
 //   diagonal            k(x, x) >= 0 and not identically 0
 //   symmetry            |k(x, y) - k(y, x)| <= 1e-14 max k(x, x)
 //   periodicity         declared periodic exactly when the domain is; on a periodic domain
@@ -71,6 +73,9 @@ double richardson_derivative(const std::function<double(double)>& f, double s, d
 
 /// `count` points in [0, L) from the golden-ratio sequence: spread out, off every uniform grid.
 std::vector<double> golden_ratio_points(std::size_t count, double length, double start = 0.1234);
+/// `count` points of `domain` as a flat point set: golden_ratio_points in d = 1; in d > 1 the
+/// Kronecker sequence of the generalised golden ratio (every prefix spread out, nested).
+std::vector<double> scattered_points(const Domain& domain, std::size_t count, double start);
 /// c_i = i L / n, i = 0..n-1: nested when n doubles, on both kinds of domain.
 std::vector<double> nested_uniform_centres(std::size_t n, double length);
 

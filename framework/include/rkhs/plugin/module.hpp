@@ -70,7 +70,8 @@
 // 6: AnyKernel::feature_basis, LearningLaw::coordinates and LearningLaw::require_kernel
 // 7: LearningLaw::reference_resolution
 // 8: PluginInfo::user_parameters, and ParameterSet::resolve's user parameters
-#define RKHS_PLUGIN_ABI_VERSION 8
+// 9: Domain in R^d (dimension, width, height), AnyKernel::evaluate_point, flat point sets
+#define RKHS_PLUGIN_ABI_VERSION 9
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

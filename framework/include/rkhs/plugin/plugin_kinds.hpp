@@ -53,7 +53,7 @@ struct CentresKind {
   using Registry = CentreRegistry;
   static constexpr std::string_view singular = "centres";
   static constexpr std::string_view plural = "centres";
-  static constexpr std::string_view builtins[] = {"random", "uniform"};
+  static constexpr std::string_view builtins[] = {"halton", "random", "uniform"};
   static constexpr auto loaded = &LoadedPlugin::centres;
   static Registry& registry() { return centre_registry(); }
 };
@@ -63,7 +63,8 @@ struct TargetKind {
   using Registry = TargetRegistry;
   static constexpr std::string_view singular = "target";
   static constexpr std::string_view plural = "targets";
-  static constexpr std::string_view builtins[] = {"csv", "expression", "iso8608", "sine"};
+  static constexpr std::string_view builtins[] = {"csv", "expression", "iso8608", "sine",
+                                                  "surface_csv"};
   static constexpr auto loaded = &LoadedPlugin::targets;
   static Registry& registry() { return target_registry(); }
 };

@@ -41,8 +41,12 @@ struct KernelVerification {
   std::string kernel;      ///< registered name
   std::string parameters;  ///< the defaults, "beta=1 c=1"
   std::string declared;    ///< "positive definite, analytic, global support, stationary"
-  /// The contract per domain: ("closed track, L = 25.133 m", report), ("interval ...", report).
+  /// The contract per domain: ("closed track, L = 25.133 m", report), ("interval ...", report),
+  /// then a box and a torus of d = 2 and 3 for a kernel defined there ("box of d = 2 [0, 2] x
+  /// [0, 1.5]", report).
   std::vector<std::pair<std::string, ContractReport>> contract;
+  /// The domains of d > 1 the kernel refuses, each with its reason (a one-dimensional kernel).
+  std::vector<std::string> not_defined_on;
   std::vector<ContractCheck> theory;  ///< strictly positive definite, power-function rate
   bool passed() const noexcept;
 };

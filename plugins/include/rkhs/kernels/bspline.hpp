@@ -3,6 +3,15 @@
 //
 //   k(u, v) = sum_{j=0}^{J} 2^{j (d - 2r)} sum_k N_p(2^j u / h0 - k) N_p(2^j v / h0 - k),
 //
+// and on a box or torus of d = 2, 3 the same sum over the tensor-product B-splines of each level,
+// N(x) = prod_a N_p(x_a) with h0_a = L_a / n0 on axis a and k in Z^d: the sum over k factorises,
+//
+//   k(u, v) = sum_j 2^{j (d - 2r)} prod_a sum_{k_a} N_p(2^j u_a / h0_a - k_a) N_p(2^j v_a / h0_a - k_a),
+//
+// evaluated so, level by level, O(d (p + 1) (J + 1)) per pair (operator() of two points). Its
+// native space is equivalent to H^r(Omega) for d/2 < r < p + 1/2; it has sum_j prod_a n_{j,a}
+// features (n_{j,a} = n0 2^j, + p on an interval), the rank bound of its Gram matrices.
+//
 // N_p the cardinal B-spline of degree p with knots 0, 1, ..., p + 1, h0 = L / n0, and
 // n_j = n0 2^j cells on level j.
 //   Periodic domain [0, L): k = 0 .. n_j - 1, spline indices wrap modulo n_j.
@@ -35,9 +44,10 @@
 // Properties: positive SEMIdefinite only (positive_definite = false). The level spaces are
 // nested, so k has rank n_J (periodic) or n_J + p (interval), fewer than feature_count():
 // a Gram matrix of more centres than that is singular (n_J = 256 with the defaults).
-// Native space equivalent to H^r when 1/2 < r < p + 1/2 (the limit J -> infinity;
-// sobolev_order is empty otherwise). Support radius (p + 1) h0 (a level-0 spline); not
-// stationary.
+// Native space equivalent to H^r when d/2 < r < p + 1/2 (the limit J -> infinity;
+// sobolev_order is empty otherwise). Support radius (p + 1) h0 (a level-0 spline; in d > 1
+// sqrt(d) (p + 1) max_a h0_a, the Euclidean distance beyond which some axis is separated by
+// more than a level-0 support); not stationary; dimension d of the domain.
 // Fails: ParameterError naming "n0" when the domain is periodic and n0 < degree + 1 (a spline
 // would overlap its own periodic copy), naming "r" when degree = 0 and r is not given, and
 // naming "degree" / "J" / "n0" for values outside their declared ranges.
@@ -103,6 +113,19 @@ class MultiscaleBSpline {
     return sum;
   }
 
+  /// k(u, v) for points of d = 2 or 3 coordinates: the level sums of the tensor-product
+  /// splines, each the product over the axes of the one-dimensional sums (file comment).
+  double operator()(const double* u, const double* v) const noexcept {
+    double sum = 0.0;
+    for (int j = 0; j <= levels_; ++j) {
+      double product = point_weight_[j];
+      for (int a = 0; a < dimension_ && product != 0.0; ++a)
+        product *= level_sum(level0(u[a], axis_length_[a]), level0(v[a], axis_length_[a]), j);
+      sum += product;
+    }
+    return sum;
+  }
+
   /// d/dv k(u, v), the dot product of u's features with v's feature derivatives.
   double derivative(double u, double v) const noexcept {
     const double x0 = level0(u), y0 = level0(v);
@@ -139,8 +162,19 @@ class MultiscaleBSpline {
     append_levels(u, out, piece_slopes, slope_weight_);
   }
 
+  /// Features of the map: on a track or an interval those of features(); in d > 1 the
+  /// tensor-product splines of all levels, sum_j prod_a n_{j,a} (the rank bound of Gram
+  /// matrices; they are evaluated by operator() of two points, not through a feature vector).
   std::size_t feature_count() const noexcept {
-    return static_cast<std::size_t>(offset_[levels_ + 1]);
+    if (dimension_ == 1) return static_cast<std::size_t>(offset_[levels_ + 1]);
+    std::size_t total = 0;
+    for (int j = 0; j <= levels_; ++j) {
+      std::size_t level = 1;
+      for (int a = 0; a < dimension_; ++a)
+        level *= static_cast<std::size_t>(offset_[j + 1] - offset_[j]);
+      total += level;
+    }
+    return total;
   }
 
   KernelProperties properties() const noexcept;
@@ -227,16 +261,43 @@ class MultiscaleBSpline {
     double t;            ///< position in the cell, [0, 1]
   };
 
-  /// u in level-0 knot units, in [0, n0] (periodic: wrapped first; interval: clamped).
-  double level0(double u) const noexcept {
+  /// u in level-0 knot units, in [0, n0] (periodic: wrapped first; interval: clamped), on an
+  /// axis of extent `length` (the track's by default).
+  double level0(double u) const noexcept { return level0(u, length_); }
+  double level0(double u, double length) const noexcept {
     if (periodic_) {
-      double w = std::fmod(u, length_);
-      if (w < 0) w += length_;
-      return w * n0_ / length_;
+      double w = std::fmod(u, length);
+      if (w < 0) w += length;
+      return w * n0_ / length;
     }
-    const double clamped = u < 0.0 ? 0.0 : (u > length_ ? length_ : u);
-    const double x0 = clamped * n0_ / length_;
+    const double clamped = u < 0.0 ? 0.0 : (u > length ? length : u);
+    const double x0 = clamped * n0_ / length;
     return x0 > n0_ ? static_cast<double>(n0_) : x0;
+  }
+
+  /// sum_k N_p(2^j x0 - k) N_p(2^j y0 - k) on level j, unweighted, for level-0 coordinates
+  /// x0, y0 of one axis (k wrapped modulo n_j when periodic): the factor of one axis.
+  double level_sum(double x0, double y0, int j) const noexcept {
+    const Cell cx = cell_at(x0, j), cy = cell_at(y0, j);
+    const std::int32_t cells = n0_ << j;
+    std::int32_t shift = cx.index - cy.index;
+    if (periodic_) {
+      if (shift < 0) shift += cells;
+      if (shift > degree_ && shift < cells - degree_) return 0.0;
+    } else if (shift > degree_ || shift < -degree_) {
+      return 0.0;
+    }
+    std::array<double, max_degree + 1> nx{}, ny{};
+    pieces(degree_, cx.t, nx.data());
+    pieces(degree_, cy.t, ny.data());
+    double sum = 0.0;
+    for (int ix = 0; ix <= degree_; ++ix) {
+      int iy = ix - shift;
+      if (periodic_ && iy < 0) iy += cells;
+      if (iy < 0 || iy > degree_) continue;
+      sum += nx[ix] * ny[iy];
+    }
+    return sum;
   }
 
   /// The level-j cell of the level-0 coordinate x0 in [0, n0]. Scaling by 2^j is exact.
@@ -262,6 +323,9 @@ class MultiscaleBSpline {
   std::array<double, max_level + 1> weight_{};        ///< 2^{j (1 - 2r) / 2}
   std::array<double, max_level + 1> slope_weight_{};  ///< weight_[j] 2^j / h0 (d/du of features)
   std::array<std::int32_t, max_level + 2> offset_{};  ///< first feature index of level j
+  int dimension_ = 1;                                  ///< d of the domain
+  std::array<double, Domain::max_dimension> axis_length_{};  ///< L_a, the extents
+  std::array<double, max_level + 1> point_weight_{};   ///< 2^{j (d - 2r)}, d > 1
 };
 
 }  // namespace rkhs::kernels

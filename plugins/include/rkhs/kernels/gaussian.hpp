@@ -14,8 +14,10 @@
 // derivative(x, y) = d/dy k(x, y): for k0, 2 (x - y) / (c sigma^2) k0(x, y) (c = 2 or 1); on a
 // periodic domain the sum of the same images' derivatives. The omitted images' derivatives are
 // below 1e-15 k0(0) / sigma (r e^{-r^2/2} decreases where e^{-r^2/2} < 1e-16).
+// On a box or torus of d = 2, 3: k0(x, y) = exp(-|x - y|^2 / (c sigma^2)); on a torus the lattice
+// sum of its images, the product over axes of the per-axis image sums above.
 // Properties: strictly positive definite, analytic (no Sobolev order), global support,
-// stationary. Wide Gaussians (sigma of the order of L or larger) have Gram matrices that are
+// stationary, dimension d of the domain. Wide Gaussians (sigma of the order of L or larger) have Gram matrices that are
 // singular to double precision: the kernel is still evaluated correctly, the trial reports it.
 // Fails: nothing beyond the parameter declarations (ParameterSet::resolve checks sigma > 0).
 
@@ -56,6 +58,20 @@ class Gaussian {
                                 domain_.difference(x, y), domain_.length, images_);
   }
 
+  /// k(x, y) for points of d = 2 or 3 coordinates: exp(-|x - y|^2 / (c sigma^2)); on a torus
+  /// the sum over the lattice images, which factorises into the per-axis image sums (the
+  /// Gaussian is a product over axes), each truncated like the track's.
+  double operator()(const double* x, const double* y) const noexcept {
+    double product = 1.0;
+    for (int a = 0; a < domain_.dimension; ++a) {
+      const double d = domain_.difference(x[a], y[a], a);
+      product *= domain_.periodic ? sum_of_images([this](double r) { return profile(r); }, d,
+                                                  domain_.extent(a), axis_images_[a])
+                                  : profile(d);
+    }
+    return product;
+  }
+
   KernelProperties properties() const noexcept;
 
   double sigma() const noexcept { return sigma_; }
@@ -67,6 +83,7 @@ class Gaussian {
   double inverse_scale_;  ///< 1 / (c sigma^2)
   Domain domain_;
   int images_ = 0;
+  int axis_images_[Domain::max_dimension] = {0, 0, 0};  ///< images per axis on a torus
 };
 
 }  // namespace rkhs::kernels

@@ -20,8 +20,11 @@
 //   nu = 2.5:  -a (1 + a) / 3 exp(-a),
 // times sqrt(2 nu) / l; on a periodic domain the derivatives of the closed-form image sums
 // (periodic_side_slope). nu = 0.5 has a kink at y = x: there it is the right-hand derivative.
-// Properties: strictly positive definite, native space H^{nu + 1/2} (d = 1), global support,
-// stationary.
+// On a box of d = 2, 3: the radial Matern function of |x - y| (the same profiles); a torus of
+// d > 1 is refused (no closed-form lattice sum; ParameterError naming "nu").
+// Properties: strictly positive definite, native space H^{nu + d/2} (Wendland, Scattered Data
+// Approximation, Theorem 10.12: the Fourier transform decays like (1 + |w|^2)^-(nu + d/2)),
+// global support, stationary, dimension d of the domain.
 // Fails: ParameterError naming "nu" for any other nu (also checked by the declaration).
 
 #include <cmath>
@@ -79,6 +82,11 @@ class Matern {
     if (!domain_.periodic) return direction * profile_slope(d);
     return direction * rate_ *
            (periodic_side_slope(rate_ * d) - periodic_side_slope(rate_ * (domain_.length - d)));
+  }
+
+  /// k(x, y) for points of d = 2 or 3 coordinates on a box: the profile of |x - y|.
+  double operator()(const double* x, const double* y) const noexcept {
+    return profile(std::sqrt(domain_.squared_distance(x, y)));
   }
 
   KernelProperties properties() const noexcept;
