@@ -167,6 +167,29 @@ TEST_CASE("centre placements in d dimensions", "[centres][rd]") {
     const auto more = centres("halton", 8, rectangle);
     CHECK(std::equal(scaled.begin(), scaled.end(), more.begin()));
   }
+  SECTION("passes: n / passes centres on each straight pass, and h stays at the lateral gap") {
+    const Domain square = box(1.0, 1.0);
+    const auto on_passes = centres("passes", 10, square);  // 2 passes at x2 = 0.25, 0.75
+    REQUIRE(on_passes.size() == 20);
+    CHECK(on_passes[0] == 0.0);
+    CHECK(on_passes[1] == 0.25);
+    CHECK(on_passes[8] == 1.0);
+    CHECK(on_passes[11] == 0.75);
+    // Between the passes (x2 = 1/2) and halfway between two centres of a pass: the farthest
+    // point, sqrt(1/4^2 + (s/2)^2) with s = 1/(m - 1) for m centres on a pass.
+    for (const std::size_t m : {5, 17, 65}) {
+      const auto c = centres("passes", 2 * m, square);
+      const double half_spacing = 0.5 / static_cast<double>(m - 1);
+      CHECK(fill_distance(c, square) ==
+            Approx(std::sqrt(0.0625 + half_spacing * half_spacing)).epsilon(1e-9));
+    }
+    CHECK_THROWS_WITH(centres("passes", 9, square),
+                      "centres 'passes' put n / passes centres on each of 2 passes; n = 9 is not "
+                      "a multiple of 2");
+    CHECK_THROWS_WITH(centres("passes", 8, Domain{1.0, false}),
+                      "centres 'passes' lie on passes across a plane: they need a domain of "
+                      "d = 2, this domain has d = 1");
+  }
   SECTION("random centres are seeded and lie in the box") {
     const auto a = centres("random", 50, rectangle, {{"seed", std::int64_t{7}}});
     const auto b = centres("random", 50, rectangle, {{"seed", std::int64_t{7}}});

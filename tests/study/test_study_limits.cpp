@@ -157,7 +157,7 @@ amplitude = )" + values(100, 1.0, 0.01) +
     return error;
   };
   CHECK(timed_error(large + "[[centres]]\nname = \"nosuch\"\n") ==
-        "s.toml:16:8: centres.name: unknown centres 'nosuch' (known: halton, random, uniform)");
+        "s.toml:16:8: centres.name: unknown centres 'nosuch' (known: halton, passes, random, uniform)");
   CHECK(timed_error(large + "[solver]\nsingular = \"never\"\n") ==
         "s.toml:16:12: solver.singular: found \"never\", expected \"pseudo_inverse\", "
         "\"regularised\" or \"fail\"");

@@ -53,7 +53,7 @@ struct CentresKind {
   using Registry = CentreRegistry;
   static constexpr std::string_view singular = "centres";
   static constexpr std::string_view plural = "centres";
-  static constexpr std::string_view builtins[] = {"halton", "random", "uniform"};
+  static constexpr std::string_view builtins[] = {"halton", "passes", "random", "uniform"};
   static constexpr auto loaded = &LoadedPlugin::centres;
   static Registry& registry() { return centre_registry(); }
 };

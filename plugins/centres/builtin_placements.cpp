@@ -1,4 +1,5 @@
-// Built-in centre placements: uniform (a grid in d > 1), random and Halton points.
+// Built-in centre placements: uniform (a grid in d > 1), random and Halton points, and points
+// on straight passes across a plane.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -157,9 +158,71 @@ class HaltonCentres final : public CentrePlacement {
   std::uint64_t skip_;
 };
 
+/// The centres a vehicle places where it drove: `passes` straight passes along axis 1 of a box
+/// or torus in d = 2, at lateral positions x2 equally spaced from `from` W to `to` W (one pass:
+/// at `from` W), n / passes centres on each, placed along the pass like the track (periodic) or
+/// the interval (end points included). Everything off the passes is far from every centre: the
+/// fill distance stays at the largest lateral gap, and a study shows where f is not learned.
+class PassCentres final : public CentrePlacement {
+ public:
+  static PluginInfo info() {
+    return {"passes",
+            "n centres on straight passes along axis 1 at equally spaced lateral positions "
+            "(d = 2): where a vehicle drove",
+            {integer_parameter("passes", 2, "number of passes; n must be a multiple of it", 1,
+                               1 << 20),
+             real_parameter("from", 0.25, "lateral position of the first pass, fraction of the "
+                            "width", 0.0, 1.0),
+             real_parameter("to", 0.75, "lateral position of the last pass, fraction of the width",
+                            0.0, 1.0)},
+            {{"deterministic", "yes"}}};
+  }
+  explicit PassCentres(const ParameterSet& p)
+      : passes_(static_cast<std::size_t>(p.integer("passes"))),
+        from_(p.real("from")),
+        to_(p.real("to")) {
+    if (to_ < from_)
+      throw ParameterError("to", fmt::format("parameter 'to' ({}) must be at least 'from' ({})",
+                                             format_real(to_), format_real(from_)));
+  }
+
+  void place_into(const Domain& domain, std::uint64_t, std::span<double> c) const override {
+    if (domain.dimension != 2)
+      throw std::invalid_argument(fmt::format(
+          "centres 'passes' lie on passes across a plane: they need a domain of d = 2, this "
+          "domain has d = {}",
+          domain.dimension));
+    const std::size_t n = c.size() / 2;
+    if (n % passes_ != 0)
+      throw std::invalid_argument(fmt::format(
+          "centres 'passes' put n / passes centres on each of {} passes; n = {} is not a "
+          "multiple of {}",
+          passes_, n, passes_));
+    const std::size_t per_pass = n / passes_;
+    Domain along = domain;  // the pass as a track or an interval of length L
+    along.dimension = 1;
+    const auto positions = along.uniform_points(per_pass);
+    for (std::size_t k = 0; k < passes_; ++k) {
+      const double fraction =
+          passes_ == 1 ? from_
+                       : from_ + (to_ - from_) * static_cast<double>(k) /
+                                     static_cast<double>(passes_ - 1);
+      for (std::size_t i = 0; i < per_pass; ++i) {
+        c[2 * (k * per_pass + i)] = positions[i];
+        c[2 * (k * per_pass + i) + 1] = fraction * domain.width;
+      }
+    }
+  }
+
+ private:
+  std::size_t passes_;
+  double from_, to_;
+};
+
 }  // namespace
 }  // namespace rkhs
 
 RKHS_REGISTER_CENTRES(rkhs::UniformCentres)
+RKHS_REGISTER_CENTRES(rkhs::PassCentres)
 RKHS_REGISTER_CENTRES(rkhs::RandomCentres)
 RKHS_REGISTER_CENTRES(rkhs::HaltonCentres)
