@@ -38,7 +38,8 @@ class UniformCentres final : public CentrePlacement {
  public:
   static PluginInfo info() {
     return {"uniform",
-            "equally spaced centres c_i = (i + offset) L / n (interval: end points included)",
+            "equally spaced centres c_i = (i + offset) L / n (interval: end points included); "
+            "in d > 1 the grid of m per axis, n = m^d",
             {real_parameter("offset", 0.0, "shift as a fraction of the spacing (periodic only)",
                             0.0, 1.0)},
             {{"deterministic", "yes"}}};
@@ -91,7 +92,8 @@ class RandomCentres final : public CentrePlacement {
  public:
   static PluginInfo info() {
     return {"random",
-            "n independent uniformly distributed centres, sorted (seeded from seed and n)",
+            "n independent uniformly distributed centres (sorted on a track), seeded from seed "
+            "and n",
             {integer_parameter("seed", 1, "seed of the generator", 0, 1LL << 62)},
             {{"deterministic", "for a given seed and n"}}};
   }
