@@ -150,7 +150,9 @@ class ExpressionTarget final : public TargetFunction {
     const auto names = variables(domain);
     std::vector<NamedValue> constants = domain_constants(domain);
     const std::size_t own_constants = constants.size();
-    for (const auto& [name, value] : p.values()) {
+    for (const auto& entry : p.values()) {
+      const std::string& name = entry.first;  // a named reference: clang 14 cannot capture a
+                                              // structured binding in the lambda below
       if (name == "f") continue;
       const bool is_variable = std::find(names.begin(), names.end(), name) != names.end();
       const auto taken = std::find_if(constants.begin(), constants.begin() + own_constants,
