@@ -323,13 +323,9 @@ class CsvRoad final : public TargetFunction {
         };
         if (field.text.empty())
           throw fail(fmt::format("{}: empty field, expected a number", choice.role));
-        double value = 0;
-        const char* begin = field.text.data();
-        const char* end = begin + field.text.size();
-        if (*begin == '+') ++begin;  // from_chars does not take a leading '+'
-        const auto [stop, error] = std::from_chars(begin, end, value);
-        if (error != std::errc() || stop != end)
-          throw fail(fmt::format("{}: '{}' is not a number", choice.role, field.text));
+        const auto parsed = csv_text::parse_number(field.text);
+        if (!parsed) throw fail(fmt::format("{}: '{}' is not a number", choice.role, field.text));
+        const double value = *parsed;
         if (std::isnan(value))
           throw fail(fmt::format("{} is NaN (every sample needs a value)", choice.role));
         if (std::isinf(value)) throw fail(fmt::format("{} is infinite", choice.role));

@@ -11,7 +11,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -130,14 +129,11 @@ class SurfaceCsv final : public TargetFunction {
   // `describe()` says it is (called only then).
   template <class Describe>
   double number(const csv_text::Field& field, unsigned line, const Describe& describe) const {
-    double value = 0;
-    const char* begin = field.text.data();
-    const char* end = begin + field.text.size();
-    if (begin != end && *begin == '+') ++begin;
-    const auto [stop, error] = std::from_chars(begin, end, value);
-    if (field.text.empty() || error != std::errc() || stop != end)
+    const auto parsed = csv_text::parse_number(field.text);
+    if (!parsed)
       throw std::invalid_argument(fmt::format("{}:{}:{}: {}: '{}' is not a number", file_, line,
                                               field.column, describe(), field.text));
+    const double value = *parsed;
     if (!std::isfinite(value))
       throw std::invalid_argument(fmt::format(
           "{}:{}:{}: {} is {} (every sample needs a finite value; tools/crg_to_surface_csv.py "

@@ -10,6 +10,7 @@
 
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/data_root.hpp"
+#include "study_data_support.hpp"
 
 using namespace rkhs;
 namespace fs = std::filesystem;
@@ -141,7 +142,7 @@ TEST_CASE("the shipped Belgian block surface holds the shipped long sections",
   // studies/data/belgian_block/surface_2cm.csv (tools/crg_to_surface_csv.py, 2 cm) and the
   // three long sections (1 cm) come from the same CRG file: along v = -0.5, 0, 0.5 the surface
   // equals the sections at every second sample.
-  set_data_root(fs::path(RKHS_STUDY_SOURCE_DIR) / "studies" / "data");
+  set_data_root(rkhs::testing::require_study_data());
   const auto* csv = target_registry().find("csv");
   const auto f =
       surface({{"file", std::string("belgian_block/surface_2cm.csv")}, {"v_start", -1.0}},

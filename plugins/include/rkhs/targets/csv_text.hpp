@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -77,6 +78,20 @@ class Lines {
 inline bool blank_or_comment(std::string_view line) {
   const auto first = line.find_first_not_of(" \t");
   return first == std::string_view::npos || line[first] == '#';
+}
+
+/// The number a whole field holds (a leading '+' allowed, which from_chars does not take), or
+/// nothing when the field is empty or is not one number. NaN and infinities are numbers here:
+/// the caller says whether it takes them.
+inline std::optional<double> parse_number(std::string_view text) {
+  if (text.empty()) return std::nullopt;
+  const char* begin = text.data();
+  const char* end = begin + text.size();
+  if (*begin == '+') ++begin;
+  double value = 0;
+  const auto [stop, error] = std::from_chars(begin, end, value);
+  if (error != std::errc() || stop != end) return std::nullopt;
+  return value;
 }
 
 /// The bytes of `path`; std::invalid_argument "<file>: cannot open the file: <why>" otherwise
