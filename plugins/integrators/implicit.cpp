@@ -107,7 +107,7 @@ class Rodas4Stepper {
                                           1.0};
     const double h = dt;
     system_.time_derivative(z_.data(), t, dfdt_.data());
-    solves_.factor(t, 1.0 / (h * gamma));
+    solves_.factor(t, z_.data(), 1.0 / (h * gamma));
     for (int i = 0; i < 6; ++i) {
       stage_ = z_;
       for (int j = 0; j < i; ++j) stage_.noalias() += a[i][j] * k_.col(j);

@@ -161,7 +161,7 @@ struct ScalarProblem {
     ++rhs_calls;
     dy = (lambda * (y.array() - std::sin(t)) + std::cos(t)).matrix();
   }
-  void factor(double, double re, std::complex<double> cx) {
+  void factor(double, const Eigen::MatrixXd&, double re, std::complex<double> cx) {
     real_shift = re;
     complex_shift = cx;
   }

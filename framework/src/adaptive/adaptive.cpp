@@ -18,6 +18,7 @@
 #include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/adaptive/state_dependent.hpp"
 
 namespace rkhs {
 
@@ -222,6 +223,9 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                      const SolverOptions& solver_options,
                                      const Integrator* reference, LapMapCache* lap_maps,
                                      const std::string& lap_map_key) {
+  if (plant.state_dependent())  // f of the plant's state: no track, no lap map
+    return measure_state_dependent(kernel, target, centres, plant, law, integrator, settings,
+                                   evaluation_points, solver_options, reference);
   law.require_kernel(kernel);  // before any work: the law refuses kernels it cannot use
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(centres.size());

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/plant.hpp"
 #include "rkhs/adaptive/stepping.hpp"
 
 namespace rkhs {
@@ -48,6 +49,25 @@ AdaptiveSystem::AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& 
     : AdaptiveSystem(A, B, P, basis, LearningMap::dense(learning_map), road, road_slope, domain,
                      speed, signal) {}
 
+void AdaptiveSystem::set_state_readout(const Plant& plant) {
+  const Eigen::MatrixXd& c = plant.readout();
+  const Eigen::VectorXd& offset = plant.readout_offset();
+  if (c.rows() != 1 || c.cols() != d_)
+    throw std::invalid_argument(fmt::format(
+        "the plant's read-out C is {} x {}; a state-dependent trial needs 1 x {} (f of one "
+        "read-out coordinate y = c^T x + y0)",
+        c.rows(), c.cols(), d_));
+  if (offset.size() > 1)
+    throw std::invalid_argument(
+        fmt::format("the plant's read-out offset has {} values, expected 1", offset.size()));
+  plant_ = &plant;
+  readout_ = c.row(0).transpose();
+  readout_offset_ = offset.size() == 1 ? offset(0) : 0.0;
+  known_.resize(d_);
+  known_time_.resize(d_);
+  known_jacobian_.resize(d_, d_);
+}
+
 void AdaptiveSystem::evaluate_basis(double s) const {
   basis_.evaluate(s, phi_.data());
   if (signal_ == LearningSignal::by_basis)
@@ -59,7 +79,7 @@ void AdaptiveSystem::evaluate_basis(double s) const {
 void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
   ++rhs_count_;
   using Vector = Eigen::Map<const Eigen::VectorXd>;
-  const double s = arc_length(t);
+  const double s = plant_ ? readout(z) : arc_length(t);
   const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
   Eigen::Map<Eigen::VectorXd> dx(dz, d_), dxhat(dz + d_, d_), dalpha(dz + 2 * d_, n_);
   evaluate_basis(s);
@@ -68,14 +88,55 @@ void AdaptiveSystem::rhs(const double* z, double* dz, double t) const {
   dx.noalias() = A_ * x + B_ * road_(s);
   dxhat.noalias() = A_ * xhat + B_ * estimate;
   dalpha = error * Vector(psi_.data(), n_);
+  if (plant_) {
+    plant_->known_dynamics(t, z, known_.data(), nullptr, nullptr);
+    dx += known_;
+    dxhat += known_;
+  }
 }
 
 void AdaptiveSystem::jacobian(const double* z, double* J, double t, double* dfdt) const {
-  jacobian_matrix(t, J);
+  jacobian_matrix(z, t, J);
   time_derivative(z, t, dfdt);
 }
 
+void AdaptiveSystem::jacobian_matrix(const double* z, double t, double* J) const {
+  if (!plant_) {
+    jacobian_matrix(t, J);
+    return;
+  }
+  ++jacobian_count_;
+  const Eigen::Index m = dimension();
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jac(J, m, m);
+  jac.setZero();
+  const double y = readout(z);
+  evaluate_basis(y);
+  basis_.evaluate_derivative(y, dphi_.data());
+  if (signal_ == LearningSignal::by_basis)
+    basis_.evaluate_mapped_derivative(y, dpsi_.data());
+  else
+    map_.apply(dphi_.data(), dpsi_.data());
+  using Vector = Eigen::Map<const Eigen::VectorXd>;
+  const Vector phi(phi_.data(), n_), psi(psi_.data(), n_), dphi(dphi_.data(), n_),
+      dpsi(dpsi_.data(), n_);
+  const Vector x(z, d_), xhat(z + d_, d_), alpha(z + 2 * d_, n_);
+  plant_->known_dynamics(t, z, known_.data(), known_jacobian_.data(), nullptr);
+  const double error = b_.dot(x - xhat);
+  jac.block(0, 0, d_, d_) = A_ + known_jacobian_;
+  jac.block(0, 0, d_, d_).noalias() += (road_slope_(y) * B_) * readout_.transpose();
+  jac.block(d_, 0, d_, d_) = known_jacobian_;
+  jac.block(d_, 0, d_, d_).noalias() += (dphi.dot(alpha) * B_) * readout_.transpose();
+  jac.block(d_, d_, d_, d_) = A_;
+  jac.block(d_, 2 * d_, d_, n_).noalias() = B_ * phi.transpose();
+  jac.block(2 * d_, 0, n_, d_).noalias() = psi * b_.transpose();
+  jac.block(2 * d_, 0, n_, d_).noalias() += (error * dpsi) * readout_.transpose();
+  jac.block(2 * d_, d_, n_, d_).noalias() = -psi * b_.transpose();
+}
+
 void AdaptiveSystem::jacobian_matrix(double t, double* J) const {
+  if (plant_)
+    throw std::logic_error(
+        "the Jacobian of a state-dependent system depends on the state: jacobian_matrix(z, t, J)");
   ++jacobian_count_;
   const Eigen::Index m = dimension();
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jac(J, m, m);
@@ -91,6 +152,14 @@ void AdaptiveSystem::jacobian_matrix(double t, double* J) const {
 }
 
 void AdaptiveSystem::time_derivative(const double* z, double t, double* dfdt) const {
+  if (plant_) {  // F depends on t only through h
+    plant_->known_dynamics(t, z, known_.data(), nullptr, known_time_.data());
+    Eigen::Map<Eigen::VectorXd> out(dfdt, dimension());
+    out.setZero();
+    out.head(d_) = known_time_;
+    out.segment(d_, d_) = known_time_;
+    return;
+  }
   // F depends on t only through s = v t: dF/dt = v dF/ds.
   const double s = arc_length(t);
   basis_.evaluate_derivative(s, dphi_.data());
@@ -113,6 +182,10 @@ void AdaptiveSystem::time_derivative(const double* z, double t, double* dfdt) co
 }
 
 void AdaptiveSystem::linearize(double t, CoupledLinearization& out) const {
+  if (plant_)
+    throw std::logic_error(
+        "a state-dependent system has no structured linearization in t alone (its Jacobian "
+        "depends on the state)");
   ++jacobian_count_;
   evaluate_basis(arc_length(t));
   out.A = &A_;
@@ -124,6 +197,8 @@ void AdaptiveSystem::linearize(double t, CoupledLinearization& out) const {
 
 void AdaptiveSystem::rhs_columns(const double* Z, double* dZ, Eigen::Index columns,
                                  double t) const {
+  if (plant_)
+    throw std::logic_error("a state-dependent system is not linear in z: it has no lap map");
   ++rhs_count_;
   const double s = arc_length(t);
   evaluate_basis(s);

@@ -26,7 +26,8 @@ class LapColumns {
   void rhs(double t, const Eigen::MatrixXd& z, Eigen::MatrixXd& dz) {
     system_.rhs_columns(z.data(), dz.data(), z.cols(), t);
   }
-  void factor(double t, double real_shift, std::complex<double> complex_shift) {
+  void factor(double t, const Eigen::MatrixXd&, double real_shift,
+              std::complex<double> complex_shift) {  // J(t): linear in the columns
     solves_.factor(t, real_shift, complex_shift);
   }
   void solve_real(Eigen::MatrixXd& r) const { solves_.solve_real(r); }

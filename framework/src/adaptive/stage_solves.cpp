@@ -14,14 +14,17 @@ LinearSolver linear_solver_from_name(std::string_view name) {
 }
 
 StageSolves::StageSolves(const AdaptiveSystem& system, LinearSolver kind)
-    : system_(system), kind_(kind) {
+    : system_(system), kind_(system.state_dependent() ? LinearSolver::dense : kind) {
   if (kind_ == LinearSolver::dense) jacobian_.resize(system.dimension(), system.dimension());
 }
 
-void StageSolves::linearize(double t) {
+void StageSolves::linearize(double t, const double* z) {
   if (kind_ == LinearSolver::structured)
     system_.linearize(t, linearization_);
-  else
+  else if (system_.state_dependent()) {
+    if (!z) throw std::logic_error("the stage solves of a state-dependent system need the state");
+    system_.jacobian_matrix(z, t, jacobian_.data());
+  } else
     system_.jacobian_matrix(t, jacobian_.data());
 }
 
@@ -39,16 +42,17 @@ void factor_dense(const Eigen::Ref<const Eigen::MatrixXd>& jacobian, Scalar shif
 
 }  // namespace
 
-void StageSolves::factor(double t, double real_shift) {
-  linearize(t);
+void StageSolves::factor(double t, const double* z, double real_shift) {
+  linearize(t, z);
   if (kind_ == LinearSolver::structured)
     real_.factor(linearization_, real_shift);
   else
     factor_dense(Eigen::MatrixXd(jacobian_), real_shift, real_matrix_, real_lu_);
 }
 
-void StageSolves::factor(double t, double real_shift, std::complex<double> complex_shift) {
-  linearize(t);
+void StageSolves::factor(double t, const double* z, double real_shift,
+                         std::complex<double> complex_shift) {
+  linearize(t, z);
   if (kind_ == LinearSolver::structured) {
     real_.factor(linearization_, real_shift);
     complex_.factor(linearization_, complex_shift);

@@ -22,6 +22,7 @@
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/adaptive/state_dependent.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
 #include "rkhs/core/random.hpp"
 #include "rkhs/approx/target.hpp"
@@ -1130,6 +1131,31 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       throw std::invalid_argument(fmt::format("adaptive.q is {} x {}, this plant needs {} x {}",
                                               Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
+    if (plant->state_dependent()) {
+      // f of the plant's state: a nonlinear system stepped through time on an interval or circle.
+      AdaptiveSettings settings = study.adaptive;
+      if (std::any_of(study.laps_values.begin(), study.laps_values.end(),
+                      [](double laps) { return std::isinf(laps); }))
+        settings.laps = std::numeric_limits<double>::infinity();
+      if (const auto error = state_dependent_settings_error(settings, plant->period());
+          !error.empty())
+        throw std::invalid_argument(error);
+      if (plant->readout().rows() != 1)
+        throw std::invalid_argument(fmt::format(
+            "its read-out has {} coordinates; f of more than one read-out coordinate is not "
+            "supported yet (one: y = c^T x + y0)",
+            plant->readout().rows()));
+      for (const auto& law_entry : axes[4].entries)
+        for_each_combination(law_entry, [&](const std::vector<std::size_t>& at) {
+          const auto law_choice = resolve_choice(report, "law", law_entry, at);
+          const auto law = law_registry().find(law_choice.name)->factory(law_choice.parameters);
+          if (law->coordinates() != LawCoordinates::centres)
+            throw std::invalid_argument(fmt::format(
+                "law '{}' learns in feature coordinates; a state-dependent plant learns in the "
+                "span of the centres' sections (laws gradient and rkhs)",
+                law_choice.label()));
+        });
+    }
   });
   detail::check_expectation_selections(root, study, expectations);
   study.expectations = std::move(expectations);

@@ -64,6 +64,26 @@ class AdaptiveSystem {
 
   Eigen::Index dimension() const noexcept { return 2 * d_ + n_; }
   Eigen::Index plant_dimension() const noexcept { return d_; }
+
+  /// Makes f a function of the plant's state (Plant::state_dependent, docs/model.md section 18):
+  ///   x'     = A x    + h(t, x) + B f(y),      y = c^T x + y0 (one read-out coordinate)
+  ///   xhat'  = A xhat + h(t, x) + B phi(y)^T alpha
+  ///   alpha' = psi(y) b^T (x - xhat)
+  /// with y wrapped onto a periodic domain. The system is then nonlinear in z: jacobian() and
+  /// jacobian_matrix(z, ...) depend on z,
+  ///   dx'/dx = A + B f'(y) c^T + dh/dx,   dxhat'/dx = dh/dx + B (dphi(y)^T alpha) c^T,
+  ///   dalpha'/dx = psi b^T + (b^T (x - xhat)) dpsi(y) c^T,
+  /// dF/dt = [dh/dt; dh/dt; 0], and linearize(), jacobian_matrix(t, J) and rhs_columns(),
+  /// which assume a Jacobian independent of z, throw std::logic_error. `plant` must outlive the
+  /// system; its read-out must be 1 x d (std::invalid_argument otherwise).
+  void set_state_readout(const class Plant& plant);
+  bool state_dependent() const noexcept { return plant_ != nullptr; }
+  /// y = c^T x + y0 (wrapped onto a periodic domain) for the plant state x (d values).
+  double readout(const double* x) const noexcept {
+    double y = readout_offset_;
+    for (Eigen::Index i = 0; i < d_; ++i) y += readout_(i) * x[i];
+    return domain_.periodic ? domain_.wrap(y) : y;
+  }
   /// Makes the path a shuttle between `from` and `from + length` (AdaptiveSettings::shuttle_from)
   /// instead of laps around the track; length 0 restores the laps.
   void set_shuttle(double from, double length) noexcept {
@@ -87,8 +107,12 @@ class AdaptiveSystem {
   /// J = dF/dz (row-major, dimension()^2 doubles, every entry written) and dfdt = dF/dt.
   void jacobian(const double* z, double* J, double t, double* dfdt) const;
   /// J = dF/dz at t alone (row-major, every entry written): the dense reference of the
-  /// structured stage solves. Counted as a Jacobian evaluation.
+  /// structured stage solves. Counted as a Jacobian evaluation. A state-dependent system
+  /// throws std::logic_error (its J depends on z: the overload below).
   void jacobian_matrix(double t, double* J) const;
+  /// J = dF/dz at (z, t) (row-major, every entry written), for any system. Counted as a
+  /// Jacobian evaluation.
+  void jacobian_matrix(const double* z, double t, double* J) const;
   /// dfdt = dF/dt at (z, t).
   void time_derivative(const double* z, double t, double* dfdt) const;
   /// J(t) in structured form (rkhs/adaptive/coupled_structure.hpp): phi and psi at s(t), and
@@ -118,6 +142,13 @@ class AdaptiveSystem {
   double speed_;
   double shuttle_from_ = 0, shuttle_length_ = 0;
   Eigen::Index d_, n_;
+  // State-dependent systems: the plant (null for the road case), c and y0 of the read-out, and
+  // h, dh/dx (row-major) and dh/dt.
+  const class Plant* plant_ = nullptr;
+  Eigen::VectorXd readout_;
+  double readout_offset_ = 0;
+  mutable Eigen::VectorXd known_, known_time_;
+  mutable Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> known_jacobian_;
   LearningSignal signal_;
   LearningMap map_;  // from_phi: M
   mutable std::vector<double> phi_, psi_, dphi_, dpsi_;
@@ -248,7 +279,9 @@ struct AdaptiveMeasurement {
   double reference_seconds = 0;
 };
 
-/// Runs one adaptive trial. Throws on invalid input or failed integration.
+/// Runs one adaptive trial. Throws on invalid input or failed integration. A plant with
+/// Plant::state_dependent() is measured by measure_state_dependent
+/// (rkhs/adaptive/state_dependent.hpp; the lap map cache is not used).
 ///
 /// With a `reference` integrator ([adaptive] reference), the trial must step through time
 /// (adaptive_engine_for must give time_stepping; std::invalid_argument otherwise): after the

@@ -165,10 +165,12 @@ struct MetricTable<AdaptiveMetric> {
        "around the track; flag not_persistently_excited when > 0); NaN when G is singular",
        true, ""},
       {M::path_l2_error, "path_l2_error", "[f] sqrt(m)",
-       "||f - fhat(T)|| in L2 over the part of the track the path covers; NaN on laps around it",
+       "||f - fhat(T)|| in L2 over the part of the track the path covers (a state-dependent "
+       "plant: the read-out's range over the second half of the run); NaN on laps around it",
        true, ""},
       {M::off_path_l2_error, "off_path_l2_error", "[f] sqrt(m)",
-       "||f - fhat(T)|| in L2 over the rest of the track; NaN on laps around it", true, ""},
+       "||f - fhat(T)|| in L2 over the rest of the track (of Omega); NaN on laps around it", true,
+       ""},
       {M::reference_norm_H_to_C, "reference_norm_H_to_C", "sqrt([k])",
        "rkhs_embedding with a reference resolution H_N standing in for H: ||I - Pi_N||_{H -> C} "
        "on the grid, the rate of its own distance from the estimator in H (Theorem 4.1); NaN "

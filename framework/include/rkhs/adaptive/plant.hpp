@@ -1,5 +1,7 @@
 #pragma once
-// Plants x' = A x + B f(s(t)) (docs/model.md sections 1-2) and learning laws (eq. a3 and 4.2).
+// Plants x' = A x + B f(s(t)) (docs/model.md sections 1-2), plants whose f is a function of
+// their state, x' = A x + h(t, x) + B f(C x + y0) (section 18), and learning laws (eq. a3 and
+// 4.2).
 
 #include <Eigen/Dense>
 #include <memory>
@@ -12,13 +14,59 @@
 
 namespace rkhs {
 
-/// A linear plant driven through B by the unknown function. A is Hurwitz (checked when the
-/// plant is created: constructors throw std::invalid_argument otherwise).
+/// A plant driven through B by the unknown function f. A is Hurwitz (checked when the plant is
+/// created: constructors throw std::invalid_argument otherwise).
+///
+/// Two kinds (docs/model.md section 18):
+///   road plants (readout() empty, the default): x' = A x + B f(s(t)), f of the arc length
+///     s(t) along the path; linear in x.
+///   state-dependent plants (readout() a p x d matrix C): x' = A x + h(t, x) + B f(C x + y0),
+///     f of the read-out y = C x + y0 in the domain of the study (p = its dimension), with
+///     known dynamics h (a forcing, a known nonlinearity). The estimator is
+///     xhat' = A xhat + h(t, x) + B fhat(y), evaluated at the measured state x, so the state
+///     error e = x - xhat obeys e' = A e + B (f - fhat)(y) as in the road case, and A is the
+///     error dynamics the Lyapunov equation and the learning laws use.
 class Plant {
  public:
   virtual ~Plant() = default;
   virtual const Eigen::MatrixXd& A() const noexcept = 0;  ///< d x d
   virtual const Eigen::VectorXd& B() const noexcept = 0;  ///< d
+
+  /// C of the read-out y = C x + y0 (p x d), or an empty matrix for a road plant.
+  virtual const Eigen::MatrixXd& readout() const noexcept { return no_matrix(); }
+  /// y0 of the read-out (p values); empty for a road plant.
+  virtual const Eigen::VectorXd& readout_offset() const noexcept { return no_vector(); }
+  /// The known dynamics of a state-dependent plant at (t, x) (x: d values): writes h (d values)
+  /// and, where the pointers are not null, dh/dx (d x d, row-major) and dh/dt (d values).
+  /// Allocates nothing. Never called for a road plant. The default is h = 0.
+  virtual void known_dynamics(double t, const double* x, double* h, double* dh_dx,
+                              double* dh_dt) const {
+    (void)t;
+    (void)x;
+    const auto d = static_cast<std::size_t>(A().rows());
+    for (std::size_t i = 0; i < d; ++i) h[i] = 0;
+    if (dh_dx)
+      for (std::size_t i = 0; i < d * d; ++i) dh_dx[i] = 0;
+    if (dh_dt)
+      for (std::size_t i = 0; i < d; ++i) dh_dt[i] = 0;
+  }
+  /// The period of h in t, seconds (a forced oscillator's 2 pi / omega): one "lap" of a
+  /// state-dependent trial. 0 when h has none (the trial then needs adaptive.final_time).
+  virtual double period() const noexcept { return 0; }
+  /// x(0) of the plant and of the estimator (d values; empty: zero).
+  virtual const Eigen::VectorXd& initial_state() const noexcept { return no_vector(); }
+
+  bool state_dependent() const noexcept { return readout().size() > 0; }
+
+ private:
+  static const Eigen::MatrixXd& no_matrix() noexcept {
+    static const Eigen::MatrixXd none;
+    return none;
+  }
+  static const Eigen::VectorXd& no_vector() noexcept {
+    static const Eigen::VectorXd none;
+    return none;
+  }
 };
 
 using PlantRegistry = Registry<Plant>;

@@ -15,8 +15,10 @@
 // A RadauProblem P provides
 //   Eigen::Index rows() const, columns() const;
 //   void rhs(double t, const Eigen::MatrixXd& Z, Eigen::MatrixXd& dZ);   every column
-//   void factor(double t, double real_shift, std::complex<double> complex_shift);
-//       J = J(t); factorises (real_shift I - J) and (complex_shift I - J)
+//   void factor(double t, const Eigen::MatrixXd& Z, double real_shift,
+//               std::complex<double> complex_shift);
+//       J = J(t, Z) at the state Z the step starts from (a problem linear in Z ignores it);
+//       factorises (real_shift I - J) and (complex_shift I - J)
 //   void solve_real(Eigen::MatrixXd& R) const;       R <- (real_shift I - J)^-1 R, per column
 //   void solve_complex(Eigen::MatrixXcd& R) const;   likewise with complex_shift
 
@@ -37,7 +39,7 @@ concept RadauProblem =
       { cp.rows() } -> std::convertible_to<Eigen::Index>;
       { cp.columns() } -> std::convertible_to<Eigen::Index>;
       p.rhs(t, Z, dZ);
-      p.factor(t, t, shift);
+      p.factor(t, Z, t, shift);
       cp.solve_real(dZ);
       cp.solve_complex(C);
     };
@@ -98,7 +100,7 @@ class RadauIIA5 {
       problem_.rhs(t, y_, f_);
       have_f_ = true;
     }
-    problem_.factor(t, mu_real / h, mu_complex / h);
+    problem_.factor(t, y_, mu_real / h, mu_complex / h);
     // Starting values: the last step's collocation polynomial extrapolated, or zero.
     for (int i = 0; i < 3; ++i) {
       if (have_polynomial_) {

@@ -22,18 +22,27 @@ LinearSolver linear_solver_from_name(std::string_view name);
 /// with them (each column of the right-hand side in place). The system must outlive it.
 class StageSolves {
  public:
+  /// A state-dependent system (AdaptiveSystem::state_dependent) has no structured form: its
+  /// solves are dense whatever `kind` asks.
   StageSolves(const AdaptiveSystem& system, LinearSolver kind);
 
-  /// J = J(t); factorises (real_shift I - J). Throws SingularStageMatrix when singular.
-  void factor(double t, double real_shift);
-  /// J = J(t); factorises (real_shift I - J) and (complex_shift I - J).
-  void factor(double t, double real_shift, std::complex<double> complex_shift);
+  /// J = J(t, z); factorises (real_shift I - J). Throws SingularStageMatrix when singular. z
+  /// (dimension() doubles) is read by a state-dependent system only, and may be null for the
+  /// others.
+  void factor(double t, const double* z, double real_shift);
+  /// J = J(t, z); factorises (real_shift I - J) and (complex_shift I - J).
+  void factor(double t, const double* z, double real_shift, std::complex<double> complex_shift);
+  /// The same for a system linear in z (J = J(t)).
+  void factor(double t, double real_shift) { factor(t, nullptr, real_shift); }
+  void factor(double t, double real_shift, std::complex<double> complex_shift) {
+    factor(t, nullptr, real_shift, complex_shift);
+  }
 
   void solve_real(Eigen::Ref<Eigen::MatrixXd> rhs) const;
   void solve_complex(Eigen::Ref<Eigen::MatrixXcd> rhs) const;
 
  private:
-  void linearize(double t);
+  void linearize(double t, const double* z);
   const AdaptiveSystem& system_;
   LinearSolver kind_;
   // structured
@@ -59,8 +68,9 @@ class TrajectoryStages {
   void rhs(double t, const Eigen::MatrixXd& z, Eigen::MatrixXd& dz) {
     system_.rhs(z.data(), dz.data(), t);
   }
-  void factor(double t, double real_shift, std::complex<double> complex_shift) {
-    solves_.factor(t, real_shift, complex_shift);
+  void factor(double t, const Eigen::MatrixXd& z, double real_shift,
+              std::complex<double> complex_shift) {
+    solves_.factor(t, z.data(), real_shift, complex_shift);
   }
   void solve_real(Eigen::MatrixXd& r) const { solves_.solve_real(r); }
   void solve_complex(Eigen::MatrixXcd& r) const { solves_.solve_complex(r); }

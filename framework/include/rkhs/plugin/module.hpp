@@ -71,7 +71,9 @@
 // 7: LearningLaw::reference_resolution
 // 8: PluginInfo::user_parameters, and ParameterSet::resolve's user parameters
 // 9: Domain in R^d (dimension, width, height), AnyKernel::evaluate_point, flat point sets
-#define RKHS_PLUGIN_ABI_VERSION 9
+// 10: state-dependent plants (Plant::readout, readout_offset, known_dynamics, period,
+//     initial_state) and AdaptiveSystem's state read-out
+#define RKHS_PLUGIN_ABI_VERSION 10
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

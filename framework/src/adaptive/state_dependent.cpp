@@ -1,0 +1,293 @@
+#include "rkhs/adaptive/state_dependent.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "rkhs/adaptive/breakpoints.hpp"
+#include "rkhs/adaptive/excitation.hpp"
+#include "rkhs/adaptive/learning_map.hpp"
+#include "rkhs/adaptive/lyapunov.hpp"
+#include "rkhs/adaptive/plant.hpp"
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/core/cancellation.hpp"
+
+namespace rkhs {
+
+std::string state_dependent_settings_error(const AdaptiveSettings& settings, double period) {
+  if (settings.limit())
+    return "laps = \"limit\" needs the lap map, which a state-dependent plant (f of its own "
+           "state: a nonlinear system) does not have";
+  if (settings.engine == AdaptiveEngine::lap_map)
+    return "engine = \"lap_map\" needs a system linear in its state; a state-dependent plant "
+           "steps through time (engine = \"time_stepping\" or \"automatic\")";
+  if (settings.shuttle())
+    return "a path (adaptive.path) moves along a track; a state-dependent plant's trajectory is "
+           "its own state";
+  if (!(period > 0) && !(settings.final_time > 0))
+    return "this plant has no forcing period to count laps in: set adaptive.final_time";
+  return {};
+}
+
+AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const TargetFunction& target,
+                                            std::span<const double> centres, const Plant& plant,
+                                            const LearningLaw& law, const Integrator& integrator,
+                                            const AdaptiveSettings& settings,
+                                            std::size_t evaluation_points,
+                                            const SolverOptions& solver_options,
+                                            const Integrator* reference) {
+  if (const auto error = state_dependent_settings_error(settings, plant.period()); !error.empty())
+    throw std::invalid_argument(error);
+  law.require_kernel(kernel);
+  if (law.coordinates() != LawCoordinates::centres)
+    throw std::invalid_argument(
+        "a state-dependent plant learns in the span of the centres' sections (laws gradient and "
+        "rkhs); feature coordinates are not supported for it");
+  const Domain& domain = kernel.domain();
+  if (domain.dimension != 1)
+    throw std::invalid_argument(
+        fmt::format("a state-dependent plant reads out one coordinate; the domain has d = {}",
+                    domain.dimension));
+  const auto n = static_cast<Eigen::Index>(centres.size());
+  using M = AdaptiveMetric;
+  using Static = ApproximationMetric;
+  AdaptiveMeasurement out;
+  out.engine = "time_stepping";
+  auto& metrics = out.metrics;
+
+  // The static part on Omega: H_n, Pi_n f, and the cross matrix on the evaluation grid.
+  const Eigen::MatrixXd gram = kernel.gram(centres);
+  check_cancelled();
+  const GramSolver solver(gram, solver_options);
+  check_cancelled();
+  Eigen::MatrixXd cross;
+  const auto approximation =
+      measure_approximation(kernel, target, centres, evaluation_points, gram, solver, &cross);
+  metrics[M::fill_distance] = approximation.metrics[Static::fill_distance];
+  metrics[M::separation_distance] = approximation.metrics[Static::separation_distance];
+  metrics[M::gram_condition_number] = approximation.metrics[Static::gram_condition_number];
+  metrics[M::power_function_sup] = approximation.metrics[Static::power_function_sup];
+  out.solve_method = approximation.solve_method;
+  for (const auto& flag : approximation.flags)
+    out.flags.push_back(
+        flag == "sup_error_at_floor" || flag == "l2_error_at_floor" ? "interpolant_" + flag : flag);
+
+  Eigen::VectorXd at_centres(n);
+  target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
+  const Eigen::VectorXd alpha_star = solver.solve(at_centres);
+  const double gamma = law.gain();
+  const auto basis = kernel.basis(centres);
+  const LearningMap learning_map = law.uses_gram_inverse()
+                                       ? LearningMap::gram_inverse(solver, gamma)
+                                       : LearningMap::scalar(n, 1.0 / gamma);
+  const Eigen::MatrixXd& A = plant.A();
+  const Eigen::VectorXd& B = plant.B();
+  const Eigen::Index d = A.rows();
+  const Eigen::MatrixXd Q = parse_matrix(settings.q, d);
+  if (Q.rows() != d || Q.cols() != d)
+    throw std::invalid_argument(
+        fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
+  const Eigen::MatrixXd P = solve_lyapunov(A, Q).P;
+
+  // f itself, or Pi_n f (then f lies in H_n and alpha* is the answer).
+  const auto road_basis = kernel.basis(centres);
+  std::vector<double> road_phi(centres.size());
+  const std::function<double(double)> road =
+      settings.projected_road ? std::function<double(double)>([&](double y) {
+        road_basis->evaluate(y, road_phi.data());
+        return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
+      })
+                              : std::function<double(double)>([&](double y) { return target(y); });
+  const std::function<double(double)> road_slope =
+      settings.projected_road
+          ? std::function<double(double)>([&](double y) {
+              road_basis->evaluate_derivative(y, road_phi.data());
+              return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
+            })
+          : std::function<double(double)>([&](double y) { return target.slope(y); });
+
+  AdaptiveSystem system(A, B, P, *basis, learning_map, road, road_slope, domain, 1.0,
+                        learning_signal_for(kernel));
+  system.set_state_readout(plant);
+  const Eigen::Index m = system.dimension();
+
+  // One lap = one forcing period. The breakpoints of a track whose lap takes that long (speed
+  // L / period) are the samples and snapshots; no kink restarts (phi(y(t)) has its kinks where
+  // the trajectory crosses a knot, not at times known in advance).
+  const double final_time =
+      settings.final_time > 0 ? settings.final_time : settings.laps * plant.period();
+  const double lap_time = plant.period() > 0 ? plant.period() : final_time;
+  AdaptiveSettings timing = settings;
+  timing.speed = domain.length / lap_time;
+  timing.final_time = final_time;
+  const auto points = adaptive_breakpoints(timing, domain, 0.0, final_time, {}, false);
+  std::vector<double> times(points.size());
+  std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
+
+  Eigen::VectorXd z0 = Eigen::VectorXd::Zero(m);
+  if (const Eigen::VectorXd& x0 = plant.initial_state(); x0.size() > 0) {
+    if (x0.size() != d)
+      throw std::invalid_argument(
+          fmt::format("the plant's initial state has {} values, expected {}", x0.size(), d));
+    z0.head(d) = x0;
+    z0.segment(d, d) = x0;
+  }
+
+  // Observation: samples of |x - xhat| and V, snapshots, and over the second half of the run the
+  // visited range of y and the excitation E.
+  const auto grid = domain.uniform_points(evaluation_points);
+  const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
+  const Eigen::MatrixXd snapshot_cross =
+      settings.snapshot_laps.empty() ? Eigen::MatrixXd() : kernel.cross(snapshot_grid, centres);
+  const bool gram_inverse = law.uses_gram_inverse();
+  out.snapshots.resize(settings.snapshot_laps.size());
+  for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
+    out.snapshots[i].lap = settings.snapshot_laps[i];
+  Eigen::MatrixXd excitation = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd phi(n), excitation_load = Eigen::VectorXd::Zero(n);
+  std::size_t excitation_samples = 0;
+  double visited_low = std::numeric_limits<double>::infinity(), visited_high = -visited_low;
+  bool left_domain = false;
+  auto observe = [&](std::size_t k, const double* z) {
+    check_cancelled();
+    const Breakpoint& point = points[k];
+    const double y = system.readout(z);
+    if (!domain.periodic && (y < 0 || y > domain.length)) left_domain = true;
+    if (point.roles & sample_role) {
+      const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
+      const Eigen::VectorXd e = x - xhat;
+      const Eigen::VectorXd gap = alpha_star - alpha;
+      const double weighted = gram_inverse ? gap.dot(gram * gap) : gap.squaredNorm();
+      out.samples.push_back({point.t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
+      if (point.t >= 0.5 * final_time) {
+        basis->evaluate(y, phi.data());
+        excitation.selfadjointView<Eigen::Lower>().rankUpdate(phi);
+        excitation_load += road(y) * phi;
+        ++excitation_samples;
+        visited_low = std::min(visited_low, y);
+        visited_high = std::max(visited_high, y);
+      }
+    }
+    if (point.roles & snapshot_role) {
+      const Eigen::VectorXd estimate =
+          snapshot_cross * Eigen::Map<const Eigen::VectorXd>(z + 2 * d, n);
+      out.snapshots[point.snapshot_index].estimate.assign(estimate.data(),
+                                                          estimate.data() + estimate.size());
+    }
+  };
+  Eigen::VectorXd z = z0;
+  const IntegrationStats stats = integrator.integrate(system, z, times, observe);
+  excitation = excitation.selfadjointView<Eigen::Lower>();
+  if (excitation_samples > 0) {
+    excitation /= static_cast<double>(excitation_samples);
+    excitation_load /= static_cast<double>(excitation_samples);
+  }
+  if (left_domain) out.flags.push_back("readout_left_domain");
+
+  out.road.resize(snapshot_grid.size());
+  for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
+  Eigen::VectorXd f(static_cast<Eigen::Index>(grid.size()));
+  for (std::size_t k = 0; k < grid.size(); ++k) f(static_cast<Eigen::Index>(k)) = road(grid[k]);
+  const Eigen::VectorXd alpha = z.tail(n);
+  const Eigen::VectorXd estimate = cross * alpha, projection = cross * alpha_star;
+  auto l2 = [&](const Eigen::VectorXd& v) {
+    return domain.l2_norm(std::span<const double>(v.data(), static_cast<std::size_t>(v.size())));
+  };
+  const Eigen::VectorXd interpolant_residual = f - projection, residual = f - estimate;
+  metrics[M::interpolant_l2_error] = l2(interpolant_residual);
+  metrics[M::interpolant_sup_error] = interpolant_residual.cwiseAbs().maxCoeff();
+  metrics[M::l2_error] = l2(residual);
+  metrics[M::sup_error] = residual.cwiseAbs().maxCoeff();
+  metrics[M::gap_to_projection] = l2(estimate - projection);
+  {  // On and off the visited set, with the weights of the L2 norm's rule (the rectangle rule
+     // on a circle, the trapezoid rule on an interval): the two parts add up to l2_error^2.
+    double on = 0, off = 0;
+    const std::size_t count = grid.size();
+    for (std::size_t k = 0; k < count; ++k) {
+      const double r = residual(static_cast<Eigen::Index>(k));
+      const double weight = domain.periodic || count == 1
+                                ? domain.length / static_cast<double>(count)
+                                : (k == 0 || k + 1 == count ? 0.5 : 1.0) * domain.length /
+                                      static_cast<double>(count - 1);
+      (grid[k] >= visited_low && grid[k] <= visited_high ? on : off) += weight * r * r;
+    }
+    metrics[M::path_l2_error] = std::sqrt(on);
+    metrics[M::off_path_l2_error] = std::sqrt(off);
+  }
+  metrics[M::final_state_error] = (z.head(d) - z.segment(d, d)).norm();
+  double max_state_error = 0, max_increase = 0;
+  for (std::size_t k = 0; k < out.samples.size(); ++k) {
+    max_state_error = std::max(max_state_error, out.samples[k].state_error);
+    if (k > 0)
+      max_increase = std::max(max_increase, out.samples[k].lyapunov - out.samples[k - 1].lyapunov);
+  }
+  metrics[M::max_state_error] = max_state_error;
+  if (settings.projected_road) {
+    const double v0 = out.samples.front().lyapunov;
+    metrics[M::coefficient_error] =
+        (alpha - alpha_star).norm() / std::max(alpha_star.norm(), 1e-300);
+    metrics[M::lyapunov_max_increase] = v0 > 0 ? max_increase / v0 : max_increase;
+    metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : std::nan("");
+  }
+  {  // P_L2 f along the trajectory: the g in H_n of least H-norm that minimises the time average
+     // of (f - g)^2(y(t)) over the second half, E a = r with r = mean f(y) phi(y) (the minimum
+     // G-norm solution through G = L L^T: a = L^-T (L^-1 E L^-T)^+ L^-1 r).
+    Eigen::LLT<Eigen::MatrixXd> cholesky(gram);
+    Eigen::VectorXd coefficients;
+    if (cholesky.info() == Eigen::Success) {
+      const auto L = cholesky.matrixL();
+      Eigen::MatrixXd reduced = L.solve(excitation);
+      reduced = L.solve(reduced.transpose()).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(reduced);
+      const Eigen::VectorXd& values = eigen.eigenvalues();
+      const double cutoff = static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
+                            std::max(values.cwiseAbs().maxCoeff(), 1e-300);
+      Eigen::VectorXd w = eigen.eigenvectors().transpose() * L.solve(excitation_load);
+      for (Eigen::Index i = 0; i < n; ++i) w(i) = values(i) > cutoff ? w(i) / values(i) : 0.0;
+      coefficients = L.transpose().solve(eigen.eigenvectors() * w);
+    } else {
+      coefficients = excitation.completeOrthogonalDecomposition().solve(excitation_load);
+    }
+    const Eigen::VectorXd l2_projection = cross * coefficients;
+    const Eigen::VectorXd l2_projection_residual = f - l2_projection;
+    metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
+    metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
+    metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
+  }
+  {  // Persistence of excitation along the trajectory.
+    const auto level = excitation_level(excitation, gram, solver.spectrum());
+    const double unexcited =
+        solver.spectrum().singular ? std::nan("") : static_cast<double>(level.unexcited);
+    metrics[M::pe_level] = level.value;
+    metrics[M::unexcited_dimension] = unexcited;
+    if (unexcited > 0) {
+      metrics[M::pe_level] = 0.0;
+      out.flags.push_back("not_persistently_excited");
+    } else if (!level.resolved && !solver.spectrum().singular) {
+      out.flags.push_back("pe_level_unresolved");
+    }
+  }
+  metrics[M::steps] = static_cast<double>(stats.steps);
+  metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
+  metrics[M::segments] = static_cast<double>(stats.segments);
+  metrics[M::rhs_evaluations] = static_cast<double>(system.rhs_evaluations());
+  metrics[M::jacobian_evaluations] = static_cast<double>(system.jacobian_evaluations());
+  if (reference) {
+    const auto started = std::chrono::steady_clock::now();
+    Eigen::VectorXd z_ref = z0;
+    reference->integrate(system, z_ref, times,
+                         [](std::size_t, const double*) { check_cancelled(); });
+    out.reference_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const Eigen::VectorXd estimate_ref = cross * z_ref.tail(n);
+    metrics[M::integration_error] =
+        l2(estimate - estimate_ref) / std::max(l2(estimate_ref), 1e-300);
+  }
+  return out;
+}
+
+}  // namespace rkhs
