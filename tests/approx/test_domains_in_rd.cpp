@@ -433,3 +433,81 @@ TEST_CASE("the multiscale B-spline kernel in d = 2: level sums of tensor-product
     }
   }
 }
+
+TEST_CASE("kernel gradients in d = 2 and 3: closed forms against formulas and differences",
+          "[kernel][rd][gradient]") {
+  // The Gaussian's gradient in closed form: grad_y exp(-|x - y|^2 / (2 sigma^2)) is
+  // k (x - y) / sigma^2.
+  const auto plane = box(2.0, 1.5);
+  const auto gaussian = kernel("gaussian", {{"sigma", 0.4}}, plane);
+  CHECK(gaussian->has_exact_gradient());
+  const std::vector<double> x{0.7, 0.4}, y{1.1, 0.65};
+  std::vector<double> g(2);
+  gaussian->gradient_point(x, y, g);
+  const double k = k_at(*gaussian, x, y);
+  CHECK(g[0] == Approx(k * (x[0] - y[0]) / 0.16).epsilon(1e-13));
+  CHECK(g[1] == Approx(k * (x[1] - y[1]) / 0.16).epsilon(1e-13));
+
+  // Every built-in kernel, on boxes and tori of d = 2 and 3 (Matern on boxes only): the gradient
+  // against central differences of evaluate_point with step 1e-5, at pairs away from the
+  // sections' kinks (the centre, the support's sphere, the B-splines' knots).
+  struct Case {
+    std::string name;
+    Given given;
+    bool torus;
+  };
+  const std::vector<Case> cases{
+      {"gaussian", {{"sigma", 0.4}}, false},
+      {"gaussian", {{"sigma", 0.7}}, true},
+      {"wendland", {{"k", std::int64_t{1}}, {"radius", 1.5}}, false},
+      {"wendland", {{"k", std::int64_t{2}}, {"radius", 1.3}}, true},
+      {"wendland", {{"k", std::int64_t{3}}, {"radius", 1.7}}, true},
+      {"wendland", {{"k", std::int64_t{0}}, {"radius", 1.5}}, false},
+      {"matern", {{"nu", 1.5}, {"length_scale", 0.5}}, false},
+      {"matern", {{"nu", 2.5}, {"length_scale", 0.5}}, false},
+      {"bspline",
+       {{"degree", std::int64_t{3}}, {"n0", std::int64_t{4}}, {"J", std::int64_t{2}}},
+       false},
+      {"bspline",
+       {{"degree", std::int64_t{3}}, {"n0", std::int64_t{4}}, {"J", std::int64_t{2}}},
+       true}};
+  for (const auto& c : cases)
+    for (const Domain& domain : {box(2.0, 1.5, c.torus), cube(1.5, c.torus)}) {
+      INFO(c.name << " d = " << domain.dimension << (c.torus ? " torus" : " box"));
+      const auto kernel_under_test = kernel(c.name, c.given, domain);
+      CHECK(kernel_under_test->has_exact_gradient());
+      const auto d = static_cast<std::size_t>(domain.dimension);
+      // Points at irrational fractions of the extents: never on a knot (multiples of 1/32 of an
+      // extent) nor at a support's distance from each other to within the step.
+      const std::vector<double> fractions{0.1234567, 0.3819660, 0.7071068,
+                                          0.5772157, 0.8414710, 0.2718282};
+      std::vector<double> centre(d), point(d), gradient(d), moved(d);
+      for (std::size_t a = 0; a < d; ++a) {
+        centre[a] = fractions[a] * domain.extent(static_cast<int>(a));
+        point[a] = fractions[a + 3] * domain.extent(static_cast<int>(a));
+      }
+      kernel_under_test->gradient_point(centre, point, gradient);
+      double largest = 0;
+      for (std::size_t a = 0; a < d; ++a) largest = std::max(largest, std::abs(gradient[a]));
+      CHECK(largest > 0);  // a pair within the support: the check is not empty
+      const double h = 1e-5;
+      for (std::size_t a = 0; a < d; ++a) {
+        moved = point;
+        moved[a] = point[a] + h;
+        const double up = k_at(*kernel_under_test, centre, moved);
+        moved[a] = point[a] - h;
+        const double down = k_at(*kernel_under_test, centre, moved);
+        CHECK(gradient[a] == Approx((up - down) / (2 * h)).margin(1e-7 * std::max(largest, 1.0)));
+      }
+    }
+
+  // In d = 1 the gradient is the derivative of the sections.
+  const Domain track{10.0, true};
+  const auto wendland = kernel("wendland", {{"k", std::int64_t{2}}, {"radius", 3.0}}, track);
+  std::vector<double> one(1);
+  wendland->gradient_point(std::vector<double>{1.0}, std::vector<double>{2.5}, one);
+  CHECK(one[0] == wendland->derivative(1.0, 2.5));
+  CHECK_THROWS_AS(
+      wendland->gradient_point(std::vector<double>{1.0, 2.0}, std::vector<double>{2.5}, one),
+      std::invalid_argument);
+}

@@ -280,6 +280,62 @@ TEST_CASE("the contract's derivative check fails a wrong derivative and passes r
   }
 }
 
+namespace {
+
+// A Gaussian on the plane whose gradient has the wrong sign in its second component.
+struct WrongGradient {
+  static rkhs::PluginInfo info() { return {"wrong_gradient", "test kernel", {}, {}}; }
+  WrongGradient(const rkhs::ParameterSet&, const Domain& domain) : domain_(domain) {}
+  double operator()(double x, double y) const noexcept {
+    const double d = x - y;
+    return std::exp(-0.5 * d * d);
+  }
+  double operator()(const double* x, const double* y) const noexcept {
+    return std::exp(-0.5 * domain_.squared_distance(x, y));
+  }
+  void gradient(const double* x, const double* y, double* g) const noexcept {
+    const double k = (*this)(x, y);
+    g[0] = (x[0] - y[0]) * k;
+    g[1] = (y[1] - x[1]) * k;  // the sign is wrong
+  }
+  rkhs::KernelProperties properties() const noexcept {
+    rkhs::KernelProperties p;
+    p.analytic = true;
+    p.dimension = domain_.dimension;
+    return p;
+  }
+  Domain domain_;
+};
+
+}  // namespace
+
+TEST_CASE("the contract's gradient check fails a wrong gradient and passes the built-in ones",
+          "[kernel][contract][gradient]") {
+  Domain plane{2.0, false};
+  plane.dimension = 2;
+  plane.width = 2.0;
+  const auto wrong =
+      rkhs::check_kernel_contract(rkhs::KernelModel<WrongGradient>(rkhs::ParameterSet{}, plane));
+  const auto* check = find_check(wrong, "gradient");
+  REQUIRE(check != nullptr);
+  INFO(check->detail);
+  CHECK_FALSE(check->passed);
+  CHECK_THAT(check->detail, Catch::Contains("closed form") && Catch::Contains("axis 2"));
+  for (const std::string name : {"gaussian", "wendland", "matern", "bspline"}) {
+    const auto* entry = rkhs::kernel_registry().find(name);
+    REQUIRE(entry);
+    const auto kernel =
+        entry->factory(rkhs::ParameterSet::resolve(entry->info.parameters, {}), plane);
+    const auto report = rkhs::check_kernel_contract(*kernel);
+    const auto* right = find_check(report, "gradient");
+    REQUIRE(right != nullptr);
+    INFO(name << ": " << right->detail);
+    CHECK(right->passed);
+    CHECK_FALSE(right->skipped);
+    CHECK_THAT(right->detail, Catch::Contains("closed form"));
+  }
+}
+
 TEST_CASE("richardson_derivative: Ridders' extrapolation to near round-off",
           "[contract][derivative]") {
   double error = 0;

@@ -168,6 +168,86 @@ void check_derivatives(const AnyKernel& kernel, double scale, Checks& checks) {
                  std::max(basis_error, mapped_error), tolerance);
 }
 
+// The gradient check (d > 1): each component of gradient_point(c, y) against Richardson
+// extrapolation of k(c, .) along that axis, where the section is smooth along the stretch.
+void check_gradient(const AnyKernel& kernel, double scale, Checks& checks,
+                    const std::function<std::vector<double>(std::size_t, double)>& scatter) {
+  const Domain& domain = kernel.domain();
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const double radius = kernel.properties().support_radius;
+  auto kinks = kernel.kink_points();  // along axis 0; axis a has them scaled by L_a / L
+  std::sort(kinks.begin(), kinks.end());
+  const auto centres = scatter(5, 0.42), points = scatter(19, 0.17);
+  double largest_slope = 0, worst = 0;
+  std::string worst_at;
+  struct Component {
+    std::size_t centre, point, axis;
+    double gradient, reference;
+  };
+  std::vector<Component> components;
+  std::vector<double> c(d), y(d), gradient(d), moved(d);
+  int left_out = 0;
+  for (std::size_t i = 0; i < centres.size() / d; ++i)
+    for (std::size_t m = 0; m < points.size() / d; ++m) {
+      std::copy_n(centres.begin() + static_cast<std::ptrdiff_t>(i * d), d, c.begin());
+      std::copy_n(points.begin() + static_cast<std::ptrdiff_t>(m * d), d, y.begin());
+      kernel.gradient_point(c, y, gradient);
+      double distance2 = 0;
+      for (std::size_t a = 0; a < d; ++a) {
+        const double t = domain.difference(c[a], y[a], static_cast<int>(a));
+        distance2 += t * t;
+      }
+      const double distance = std::sqrt(distance2);
+      for (std::size_t a = 0; a < d; ++a) {
+        const auto axis = static_cast<int>(a);
+        const double extent = domain.extent(axis);
+        // Smooth along axis a near y: away from the centre, the support's sphere, the axis'
+        // kinks and (on a box) its faces.
+        double gap = distance;
+        if (radius > 0) gap = std::min(gap, std::abs(distance - radius));
+        for (double kink : kinks) {
+          const double position = kink * extent / domain.length;
+          gap = std::min(gap, std::abs(domain.difference(position, y[a], axis)));
+        }
+        if (!domain.periodic) gap = std::min({gap, y[a], extent - y[a]});
+        if (gap < 1e-6 * extent) {
+          ++left_out;
+          continue;
+        }
+        double error = 0;
+        const double reference = richardson_derivative(
+            [&](double t) {
+              moved = y;
+              moved[a] = t;
+              return kernel.evaluate_point(c, moved);
+            },
+            y[a], std::min(0.5 * gap, 0.05 * extent), error);
+        components.push_back({i, m, a, gradient[a], reference});
+        largest_slope = std::max(largest_slope, std::abs(reference));
+      }
+    }
+  const double slope_scale = std::max(largest_slope, scale / domain.length);
+  for (const auto& component : components) {
+    const double deviation = std::abs(component.gradient - component.reference) / slope_scale;
+    if (!(deviation <= worst)) {
+      worst = std::isnan(deviation) ? std::numeric_limits<double>::infinity() : deviation;
+      worst_at = fmt::format(" at centre {}, point {}, axis {}: {} against {}", component.centre,
+                             component.point, component.axis + 1, g(component.gradient),
+                             g(component.reference));
+    }
+  }
+  if (components.empty()) {
+    checks.skip("gradient", "every sample point is within 1e-6 L of a possible kink");
+    return;
+  }
+  checks.at_most("gradient",
+                 fmt::format("{} ({}) at {} components (centre, point, axis), max |dk/dy_a - "
+                             "Richardson| / max(max |dk/dy_a|, max k / L){}",
+                             kernel.has_exact_gradient() ? "closed form" : "difference quotient",
+                             kernel.name(), components.size(), worst_at),
+                 worst, 1e-6);
+}
+
 }  // namespace
 
 double richardson_derivative(const std::function<double(double)>& f, double s, double largest_step,
@@ -458,6 +538,9 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
   } else {
     checks.skip("derivative", "defined for sections along a track (d = 1)");
     checks.skip("basis derivative", "defined for sections along a track (d = 1)");
+    check_gradient(kernel, scale, checks, [&](std::size_t count, double start) {
+      return scattered_points(domain, count, start);
+    });
   }
 
   // Power function on nested centres 4 -> 8 -> 16 (uniform in d = 1, the first n scattered

@@ -39,6 +39,11 @@ class ReferenceResolvedKernel final : public AnyKernel {
   }
   double derivative(double x, double y) const override { return kernel_.derivative(x, y); }
   bool has_exact_derivative() const noexcept override { return kernel_.has_exact_derivative(); }
+  void gradient_point(std::span<const double> x, std::span<const double> y,
+                      std::span<double> out) const override {
+    kernel_.gradient_point(x, y, out);
+  }
+  bool has_exact_gradient() const noexcept override { return kernel_.has_exact_gradient(); }
   void gram_into(std::span<const double> centres, Eigen::Ref<Eigen::MatrixXd> out) const override {
     kernel_.gram_into(centres, out);
   }

@@ -98,6 +98,16 @@ concept DifferentiableKernel = KernelFunction<K> && requires(const K& k, double 
   { k.derivative(x, y) } -> std::convertible_to<double>;
 };
 
+/// A kernel on domains of d > 1 with the gradient of its sections in closed form:
+/// `k.gradient(x, y, g)` writes the d components of grad_y k(x, y) (periodised like k on a
+/// torus). Where a section is not differentiable (the centre of a kernel with a cusp, nu = 1/2
+/// or Wendland k = 0 at y = x) the kernel's header says what it writes.
+template <class K>
+concept GradientKernel = PointKernel<K> &&
+    requires(const K& k, const double* x, const double* y, double* g) {
+  k.gradient(x, y, g);
+};
+
 /// A feature-map kernel with the derivatives of its features in closed form:
 /// `feature_derivatives(s, f)` clears f and appends d/ds of the features at s with the SAME
 /// indices in the same order as features(s, f) (so a basis can apply them to columns it
@@ -164,6 +174,15 @@ class AnyKernel {
   /// True when the kernel type gives its derivatives in closed form (DifferentiableKernel or
   /// DifferentiableFeatureMapKernel).
   virtual bool has_exact_derivative() const noexcept = 0;
+  /// out = grad_y k(x, y), d = domain().dimension values, for points of d coordinates each
+  /// (std::invalid_argument for other sizes). In d = 1 the same as derivative(x[0], y[0]); in
+  /// d > 1 the kernel's closed form when has_exact_gradient() (GradientKernel), otherwise central
+  /// differences per axis with step 1e-6 of the axis' extent (one-sided within that step of a
+  /// box's faces). A virtual call per point, for tests, contracts and read-outs of one point.
+  virtual void gradient_point(std::span<const double> x, std::span<const double> y,
+                              std::span<double> out) const = 0;
+  /// True when gradient_point is a closed form (in d = 1: has_exact_derivative()).
+  virtual bool has_exact_gradient() const noexcept = 0;
   /// Point sets (centres, points) are flat: N points of d = domain().dimension coordinates
   /// each, N d values (core/domain.hpp); in d = 1 a list of arc lengths.
   ///

@@ -569,6 +569,40 @@ class KernelModel final : public AnyKernel {
     }
   }
   bool has_exact_derivative() const noexcept override { return exact_derivative; }
+  void gradient_point(std::span<const double> x, std::span<const double> y,
+                      std::span<double> out) const override {
+    const auto d = static_cast<std::size_t>(domain_.dimension);
+    if (x.size() != d || y.size() != d || out.size() != d)
+      throw std::invalid_argument("AnyKernel::gradient_point: points of " +
+                                  std::to_string(x.size()) + " and " + std::to_string(y.size()) +
+                                  " coordinates and " + std::to_string(out.size()) +
+                                  " outputs on a domain of dimension " + std::to_string(d));
+    if (d == 1) {
+      out[0] = derivative(x[0], y[0]);
+      return;
+    }
+    if constexpr (GradientKernel<K>) {
+      kernel_.gradient(x.data(), y.data(), out.data());
+    } else if constexpr (PointKernel<K>) {
+      double point[Domain::max_dimension] = {0, 0, 0};
+      for (std::size_t a = 0; a < d; ++a) point[a] = y[a];
+      for (std::size_t a = 0; a < d; ++a) {
+        const double extent = domain_.extent(static_cast<int>(a)), step = 1e-6 * extent;
+        // Central, or one-sided next to a box's face (points beyond it are outside Omega).
+        const double up = domain_.periodic || y[a] + step <= extent ? step : 0.0;
+        const double down = domain_.periodic || y[a] - step >= 0.0 ? step : 0.0;
+        point[a] = y[a] + up;
+        const double high = kernel_(x.data(), point);
+        point[a] = y[a] - down;
+        const double low = kernel_(x.data(), point);
+        point[a] = y[a];
+        out[a] = (high - low) / (up + down);
+      }
+    }
+  }
+  bool has_exact_gradient() const noexcept override {
+    return domain_.dimension == 1 ? exact_derivative : GradientKernel<K>;
+  }
   void gram_into(std::span<const double> centres, Eigen::Ref<Eigen::MatrixXd> out) const override {
     const std::size_t n = domain_.point_count(centres);
     require_flat(centres, "gram_into");

@@ -73,7 +73,8 @@
 // 9: Domain in R^d (dimension, width, height), AnyKernel::evaluate_point, flat point sets
 // 10: state-dependent plants (Plant::readout, readout_offset, known_dynamics, period,
 //     initial_state) and AdaptiveSystem's state read-out
-#define RKHS_PLUGIN_ABI_VERSION 10
+// 11: AnyKernel::gradient_point and has_exact_gradient
+#define RKHS_PLUGIN_ABI_VERSION 11
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

@@ -126,6 +126,29 @@ class MultiscaleBSpline {
     return sum;
   }
 
+  /// grad_v k(u, v) for points of d = 2 or 3 coordinates: per level, each axis' factor
+  /// differentiated in v_a (d/dv_a of N_p(2^j v_a / h0_a - k) is 2^j / h0_a N_p'), times the
+  /// other axes' factors. At a knot, the right-hand derivative (as derivative()); on a box, 0
+  /// outside [0, L_a], where the point is clamped.
+  void gradient(const double* u, const double* v, double* g) const noexcept {
+    for (int a = 0; a < dimension_; ++a) g[a] = 0.0;
+    double sums[3] = {0, 0, 0}, slopes[3] = {0, 0, 0};
+    for (int j = 0; j <= levels_; ++j) {
+      for (int a = 0; a < dimension_; ++a) {
+        const double x0 = level0(u[a], axis_length_[a]), y0 = level0(v[a], axis_length_[a]);
+        sums[a] = level_sum(x0, y0, j);
+        const bool clamped = !periodic_ && (v[a] < 0.0 || v[a] > axis_length_[a]);
+        slopes[a] = clamped ? 0.0 : level_slope(x0, y0, j) * scale_[j] * n0_ / axis_length_[a];
+      }
+      for (int a = 0; a < dimension_; ++a) {
+        double product = point_weight_[j] * slopes[a];
+        for (int b = 0; b < dimension_; ++b)
+          if (b != a) product *= sums[b];
+        g[a] += product;
+      }
+    }
+  }
+
   /// d/dv k(u, v), the dot product of u's features with v's feature derivatives.
   double derivative(double u, double v) const noexcept {
     const double x0 = level0(u), y0 = level0(v);
@@ -296,6 +319,31 @@ class MultiscaleBSpline {
       if (periodic_ && iy < 0) iy += cells;
       if (iy < 0 || iy > degree_) continue;
       sum += nx[ix] * ny[iy];
+    }
+    return sum;
+  }
+
+  /// sum_k N_p(2^j x0 - k) N_p'(2^j y0 - k) on level j: level_sum's derivative in the cell
+  /// coordinate of y0 (multiply by 2^j n0 / L for the derivative in v).
+  double level_slope(double x0, double y0, int j) const noexcept {
+    const Cell cx = cell_at(x0, j), cy = cell_at(y0, j);
+    const std::int32_t cells = n0_ << j;
+    std::int32_t shift = cx.index - cy.index;
+    if (periodic_) {
+      if (shift < 0) shift += cells;
+      if (shift > degree_ && shift < cells - degree_) return 0.0;
+    } else if (shift > degree_ || shift < -degree_) {
+      return 0.0;
+    }
+    std::array<double, max_degree + 1> nx{}, dny{};
+    pieces(degree_, cx.t, nx.data());
+    piece_slopes(degree_, cy.t, dny.data());
+    double sum = 0.0;
+    for (int ix = 0; ix <= degree_; ++ix) {
+      int iy = ix - shift;
+      if (periodic_ && iy < 0) iy += cells;
+      if (iy < 0 || iy > degree_) continue;
+      sum += nx[ix] * dny[iy];
     }
     return sum;
   }

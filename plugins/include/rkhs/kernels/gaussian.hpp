@@ -72,6 +72,31 @@ class Gaussian {
     return product;
   }
 
+  /// grad_y k(x, y) for points of d = 2 or 3 coordinates: each axis' factor differentiated (on
+  /// a torus its image sum's slope, truncated like the sum), times the other axes' factors.
+  void gradient(const double* x, const double* y, double* g) const noexcept {
+    const int d = domain_.dimension;
+    double value[Domain::max_dimension] = {1, 1, 1}, slope[Domain::max_dimension] = {0, 0, 0};
+    for (int a = 0; a < d; ++a) {
+      const double t = domain_.difference(x[a], y[a], a);  // x - y: d/dy = -d/dt
+      if (domain_.periodic) {
+        value[a] = sum_of_images([this](double r) { return profile(r); }, t, domain_.extent(a),
+                                 axis_images_[a]);
+        slope[a] = -sum_of_image_slopes([this](double r) { return profile_slope(r); }, t,
+                                        domain_.extent(a), axis_images_[a]);
+      } else {
+        value[a] = profile(t);
+        slope[a] = -profile_slope(t);
+      }
+    }
+    for (int a = 0; a < d; ++a) {
+      double product = slope[a];
+      for (int b = 0; b < d; ++b)
+        if (b != a) product *= value[b];
+      g[a] = product;
+    }
+  }
+
   KernelProperties properties() const noexcept;
 
   double sigma() const noexcept { return sigma_; }

@@ -89,6 +89,15 @@ class Matern {
     return profile(std::sqrt(domain_.squared_distance(x, y)));
   }
 
+  /// grad_y k(x, y) on a box: k0'(r) (y - x) / r; 0 at r = 0 (nu = 1/2 has its cusp there, the
+  /// others a zero slope).
+  void gradient(const double* x, const double* y, double* g) const noexcept {
+    const int d = domain_.dimension;
+    const double r = std::sqrt(domain_.squared_distance(x, y));
+    const double factor = r > 0.0 ? profile_slope(r) / r : 0.0;
+    for (int a = 0; a < d; ++a) g[a] = factor * (y[a] - x[a]);
+  }
+
   KernelProperties properties() const noexcept;
 
   double nu() const noexcept { return nu_; }

@@ -68,6 +68,24 @@ class Wendland {
     }
   }
 
+  /// d/dr phi_{3,k}(r) for r >= 0 (0 for r >= 1):
+  ///   k = 0: -2 (1 - r),  1: -20 r (1 - r)^3,  2: -(56/3) r (5 r + 1) (1 - r)^5,
+  ///   k = 3: -22 r (16 r^2 + 7 r + 1) (1 - r)^7.
+  static double phi_3_slope(int smoothness, double r) noexcept {
+    if (r >= 1.0) return 0.0;
+    const double s = 1.0 - r, s2 = s * s, s3 = s2 * s;
+    switch (smoothness) {
+      case 0:
+        return -2.0 * s;
+      case 1:
+        return -20.0 * r * s3;
+      case 2:
+        return -(56.0 / 3.0) * r * (5.0 * r + 1.0) * s3 * s2;
+      default:
+        return -22.0 * r * ((16.0 * r + 7.0) * r + 1.0) * s3 * s3 * s;
+    }
+  }
+
   /// phi_{1,k}(r) of the scaled distance r >= 0 (0 for r >= 1).
   static double phi(int smoothness, double r) noexcept {
     if (r >= 1.0) return 0.0;
@@ -156,6 +174,39 @@ class Wendland {
       ++m[a];
     }
     return total;
+  }
+
+  /// grad_y k(x, y) for points of d = 2 or 3 coordinates: phi_{3,k}'(r / rho) / rho times
+  /// (y - x) / r, summed over the same lattice images as k on a torus; 0 at r = 0 (where k = 0
+  /// has its cusp and k >= 1 a zero slope).
+  void gradient(const double* x, const double* y, double* g) const noexcept {
+    const int d = domain_.dimension;
+    double difference[Domain::max_dimension] = {0, 0, 0};
+    for (int a = 0; a < d; ++a) {
+      difference[a] = domain_.difference(x[a], y[a], a);
+      g[a] = 0.0;
+    }
+    int m[Domain::max_dimension] = {0, 0, 0};
+    if (domain_.periodic)
+      for (int a = 0; a < d; ++a) m[a] = -axis_images_[a];
+    while (true) {
+      double t[Domain::max_dimension] = {0, 0, 0}, sum = 0.0;
+      for (int a = 0; a < d; ++a) {
+        t[a] = difference[a] + (domain_.periodic ? m[a] * domain_.extent(a) : 0.0);
+        sum += t[a] * t[a];
+      }
+      const double r = std::sqrt(sum);
+      if (r > 0.0 && r < radius_) {
+        // t = x - y: d r / d y_a = -t_a / r.
+        const double factor = -phi_3_slope(smoothness_, r / radius_) / (radius_ * r);
+        for (int a = 0; a < d; ++a) g[a] += factor * t[a];
+      }
+      if (!domain_.periodic) break;
+      int a = 0;
+      for (; a < d && m[a] == axis_images_[a]; ++a) m[a] = -axis_images_[a];
+      if (a == d) break;
+      ++m[a];
+    }
   }
 
   KernelProperties properties() const noexcept;
