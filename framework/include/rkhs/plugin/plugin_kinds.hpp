@@ -84,7 +84,7 @@ struct PlantKind {
   using Registry = PlantRegistry;
   static constexpr std::string_view singular = "plant";
   static constexpr std::string_view plural = "plants";
-  static constexpr std::string_view builtins[] = {"linear", "quarter_car"};
+  static constexpr std::string_view builtins[] = {"duffing", "linear", "pendulum", "quarter_car"};
   static constexpr auto loaded = &LoadedPlugin::plants;
   static Registry& registry() { return plant_registry(); }
 };
