@@ -301,6 +301,19 @@ class MultiscaleBSpline {
   /// sum_k N_p(2^j x0 - k) N_p(2^j y0 - k) on level j, unweighted, for level-0 coordinates
   /// x0, y0 of one axis (k wrapped modulo n_j when periodic): the factor of one axis.
   double level_sum(double x0, double y0, int j) const noexcept {
+    return level_product(x0, y0, j, pieces);
+  }
+
+  /// sum_k N_p(2^j x0 - k) N_p'(2^j y0 - k) on level j: level_sum's derivative in the cell
+  /// coordinate of y0 (multiply by 2^j n0 / L for the derivative in v).
+  double level_slope(double x0, double y0, int j) const noexcept {
+    return level_product(x0, y0, j, piece_slopes);
+  }
+
+  /// sum_k N_p(2^j x0 - k) Y(2^j y0 - k) on level j, Y the pieces `y_pieces` gives at y0's cell
+  /// (the splines themselves or their slopes).
+  double level_product(double x0, double y0, int j,
+                       void (*y_pieces)(int, double, double*) noexcept) const noexcept {
     const Cell cx = cell_at(x0, j), cy = cell_at(y0, j);
     const std::int32_t cells = n0_ << j;
     std::int32_t shift = cx.index - cy.index;
@@ -312,38 +325,13 @@ class MultiscaleBSpline {
     }
     std::array<double, max_degree + 1> nx{}, ny{};
     pieces(degree_, cx.t, nx.data());
-    pieces(degree_, cy.t, ny.data());
+    y_pieces(degree_, cy.t, ny.data());
     double sum = 0.0;
     for (int ix = 0; ix <= degree_; ++ix) {
       int iy = ix - shift;
       if (periodic_ && iy < 0) iy += cells;
       if (iy < 0 || iy > degree_) continue;
       sum += nx[ix] * ny[iy];
-    }
-    return sum;
-  }
-
-  /// sum_k N_p(2^j x0 - k) N_p'(2^j y0 - k) on level j: level_sum's derivative in the cell
-  /// coordinate of y0 (multiply by 2^j n0 / L for the derivative in v).
-  double level_slope(double x0, double y0, int j) const noexcept {
-    const Cell cx = cell_at(x0, j), cy = cell_at(y0, j);
-    const std::int32_t cells = n0_ << j;
-    std::int32_t shift = cx.index - cy.index;
-    if (periodic_) {
-      if (shift < 0) shift += cells;
-      if (shift > degree_ && shift < cells - degree_) return 0.0;
-    } else if (shift > degree_ || shift < -degree_) {
-      return 0.0;
-    }
-    std::array<double, max_degree + 1> nx{}, dny{};
-    pieces(degree_, cx.t, nx.data());
-    piece_slopes(degree_, cy.t, dny.data());
-    double sum = 0.0;
-    for (int ix = 0; ix <= degree_; ++ix) {
-      int iy = ix - shift;
-      if (periodic_ && iy < 0) iy += cells;
-      if (iy < 0 || iy > degree_) continue;
-      sum += nx[ix] * dny[iy];
     }
     return sum;
   }
