@@ -2,14 +2,17 @@
 // function f is a function of their state, x' = A x + h(t, x) + B f(c^T x + y0).
 //
 //   duffing   q'' + delta q' + alpha q = f(q + y0) + gamma cos(omega t): f an unknown stiffness
-//             law (the Duffing oscillator's -beta q^3, written as a target in y = q + y0).
+//             law (the Duffing oscillator's -beta q^3, written as a target in y = q + y0);
+//             with readout = "state", f(q + y0, q' + y0') of the whole state, an unknown law of
+//             stiffness and damping on a domain of d = 2.
 //   pendulum  theta'' + (g / l) sin(theta) + c theta' = f(theta' + y0) + gamma cos(omega t): f an
 //             unknown friction law of the angular velocity; the gravity term is known and
 //             nonlinear, h = [0, -(g/l) (sin(theta) - theta) + gamma cos(omega t)].
 //
 // Both have the state x = [q, q'] (or [theta, theta']), B = [0; 1], A = [0 1; -k -delta] with
 // k = alpha or g / l (Hurwitz for k, delta > 0), and the forcing's period 2 pi / omega as their
-// lap. The read-out offset y0 places the state's range inside the study's domain [0, L].
+// lap. The read-out offset y0 places the state's range inside the study's domain ([0, L], or the
+// box [0, L] x [0, W] for a read-out of both coordinates).
 #include <fmt/format.h>
 
 #include <cmath>
@@ -33,19 +36,24 @@ std::vector<ParameterSpec> forcing_parameters(std::vector<ParameterSpec> paramet
 /// with a known nonlinearity n (zero for duffing) and the read-out y = c^T x + y0.
 class ForcedOscillator : public Plant {
  public:
+  /// The read-out y = C x + y0: C (p x 2) and y0 (p values).
   ForcedOscillator(double stiffness, double damping, double amplitude, double omega,
-                   Eigen::Index readout_coordinate, double offset)
+                   Eigen::MatrixXd readout, Eigen::VectorXd offset)
       : A_(2, 2),
         B_(2),
-        C_(Eigen::MatrixXd::Zero(1, 2)),
-        offset_(1),
+        C_(std::move(readout)),
+        offset_(std::move(offset)),
         amplitude_(amplitude),
         omega_(omega) {
     A_ << 0, 1, -stiffness, -damping;
     B_ << 0, 1;
-    C_(0, readout_coordinate) = 1;
-    offset_ << offset;
     require_hurwitz(A_);
+  }
+  /// The read-out of coordinate `coordinate` alone: y = x_coordinate + offset.
+  static Eigen::MatrixXd coordinate_readout(Eigen::Index coordinate) {
+    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(1, 2);
+    c(0, coordinate) = 1;
+    return c;
   }
   const Eigen::MatrixXd& A() const noexcept override { return A_; }
   const Eigen::VectorXd& B() const noexcept override { return B_; }
@@ -93,12 +101,31 @@ class Duffing final : public ForcedOscillator {
                 {positive_parameter("alpha", 1.0, "linear stiffness alpha, 1/s^2"),
                  positive_parameter("delta", 0.5, "damping delta, 1/s"),
                  real_parameter("offset", 2.0,
-                                "read-out offset y0: f is evaluated at y = q + y0 in the domain")}),
-            {{"dimension", "2"}, {"read-out", "y = q + y0"}}};
+                                "read-out offset y0: f is evaluated at y = q + y0 in the domain"),
+                 choice_parameter("readout", "position",
+                                  "what f is a function of: the position, y = q + y0 (a domain "
+                                  "of d = 1), or the state, y = (q + y0, q' + y0') (d = 2)",
+                                  {"position", "state"}),
+                 real_parameter("velocity_offset", 2.0,
+                                "readout = \"state\": y0', the offset of the velocity "
+                                "coordinate y2 = q' + y0'")}),
+            {{"dimension", "2"}, {"read-out", "y = q + y0, or (q + y0, q' + y0')"}}};
   }
   explicit Duffing(const ParameterSet& p)
-      : ForcedOscillator(p.real("alpha"), p.real("delta"), p.real("amplitude"), p.real("omega"), 0,
-                         p.real("offset")) {}
+      : ForcedOscillator(p.real("alpha"), p.real("delta"), p.real("amplitude"), p.real("omega"),
+                         readout(p), offsets(p)) {}
+
+ private:
+  static bool of_state(const ParameterSet& p) { return p.choice("readout") == "state"; }
+  static Eigen::MatrixXd readout(const ParameterSet& p) {
+    return of_state(p) ? Eigen::MatrixXd::Identity(2, 2) : coordinate_readout(0);
+  }
+  static Eigen::VectorXd offsets(const ParameterSet& p) {
+    if (!of_state(p)) return Eigen::VectorXd::Constant(1, p.real("offset"));
+    Eigen::VectorXd y0(2);
+    y0 << p.real("offset"), p.real("velocity_offset");
+    return y0;
+  }
 };
 
 class Pendulum final : public ForcedOscillator {
@@ -119,7 +146,8 @@ class Pendulum final : public ForcedOscillator {
   }
   explicit Pendulum(const ParameterSet& p)
       : ForcedOscillator(p.real("gravity") / p.real("length"), p.real("damping"),
-                         p.real("amplitude"), p.real("omega"), 1, p.real("offset")),
+                         p.real("amplitude"), p.real("omega"), coordinate_readout(1),
+                         Eigen::VectorXd::Constant(1, p.real("offset"))),
         frequency_squared_(p.real("gravity") / p.real("length")) {}
 
  protected:

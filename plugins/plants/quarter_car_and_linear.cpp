@@ -5,8 +5,33 @@
 
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/plants/quarter_car.hpp"
 
 namespace rkhs {
+
+std::vector<ParameterSpec> quarter_car::parameters() {
+  return {positive_parameter("m1", 0.5, "unsprung mass, kg"),
+          positive_parameter("m2", 0.5, "sprung mass, kg"),
+          positive_parameter("k1", 5e4, "tyre stiffness, N/m"),
+          positive_parameter("k2", 3e4, "suspension stiffness, N/m"),
+          positive_parameter("c2", 200.0, "suspension damping, N s/m"),
+          boolean_parameter("paper_sign", false,
+                            "use the paper's printed -c2/m2 in A[2][0] (Newton gives +c2/m2)")};
+}
+
+void quarter_car::system(const ParameterSet& p, Eigen::MatrixXd& A, Eigen::VectorXd& B) {
+  const double m1 = p.real("m1"), m2 = p.real("m2"), k1 = p.real("k1"), k2 = p.real("k2"),
+               c2 = p.real("c2");
+  const double a20 = (p.boolean("paper_sign") ? -1.0 : 1.0) * c2 / m2;
+  A.resize(4, 4);
+  B.resize(4);
+  A << -c2 / m1, -(k1 + k2) / m1, c2 / m1, k2 / m1,  //
+      1, 0, 0, 0,                                    //
+      a20, k2 / m2, -c2 / m2, -k2 / m2,              //
+      0, 0, 1, 0;
+  B << k1 / m1, 0, 0, 0;
+  require_hurwitz(A);
+}
 
 namespace {
 
@@ -16,26 +41,10 @@ class QuarterCar final : public Plant {
   static PluginInfo info() {
     return {"quarter_car",
             "quarter-car suspension of the paper's Section 5, state [x1', x1, x2', x2]",
-            {positive_parameter("m1", 0.5, "unsprung mass, kg"),
-             positive_parameter("m2", 0.5, "sprung mass, kg"),
-             positive_parameter("k1", 5e4, "tyre stiffness, N/m"),
-             positive_parameter("k2", 3e4, "suspension stiffness, N/m"),
-             positive_parameter("c2", 200.0, "suspension damping, N s/m"),
-             boolean_parameter("paper_sign", false,
-                               "use the paper's printed -c2/m2 in A[2][0] (Newton gives +c2/m2)")},
+            quarter_car::parameters(),
             {{"dimension", "4"}}};
   }
-  explicit QuarterCar(const ParameterSet& p) : A_(4, 4), B_(4) {
-    const double m1 = p.real("m1"), m2 = p.real("m2"), k1 = p.real("k1"), k2 = p.real("k2"),
-                 c2 = p.real("c2");
-    const double a20 = (p.boolean("paper_sign") ? -1.0 : 1.0) * c2 / m2;
-    A_ << -c2 / m1, -(k1 + k2) / m1, c2 / m1, k2 / m1,  //
-        1, 0, 0, 0,                                     //
-        a20, k2 / m2, -c2 / m2, -k2 / m2,               //
-        0, 0, 1, 0;
-    B_ << k1 / m1, 0, 0, 0;
-    require_hurwitz(A_);
-  }
+  explicit QuarterCar(const ParameterSet& p) { quarter_car::system(p, A_, B_); }
   const Eigen::MatrixXd& A() const noexcept override { return A_; }
   const Eigen::VectorXd& B() const noexcept override { return B_; }
 

@@ -122,7 +122,9 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                                           // the decay of ||f~||_H against the PE level
                                           "learning_decay_rate",
                                           "averaged_decay_rate",
-                                          "pe_decay_ratio"};
+                                          "pe_decay_ratio",
+                                          // f of the plant's state: where the trajectory went
+                                          "visited_rms_error"};
   CHECK(adaptive_metric_names() == expected);
   std::vector<std::string> may_be_nan;
   for (const auto& row : MetricTable<AdaptiveMetric>::rows)
@@ -138,5 +140,5 @@ TEST_CASE("the adaptive metric table: output order and NaN rules", "[adaptive]")
                           "plant_gap", "gap_effectivity_H", "gap_effectivity_C",
                           "unexcited_dimension", "path_l2_error", "off_path_l2_error",
                           "reference_norm_H_to_C", "learning_decay_rate", "averaged_decay_rate",
-                          "pe_decay_ratio"});
+                          "pe_decay_ratio", "visited_rms_error"});
 }

@@ -4,7 +4,7 @@
 The layers, bottom to top, are the folders of framework/include/rkhs/ and framework/src/, then
 the MPI runner (framework/mpi/) and the command (framework/cli/). The built-in plugins
 (plugins/) sit beside the framework: they may include the layers a plugin module may use (up
-to plugin/) and each other's headers (rkhs/integrators/, rkhs/kernels/, rkhs/targets/), and no framework layer
+to plugin/) and each other's headers (rkhs/integrators/, rkhs/kernels/, rkhs/plants/, rkhs/targets/), and no framework layer
 includes them. docs/architecture.md draws the same picture.
 
 Every `#include "rkhs/<folder>/..."` of every .hpp and .cpp below framework/ and plugins/ is
@@ -23,7 +23,7 @@ LAYERS = ["core", "kernel", "approx", "adaptive", "plugin", "rates", "study", "r
           "report", "pipeline", "mpi", "cli"]
 # The built-in plugins may use these layers (what a plugin module sees), and each other.
 PLUGIN_MAY_USE = LAYERS[: LAYERS.index("plugin") + 1]
-PLUGIN_HEADER_FOLDERS = ["integrators", "kernels", "targets"]
+PLUGIN_HEADER_FOLDERS = ["integrators", "kernels", "plants", "targets"]
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"rkhs/([a-z_0-9]+)/[^"]+"', re.M)
 

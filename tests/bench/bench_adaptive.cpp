@@ -1,7 +1,9 @@
 // The adaptive system's hot path: one right-hand-side evaluation, one Jacobian, and a whole
 // one-lap trial of the learning configuration (v = 1e-4 m/s, Gamma = 2e4, rosenbrock4 at
 // rtol 1e-6), against n, for each kernel and law. The right-hand side allocates nothing; for
-// B-spline kernels it costs O(n x features at s), not O(n^2).
+// B-spline kernels it costs O(n x features at s), not O(n^2). Also the right-hand side and
+// Jacobian of a read-out in R^2 (vehicle_surface over the unit square, Wendland sections on a
+// grid): n point evaluations, then M phi.
 #include <benchmark/benchmark.h>
 
 #include <numbers>
@@ -161,7 +163,58 @@ BENCHMARK_CAPTURE(right_hand_side, bspline_rkhs_jacobian, std::string("bspline")
     ->RangeMultiplier(2)
     ->Range(16, 256)
     ->Complexity();
+// f of a read-out in R^2: the vehicle_surface plant's wheel over the unit square, n = m^2
+// Wendland sections (k = 1, radius 0.25) on a grid, the rkhs law (M = G^-1 / Gamma, dense).
+void planar_readout(benchmark::State& state, bool jacobian) {
+  const auto side = static_cast<std::size_t>(state.range(0));
+  rkhs::Domain square{1.0, false};
+  square.dimension = 2;
+  square.width = 1.0;
+  const auto* kernel_entry = rkhs::kernel_registry().find("wendland");
+  const auto kernel = kernel_entry->factory(
+      rkhs::ParameterSet::resolve(kernel_entry->info.parameters,
+                                  {{"k", std::int64_t{1}}, {"radius", 0.25}}),
+      square);
+  std::vector<double> centres;
+  for (std::size_t j = 0; j < side; ++j)
+    for (std::size_t i = 0; i < side; ++i) {
+      centres.push_back(static_cast<double>(i) / static_cast<double>(side - 1));
+      centres.push_back(static_cast<double>(j) / static_cast<double>(side - 1));
+    }
+  const auto* plant_entry = rkhs::plant_registry().find("vehicle_surface");
+  const auto plant = plant_entry->factory(rkhs::ParameterSet::resolve(
+      plant_entry->info.parameters, {{"passes", std::string("0.25; 0.75")}}));
+  const auto P = rkhs::solve_lyapunov(plant->A(), Eigen::MatrixXd::Identity(6, 6)).P;
+  const rkhs::GramSolver solver(kernel->gram(centres), {});
+  const rkhs::PointSections sections(*kernel, centres);
+  const auto map = rkhs::LearningMap::gram_inverse(solver, 1.0);
+  const std::function<double(const double*)> f = [](const double* y) {
+    return 0.01 * std::sin(6 * y[0]) * std::cos(4 * y[1]);
+  };
+  const std::function<void(const double*, double*)> gradient = [](const double* y, double* g) {
+    g[0] = 0.06 * std::cos(6 * y[0]) * std::cos(4 * y[1]);
+    g[1] = -0.04 * std::sin(6 * y[0]) * std::sin(4 * y[1]);
+  };
+  rkhs::AdaptiveSystem system(plant->A(), plant->B(), P, sections, map, *plant, f, gradient,
+                              square);
+  const auto m = system.dimension();
+  Eigen::VectorXd z = Eigen::VectorXd::Constant(m, 0.01), dz(m), dfdt(m);
+  z(4) = z(10) = 0.43;  // the wheel inside the square
+  z(5) = z(11) = 0.57;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
+  for (auto _ : state) {
+    if (jacobian)
+      system.jacobian(z.data(), J.data(), 1.0, dfdt.data());
+    else
+      system.rhs(z.data(), dz.data(), 1.0);
+    benchmark::DoNotOptimize(jacobian ? J.data() : dz.data());
+  }
+  state.SetComplexityN(static_cast<benchmark::IterationCount>(side * side));
+}
+
 BENCHMARK(embedding_rhs)->DenseRange(4, 10, 2)->Complexity();
+BENCHMARK_CAPTURE(planar_readout, rhs, false)->Arg(6)->Arg(8)->Arg(12)->Arg(16)->Complexity();
+BENCHMARK_CAPTURE(planar_readout, jacobian, true)->Arg(6)->Arg(8)->Arg(12)->Arg(16)->Complexity();
 BENCHMARK_CAPTURE(one_lap_trial, gaussian_gradient, std::string("gaussian"), std::string("gradient"))
     ->Arg(10)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK_CAPTURE(one_lap_trial, gaussian_rkhs, std::string("gaussian"), std::string("rkhs"))

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <vector>
 
 #include "rkhs/adaptive/breakpoints.hpp"
 #include "rkhs/adaptive/excitation.hpp"
@@ -17,6 +19,40 @@
 #include "rkhs/core/cancellation.hpp"
 
 namespace rkhs {
+
+std::vector<bool> visited_neighbourhood(const Domain& domain, std::span<const double> path,
+                                        std::span<const double> points, double reach) {
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const std::size_t count = domain.point_count(points), samples = domain.point_count(path);
+  std::vector<bool> inside(count, false);
+  const double reach_squared = reach * reach;
+  for (std::size_t k = 0; k < count; ++k) {
+    const double* x = points.data() + k * d;
+    for (std::size_t j = 0; j < samples && !inside[k]; ++j) {
+      // The segment from path point j to point j + 1 (a single point for the last one), in
+      // coordinates relative to point j: on a torus the shortest representatives.
+      const double* a = path.data() + j * d;
+      const double* b = j + 1 < samples ? a + d : a;
+      double offset[Domain::max_dimension] = {0, 0, 0}, along[Domain::max_dimension] = {0, 0, 0};
+      double length_squared = 0, projection = 0;
+      for (std::size_t i = 0; i < d; ++i) {
+        const int axis = static_cast<int>(i);
+        offset[i] = domain.difference(x[i], a[i], axis);
+        along[i] = domain.difference(b[i], a[i], axis);
+        length_squared += along[i] * along[i];
+        projection += offset[i] * along[i];
+      }
+      const double u = length_squared > 0 ? std::clamp(projection / length_squared, 0.0, 1.0) : 0.0;
+      double distance_squared = 0;
+      for (std::size_t i = 0; i < d; ++i) {
+        const double gap = offset[i] - u * along[i];
+        distance_squared += gap * gap;
+      }
+      inside[k] = distance_squared <= reach_squared;
+    }
+  }
+  return inside;
+}
 
 std::string state_dependent_settings_error(const AdaptiveSettings& settings, double period) {
   if (settings.limit())
@@ -48,11 +84,15 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
         "a state-dependent plant learns in the span of the centres' sections (laws gradient and "
         "rkhs); feature coordinates are not supported for it");
   const Domain& domain = kernel.domain();
-  if (domain.dimension != 1)
+  const int p = domain.dimension;  // read-out coordinates
+  if (plant.readout().rows() != p)
     throw std::invalid_argument(
-        fmt::format("a state-dependent plant reads out one coordinate; the domain has d = {}",
-                    domain.dimension));
-  const auto n = static_cast<Eigen::Index>(centres.size());
+        fmt::format("the plant reads out {} coordinate{}; f on a domain of d = {} needs {}",
+                    plant.readout().rows(), plant.readout().rows() == 1 ? "" : "s", p, p));
+  if (p > 1 && !settings.snapshot_laps.empty())
+    throw std::invalid_argument(
+        "snapshots of the estimate (adaptive.snapshot_laps) are profiles along a domain of d = 1");
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
   using M = AdaptiveMetric;
   using Static = ApproximationMetric;
   AdaptiveMeasurement out;
@@ -77,10 +117,11 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
         flag == "sup_error_at_floor" || flag == "l2_error_at_floor" ? "interpolant_" + flag : flag);
 
   Eigen::VectorXd at_centres(n);
-  target.evaluate(centres, std::span<double>(at_centres.data(), centres.size()));
+  target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
   const Eigen::VectorXd alpha_star = solver.solve(at_centres);
   const double gamma = law.gain();
-  const auto basis = kernel.basis(centres);
+  const auto basis = p == 1 ? kernel.basis(centres) : nullptr;
+  const PointSections sections(kernel, centres);
   const LearningMap learning_map = law.uses_gram_inverse()
                                        ? LearningMap::gram_inverse(solver, gamma)
                                        : LearningMap::scalar(n, 1.0 / gamma);
@@ -93,9 +134,11 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
         fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
   const Eigen::MatrixXd P = solve_lyapunov(A, Q).P;
 
-  // f itself, or Pi_n f (then f lies in H_n and alpha* is the answer).
-  const auto road_basis = kernel.basis(centres);
-  std::vector<double> road_phi(centres.size());
+  // f itself, or Pi_n f (then f lies in H_n and alpha* is the answer): along one read-out
+  // coordinate (road, road_slope) or at a point of R^p (point_road, point_road_gradient; the
+  // gradient of f by central differences, that of Pi_n f from the sections' gradients).
+  const auto road_basis = p == 1 ? kernel.basis(centres) : nullptr;
+  std::vector<double> road_phi(static_cast<std::size_t>(n) * static_cast<std::size_t>(p));
   const std::function<double(double)> road =
       settings.projected_road ? std::function<double(double)>([&](double y) {
         road_basis->evaluate(y, road_phi.data());
@@ -109,10 +152,52 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
               return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
             })
           : std::function<double(double)>([&](double y) { return target.slope(y); });
+  const std::function<double(const double*)> point_road =
+      settings.projected_road ? std::function<double(const double*)>([&](const double* y) {
+        sections.evaluate(y, road_phi.data());
+        return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
+      })
+                              : std::function<double(const double*)>([&](const double* y) {
+                                  double value = 0;
+                                  target.evaluate(std::span<const double>(y, std::size_t(p)),
+                                                  std::span<double>(&value, 1));
+                                  return value;
+                                });
+  const std::function<void(const double*, double*)> point_road_gradient =
+      settings.projected_road
+          ? std::function<void(const double*, double*)>([&](const double* y, double* g) {
+              sections.gradient(y, road_phi.data());
+              const Eigen::Map<const Eigen::MatrixXd> slopes(road_phi.data(), n, p);
+              Eigen::Map<Eigen::VectorXd>(g, p).noalias() = slopes.transpose() * alpha_star;
+            })
+          : std::function<void(const double*, double*)>([&](const double* y, double* g) {
+              // Central differences with step 1e-6 of each axis' extent; one-sided within that
+              // step of a box's faces (the target need not exist beyond them).
+              double point[Domain::max_dimension] = {0, 0, 0};
+              std::copy(y, y + p, point);
+              for (int a = 0; a < p; ++a) {
+                const double extent = domain.extent(a), step = 1e-6 * extent;
+                const double up = domain.periodic || y[a] + step <= extent ? step : 0.0;
+                const double down = domain.periodic || y[a] - step >= 0.0 ? step : 0.0;
+                point[a] = y[a] + up;
+                const double high = point_road(point);
+                point[a] = y[a] - down;
+                const double low = point_road(point);
+                point[a] = y[a];
+                g[a] = (high - low) / (up + down);
+              }
+            });
 
-  AdaptiveSystem system(A, B, P, *basis, learning_map, road, road_slope, domain, 1.0,
-                        learning_signal_for(kernel));
-  system.set_state_readout(plant);
+  std::unique_ptr<AdaptiveSystem> made;
+  if (p == 1) {
+    made = std::make_unique<AdaptiveSystem>(A, B, P, *basis, learning_map, road, road_slope, domain,
+                                            1.0, learning_signal_for(kernel));
+    made->set_state_readout(plant);
+  } else {
+    made = std::make_unique<AdaptiveSystem>(A, B, P, sections, learning_map, plant, point_road,
+                                            point_road_gradient, domain);
+  }
+  AdaptiveSystem& system = *made;
   const Eigen::Index m = system.dimension();
 
   // One lap = one forcing period. The breakpoints of a track whose lap takes that long (speed
@@ -126,7 +211,8 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   timing.final_time = final_time;
   const auto points = adaptive_breakpoints(timing, domain, 0.0, final_time, {}, false);
   std::vector<double> times(points.size());
-  std::transform(points.begin(), points.end(), times.begin(), [](const auto& p) { return p.t; });
+  std::transform(points.begin(), points.end(), times.begin(),
+                 [](const auto& breakpoint) { return breakpoint.t; });
 
   Eigen::VectorXd z0 = Eigen::VectorXd::Zero(m);
   if (const Eigen::VectorXd& x0 = plant.initial_state(); x0.size() > 0) {
@@ -143,6 +229,14 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
   const Eigen::MatrixXd snapshot_cross =
       settings.snapshot_laps.empty() ? Eigen::MatrixXd() : kernel.cross(snapshot_grid, centres);
+  // phi and f at a read-out point (p values).
+  auto evaluate_phi = [&](const double* y, double* out_phi) {
+    if (p == 1)
+      basis->evaluate(y[0], out_phi);
+    else
+      sections.evaluate(y, out_phi);
+  };
+  auto road_at = [&](const double* y) { return p == 1 ? road(y[0]) : point_road(y); };
   const bool gram_inverse = law.uses_gram_inverse();
   out.snapshots.resize(settings.snapshot_laps.size());
   for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
@@ -150,13 +244,23 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   Eigen::MatrixXd excitation = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd phi(n), excitation_load = Eigen::VectorXd::Zero(n);
   std::size_t excitation_samples = 0;
+  // The visited set: [min y, max y] in d = 1; in d > 1 the neighbourhood of the polyline through
+  // the sampled read-outs (visited_points, p values each).
   double visited_low = std::numeric_limits<double>::infinity(), visited_high = -visited_low;
+  std::vector<double> visited_points;
   bool left_domain = false;
   auto observe = [&](std::size_t k, const double* z) {
     check_cancelled();
     const Breakpoint& point = points[k];
-    const double y = system.readout(z);
-    if (!domain.periodic && (y < 0 || y > domain.length)) left_domain = true;
+    double y[Domain::max_dimension] = {0, 0, 0};
+    system.readout_point(z, y);
+    // Beyond the interval or box by more than 1e-6 of its extent: a read-out that runs along
+    // a face (a path on the box's edge) stays within its integration error of it.
+    for (int a = 0; a < p; ++a) {
+      const double slack = 1e-6 * domain.extent(a);
+      if (!domain.periodic && (y[a] < -slack || y[a] > domain.extent(a) + slack))
+        left_domain = true;
+    }
     if (point.roles & sample_role) {
       const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
       const Eigen::VectorXd e = x - xhat;
@@ -164,12 +268,13 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
       const double weighted = gram_inverse ? gap.dot(gram * gap) : gap.squaredNorm();
       out.samples.push_back({point.t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
       if (point.t >= 0.5 * final_time) {
-        basis->evaluate(y, phi.data());
+        evaluate_phi(y, phi.data());
         excitation.selfadjointView<Eigen::Lower>().rankUpdate(phi);
-        excitation_load += road(y) * phi;
+        excitation_load += road_at(y) * phi;
         ++excitation_samples;
-        visited_low = std::min(visited_low, y);
-        visited_high = std::max(visited_high, y);
+        visited_low = std::min(visited_low, y[0]);
+        visited_high = std::max(visited_high, y[0]);
+        visited_points.insert(visited_points.end(), y, y + p);
       }
     }
     if (point.roles & snapshot_role) {
@@ -188,10 +293,14 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   }
   if (left_domain) out.flags.push_back("readout_left_domain");
 
-  out.road.resize(snapshot_grid.size());
-  for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
-  Eigen::VectorXd f(static_cast<Eigen::Index>(grid.size()));
-  for (std::size_t k = 0; k < grid.size(); ++k) f(static_cast<Eigen::Index>(k)) = road(grid[k]);
+  if (p == 1) {
+    out.road.resize(snapshot_grid.size());
+    for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
+  }
+  const std::size_t grid_count = domain.point_count(grid);
+  Eigen::VectorXd f(static_cast<Eigen::Index>(grid_count));
+  for (std::size_t k = 0; k < grid_count; ++k)
+    f(static_cast<Eigen::Index>(k)) = road_at(grid.data() + k * static_cast<std::size_t>(p));
   const Eigen::VectorXd alpha = z.tail(n);
   const Eigen::VectorXd estimate = cross * alpha, projection = cross * alpha_star;
   auto l2 = [&](const Eigen::VectorXd& v) {
@@ -203,8 +312,19 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   metrics[M::l2_error] = l2(residual);
   metrics[M::sup_error] = residual.cwiseAbs().maxCoeff();
   metrics[M::gap_to_projection] = l2(estimate - projection);
-  {  // On and off the visited set, with the weights of the L2 norm's rule (the rectangle rule
-     // on a circle, the trapezoid rule on an interval): the two parts add up to l2_error^2.
+  if (p > 1) {  // On and off the visited set: the grid points within the centres' fill distance
+                // of the polyline through the sampled read-outs, with the L2 norm's weights
+                // (the two parts add up to l2_error^2).
+    const double reach = metrics[M::fill_distance];
+    const auto on_path = visited_neighbourhood(domain, visited_points, grid, reach);
+    Eigen::VectorXd on = residual, off = residual;
+    for (Eigen::Index k = 0; k < residual.size(); ++k)
+      (on_path[static_cast<std::size_t>(k)] ? off : on)(k) = 0;
+    metrics[M::path_l2_error] = l2(on);
+    metrics[M::off_path_l2_error] = l2(off);
+  } else {  // On and off the visited set [min y, max y], with the weights of the L2 norm's rule
+            // (the rectangle rule on a circle, the trapezoid rule on an interval): the two
+            // parts add up to l2_error^2.
     double on = 0, off = 0;
     const std::size_t count = grid.size();
     for (std::size_t k = 0; k < count; ++k) {
@@ -217,6 +337,18 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
     }
     metrics[M::path_l2_error] = std::sqrt(on);
     metrics[M::off_path_l2_error] = std::sqrt(off);
+  }
+  {  // f - fhat(T) where the trajectory went: at the sampled read-outs of the second half.
+    const std::size_t visited = visited_points.size() / static_cast<std::size_t>(p);
+    double sum = 0;
+    for (std::size_t k = 0; k < visited; ++k) {
+      const double* y = visited_points.data() + k * static_cast<std::size_t>(p);
+      evaluate_phi(y, phi.data());
+      const double r = road_at(y) - phi.dot(alpha);
+      sum += r * r;
+    }
+    metrics[M::visited_rms_error] =
+        visited > 0 ? std::sqrt(sum / static_cast<double>(visited)) : std::nan("");
   }
   metrics[M::final_state_error] = (z.head(d) - z.segment(d, d)).norm();
   double max_state_error = 0, max_increase = 0;
@@ -235,7 +367,10 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   }
   {  // P_L2 f along the trajectory: the g in H_n of least H-norm that minimises the time average
      // of (f - g)^2(y(t)) over the second half, E a = r with r = mean f(y) phi(y) (the minimum
-     // G-norm solution through G = L L^T: a = L^-T (L^-1 E L^-T)^+ L^-1 r).
+     // G-norm solution through G = L L^T: a = L^-T (L^-1 E L^-T)^+ L^-1 r). The pseudo-inverse
+     // drops the eigenvalues of L^-1 E L^-T within its round-off, eps max(n, cond(G)) times the
+     // largest: directions the trajectory excites less than that are not determined by it (in
+     // d > 1 a curve grazes many supports, and keeping them made P_L2 f off the curve noise).
     Eigen::LLT<Eigen::MatrixXd> cholesky(gram);
     Eigen::VectorXd coefficients;
     if (cholesky.info() == Eigen::Success) {
@@ -244,8 +379,11 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
       reduced = L.solve(reduced.transpose()).transpose();
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(reduced);
       const Eigen::VectorXd& values = eigen.eigenvalues();
-      const double cutoff = static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
-                            std::max(values.cwiseAbs().maxCoeff(), 1e-300);
+      const double condition = metrics[M::gram_condition_number];
+      const double cutoff =
+          std::numeric_limits<double>::epsilon() *
+          std::max(static_cast<double>(n), std::isfinite(condition) ? condition : 0.0) *
+          std::max(values.cwiseAbs().maxCoeff(), 1e-300);
       Eigen::VectorXd w = eigen.eigenvectors().transpose() * L.solve(excitation_load);
       for (Eigen::Index i = 0; i < n; ++i) w(i) = values(i) > cutoff ? w(i) / values(i) : 0.0;
       coefficients = L.transpose().solve(eigen.eigenvectors() * w);

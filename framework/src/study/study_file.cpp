@@ -947,11 +947,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                               show(*domain->get("radius"))));
   }
   study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
-  if (study.domain.dimension > 1 && study.kind == StudyKind::adaptive)
-    report.fail(domain->get("lengths")->source(), "domain.lengths",
-                fmt::format("an adaptive study runs along a track (d = 1); a domain of d = {} is "
-                            "for approximation studies so far",
-                            study.domain.dimension));
+  // An adaptive study in d > 1 learns f of a plant's read-out of d coordinates: every plant
+  // must be state-dependent with such a read-out (checked with the plants below).
 
   const auto* grid = optional_table(report, root, "grid");
   if (!grid || !grid->contains("n"))
@@ -1131,6 +1128,12 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       throw std::invalid_argument(fmt::format("adaptive.q is {} x {}, this plant needs {} x {}",
                                               Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
+    const int dimension = study.domain.dimension;
+    if (!plant->state_dependent() && dimension > 1)
+      throw std::invalid_argument(fmt::format(
+          "it drives f along a track (d = 1), and the domain has d = {}: a domain of d > 1 "
+          "needs a plant whose f is a function of a read-out of {} coordinates of its state",
+          dimension, dimension));
     if (plant->state_dependent()) {
       // f of the plant's state: a nonlinear system stepped through time on an interval or circle.
       AdaptiveSettings settings = study.adaptive;
@@ -1140,11 +1143,15 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       if (const auto error = state_dependent_settings_error(settings, plant->period());
           !error.empty())
         throw std::invalid_argument(error);
-      if (plant->readout().rows() != 1)
+      if (plant->readout().rows() != dimension)
         throw std::invalid_argument(fmt::format(
-            "its read-out has {} coordinates; f of more than one read-out coordinate is not "
-            "supported yet (one: y = c^T x + y0)",
-            plant->readout().rows()));
+            "its read-out y = C x + y0 has {} coordinate{}, and f is a function on the domain of "
+            "d = {}: they must agree",
+            plant->readout().rows(), plant->readout().rows() == 1 ? "" : "s", dimension));
+      if (dimension > 1 && !study.adaptive.snapshot_laps.empty())
+        throw std::invalid_argument(
+            "adaptive.snapshot_laps records profiles of the estimate along a domain of d = 1; "
+            "remove it in d > 1");
       for (const auto& law_entry : axes[4].entries)
         for_each_combination(law_entry, [&](const std::vector<std::size_t>& at) {
           const auto law_choice = resolve_choice(report, "law", law_entry, at);

@@ -16,6 +16,7 @@
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/kernel/kernel.hpp"
+#include "rkhs/kernel/point_sections.hpp"
 #include "rkhs/core/registry.hpp"
 #include "rkhs/approx/target.hpp"
 
@@ -62,6 +63,20 @@ class AdaptiveSystem {
                  const std::function<double(double)>& road_slope, const Domain& domain,
                  double speed, LearningSignal signal = LearningSignal::from_phi);
 
+  /// A state-dependent system whose f is a function of a read-out of p > 1 coordinates,
+  /// y = C x + y0 in R^p (docs/model.md section 18): the system of set_state_readout with
+  ///   dx'/dx = A + B grad f(y)^T C + dh/dx,   dxhat'/dx = dh/dx + B (Dphi(y)^T alpha)^T C,
+  ///   dalpha'/dx = psi b^T + (b^T (x - xhat)) M Dphi(y) C,
+  /// Dphi the n x p Jacobian of the sections (PointSections::gradient) and psi = M phi. `f`
+  /// and `f_gradient` take a point of p coordinates (f_gradient writes p values). The plant's
+  /// read-out must be p x d with p = sections.dimension() (std::invalid_argument otherwise).
+  /// Every reference must outlive the system.
+  AdaptiveSystem(const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::MatrixXd& P,
+                 const PointSections& sections, const LearningMap& learning_map,
+                 const class Plant& plant, const std::function<double(const double*)>& f,
+                 const std::function<void(const double*, double*)>& f_gradient,
+                 const Domain& domain);
+
   Eigen::Index dimension() const noexcept { return 2 * d_ + n_; }
   Eigen::Index plant_dimension() const noexcept { return d_; }
 
@@ -78,7 +93,24 @@ class AdaptiveSystem {
   /// system; its read-out must be 1 x d (std::invalid_argument otherwise).
   void set_state_readout(const class Plant& plant);
   bool state_dependent() const noexcept { return plant_ != nullptr; }
-  /// y = c^T x + y0 (wrapped onto a periodic domain) for the plant state x (d values).
+  /// p, the read-out's coordinates: 1 for a road plant and for set_state_readout.
+  int readout_dimension() const noexcept { return sections_ ? sections_->dimension() : 1; }
+  /// y = C x + y0 (every coordinate wrapped onto a periodic domain) for the plant state x (d
+  /// values): readout_dimension() values. A road system writes nothing.
+  void readout_point(const double* x, double* y) const noexcept {
+    if (!plant_) return;
+    if (!sections_) {
+      y[0] = readout(x);
+      return;
+    }
+    for (Eigen::Index a = 0; a < readout_matrix_.rows(); ++a) {
+      double value = readout_offsets_(a);
+      for (Eigen::Index i = 0; i < d_; ++i) value += readout_matrix_(a, i) * x[i];
+      y[a] = domain_.wrap(value, static_cast<int>(a));
+    }
+  }
+  /// y = c^T x + y0 (wrapped onto a periodic domain) for the plant state x (d values); one
+  /// read-out coordinate (set_state_readout).
   double readout(const double* x) const noexcept {
     double y = readout_offset_;
     for (Eigen::Index i = 0; i < d_; ++i) y += readout_(i) * x[i];
@@ -133,11 +165,14 @@ class AdaptiveSystem {
  private:
   /// phi_ = phi(s) and psi_ = psi(s): one basis evaluation (from_phi) or two (by_basis).
   void evaluate_basis(double s) const;
+  /// y_ = y(x), phi_ = phi(y) and psi_ = M phi(y) for a read-out of p > 1 coordinates; f(y).
+  double evaluate_sections(const double* x) const;
+  void state_jacobian(const double* z, double t, double* J) const;
   Eigen::MatrixXd A_;
   Eigen::VectorXd B_, b_;
-  KernelBasis& basis_;
-  const std::function<double(double)>& road_;
-  const std::function<double(double)>& road_slope_;
+  KernelBasis* basis_ = nullptr;  // null with sections_
+  const std::function<double(double)>* road_ = nullptr;
+  const std::function<double(double)>* road_slope_ = nullptr;
   Domain domain_;
   double speed_;
   double shuttle_from_ = 0, shuttle_length_ = 0;
@@ -148,6 +183,16 @@ class AdaptiveSystem {
   Eigen::VectorXd readout_;
   double readout_offset_ = 0;
   mutable Eigen::VectorXd known_, known_time_;
+  // Read-outs of p > 1 coordinates: the sections in R^p, C (p x d) and y0, f and grad f, and
+  // scratch: y, grad f(y), Dphi^T alpha, a 1 x d row, Dphi and M Dphi (n x p, column-major).
+  const PointSections* sections_ = nullptr;
+  Eigen::MatrixXd readout_matrix_;
+  Eigen::VectorXd readout_offsets_;
+  const std::function<double(const double*)>* point_road_ = nullptr;
+  const std::function<void(const double*, double*)>* point_road_gradient_ = nullptr;
+  mutable Eigen::VectorXd y_, road_gradient_, slope_of_estimate_;
+  mutable Eigen::RowVectorXd readout_row_;
+  mutable Eigen::MatrixXd dphi_points_, dpsi_points_;
   mutable Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> known_jacobian_;
   LearningSignal signal_;
   LearningMap map_;  // from_phi: M

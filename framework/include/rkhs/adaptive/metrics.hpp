@@ -56,12 +56,13 @@ enum class AdaptiveMetric : std::size_t {
   learning_decay_rate,
   averaged_decay_rate,
   pe_decay_ratio,
+  visited_rms_error,
 };
 
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
-  static constexpr std::array<MetricRow<M>, 45> rows{{
+  static constexpr std::array<MetricRow<M>, 46> rows{{
       {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
       {M::separation_distance, "separation_distance", "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
@@ -166,7 +167,8 @@ struct MetricTable<AdaptiveMetric> {
        true, ""},
       {M::path_l2_error, "path_l2_error", "[f] sqrt(m)",
        "||f - fhat(T)|| in L2 over the part of the track the path covers (a state-dependent "
-       "plant: the read-out's range over the second half of the run); NaN on laps around it",
+       "plant: the read-out's range over the second half of the run, in d > 1 the points "
+       "within the fill distance of its orbit); NaN on laps around it",
        true, ""},
       {M::off_path_l2_error, "off_path_l2_error", "[f] sqrt(m)",
        "||f - fhat(T)|| in L2 over the rest of the track (of Omega); NaN on laps around it", true,
@@ -189,6 +191,10 @@ struct MetricTable<AdaptiveMetric> {
        "learning_decay_rate / averaged_decay_rate: 1 in the averaging limit (slow path, slow "
        "learning); NaN unless both are defined",
        true, "decay_rate_unresolved"},
+      {M::visited_rms_error, "visited_rms_error", "[f]",
+       "state-dependent plants: the root mean square of f - fhat(T) at the read-outs sampled over "
+       "the second half of the run, where the trajectory went (what it can teach); NaN otherwise",
+       true, ""},
   }};
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

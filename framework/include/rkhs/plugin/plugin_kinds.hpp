@@ -84,7 +84,8 @@ struct PlantKind {
   using Registry = PlantRegistry;
   static constexpr std::string_view singular = "plant";
   static constexpr std::string_view plural = "plants";
-  static constexpr std::string_view builtins[] = {"duffing", "linear", "pendulum", "quarter_car"};
+  static constexpr std::string_view builtins[] = {"duffing", "linear", "pendulum", "quarter_car",
+                                                  "vehicle_surface"};
   static constexpr auto loaded = &LoadedPlugin::plants;
   static Registry& registry() { return plant_registry(); }
 };
