@@ -8,7 +8,9 @@ the limit) so the whole check takes a few minutes on two cores; approximation st
 shipped. Numbers must agree to 1e-9 relative: the last digits of a double depend on the
 processor (glibc picks its exp, log and sin by CPU features at run time, and Eigen its kernels
 at build time), so a refactoring that changes no formula stays well inside that, while a change
-of method does not. Text must match exactly. Columns may be added, never removed, renamed or
+of method does not. Values that ill-conditioned computations leave at round-off also agree
+within 1e-7 of their column's largest magnitude (COLUMN_ROUND_OFF; fits through them are then
+reported, not compared), and flat fits are not compared on R^2 and AIC (FLAT_FIT). Text must match exactly. Columns may be added, never removed, renamed or
 changed; rows must match in number and order. Verdicts must match line for line, except the
 first line's wall time.
 
