@@ -42,6 +42,59 @@ std::unique_ptr<Integrator> make_integrator(const std::string& name,
 
 const Domain interval{3.6, false};
 
+struct KernelCase {
+  std::string name;
+  std::map<std::string, ParameterValue> parameters;
+};
+
+using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// The system's Jacobian J and dF/dt at (z, t), and how far each lies from central differences
+/// of its rhs with step `step` (largest absolute entry of the difference).
+struct DerivativeCheck {
+  RowMajorMatrix J;
+  Eigen::VectorXd dfdt;
+  double jacobian_gap = 0, time_gap = 0;
+};
+DerivativeCheck check_derivatives(const AdaptiveSystem& system, const Eigen::VectorXd& z, double t,
+                                  double step) {
+  const Eigen::Index m = system.dimension();
+  DerivativeCheck out{RowMajorMatrix(m, m), Eigen::VectorXd(m)};
+  system.jacobian(z.data(), out.J.data(), t, out.dfdt.data());
+  Eigen::VectorXd up(m), down(m);
+  Eigen::MatrixXd difference(m, m);
+  for (Eigen::Index j = 0; j < m; ++j) {
+    Eigen::VectorXd z_up = z, z_down = z;
+    z_up(j) += step;
+    z_down(j) -= step;
+    system.rhs(z_up.data(), up.data(), t);
+    system.rhs(z_down.data(), down.data(), t);
+    difference.col(j) = (up - down) / (2 * step);
+  }
+  out.jacobian_gap = (Eigen::MatrixXd(out.J) - difference).cwiseAbs().maxCoeff();
+  system.rhs(z.data(), up.data(), t + step);
+  system.rhs(z.data(), down.data(), t - step);
+  out.time_gap = ((up - down) / (2 * step) - out.dfdt).cwiseAbs().maxCoeff();
+  return out;
+}
+
+/// The error message of parsing `text` as the study file `file`, or "no error".
+std::string study_error(const std::string& text, const std::string& file) {
+  try {
+    parse_study(text, file);
+  } catch (const StudyError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+/// `text` with the first `from` replaced by `to` (which must be there).
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  return text.replace(at, from.size(), to);
+}
+
 // f(y) = -(y - 1.8)^3 (the Duffing stiffness -q^3 for y0 = 1.8) and its slope.
 const std::function<double(double)> cubic = [](double y) { return -std::pow(y - 1.8, 3); };
 const std::function<double(double)> cubic_slope = [](double y) {
@@ -85,10 +138,6 @@ struct System {
 
 TEST_CASE("a state-dependent system's Jacobian and dF/dt are the derivatives of its rhs",
           "[adaptive][state]") {
-  struct KernelCase {
-    std::string name;
-    std::map<std::string, ParameterValue> parameters;
-  };
   const std::vector<KernelCase> kernels{{"wendland", {{"k", std::int64_t{2}}, {"radius", 0.9}}},
                                         {"gaussian", {{"sigma", 0.4}}},
                                         {"matern", {}}};
@@ -106,29 +155,13 @@ TEST_CASE("a state-dependent system's Jacobian and dF/dt are the derivatives of 
           Eigen::VectorXd z(m);
           for (Eigen::Index i = 0; i < m; ++i) z(i) = unit(random);
           const double t = 3.0 + unit(random);
-          Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
-          Eigen::VectorXd dfdt(m);
-          system.jacobian(z.data(), J.data(), t, dfdt.data());
           // Central differences, step 1e-6: truncation ~1e-12 |F'''|, round-off ~1e-10 |F|.
-          const double step = 1e-6;
-          Eigen::VectorXd up(m), down(m), z_up, z_down;
-          Eigen::MatrixXd difference(m, m);
-          for (Eigen::Index j = 0; j < m; ++j) {
-            z_up = z;
-            z_down = z;
-            z_up(j) += step;
-            z_down(j) -= step;
-            system.rhs(z_up.data(), up.data(), t);
-            system.rhs(z_down.data(), down.data(), t);
-            difference.col(j) = (up - down) / (2 * step);
-          }
-          const double scale = std::max(1.0, J.cwiseAbs().maxCoeff());
-          CHECK((Eigen::MatrixXd(J) - difference).cwiseAbs().maxCoeff() <= 1e-6 * scale);
+          const auto check = check_derivatives(system, z, t, 1e-6);
+          const double scale = std::max(1.0, check.J.cwiseAbs().maxCoeff());
+          CHECK(check.jacobian_gap <= 1e-6 * scale);
           // The read-out couples x to alpha': the difference sees it, so the check is not empty.
-          CHECK(J.block(2 * 2, 0, m - 4, 1).cwiseAbs().maxCoeff() > 0);
-          system.rhs(z.data(), up.data(), t + step);
-          system.rhs(z.data(), down.data(), t - step);
-          CHECK(((up - down) / (2 * step) - dfdt).cwiseAbs().maxCoeff() <= 1e-6 * scale);
+          CHECK(check.J.block(2 * 2, 0, m - 4, 1).cwiseAbs().maxCoeff() > 0);
+          CHECK(check.time_gap <= 1e-6 * scale);
         }
         // The Jacobian in t alone and the structured linearisation do not exist here.
         Eigen::MatrixXd J(m, m);
@@ -265,29 +298,17 @@ TEST_CASE("with f in H_n and an orbit over Omega, alpha converges to alpha* and 
 
 TEST_CASE("a state-dependent plant refuses what needs a track or a linear system",
           "[adaptive][state]") {
-  const auto error = [](const std::string& text) {
-    try {
-      parse_study(text, "duffing.toml");
-    } catch (const StudyError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  auto with = [](std::string text, const std::string& from, const std::string& to) {
-    const auto at = text.find(from);
-    REQUIRE(at != std::string::npos);
-    return text.replace(at, from.size(), to);
-  };
+  const auto error = [](const std::string& text) { return study_error(text, "duffing.toml"); };
   const std::string study = duffing_study("2.0", "target");
   CHECK(error(study) == "no error");
-  CHECK_THAT(error(with(study, "laps = 300", "laps = \"limit\"")),
+  CHECK_THAT(error(replaced(study, "laps = 300", "laps = \"limit\"")),
              Catch::Contains("duffing.toml:") && Catch::Contains("lap map") &&
                  Catch::Contains("state-dependent"));
   CHECK_THAT(error(study + "engine = \"lap_map\"\n"),
              Catch::Contains("engine = \\\"lap_map\\\"") || Catch::Contains("linear in its state"));
   CHECK_THAT(error(study + "path = { from = 0.0, to = 1.0 }\n"),
              Catch::Contains("trajectory is its own state"));
-  CHECK_THAT(error(with(study, "name = \"rkhs\"", "name = \"rkhs_embedding\"")),
+  CHECK_THAT(error(replaced(study, "name = \"rkhs\"", "name = \"rkhs_embedding\"")),
              Catch::Contains("feature coordinates") && Catch::Contains("rkhs_embedding"));
 }
 
@@ -314,10 +335,6 @@ void planar_f_gradient(const double* y, double* g) {
 
 TEST_CASE("with a read-out of two coordinates the Jacobian and dF/dt are the rhs' derivatives",
           "[adaptive][state]") {
-  struct KernelCase {
-    std::string name;
-    std::map<std::string, ParameterValue> parameters;
-  };
   const std::vector<KernelCase> kernels{{"wendland", {{"k", std::int64_t{2}}, {"radius", 1.6}}},
                                         {"gaussian", {{"sigma", 0.8}}}};
   const std::function<double(const double*)> f = planar_f;
@@ -366,23 +383,10 @@ TEST_CASE("with a read-out of two coordinates the Jacobian and dF/dt are the rhs
           system.readout_point(z.data(), y);
           CHECK(y[0] == Approx(z(0) + 1.8).epsilon(1e-15));
           CHECK(y[1] == Approx(z(1) + 2.0).epsilon(1e-15));
-          Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
-          Eigen::VectorXd dfdt(m);
-          system.jacobian(z.data(), J.data(), t, dfdt.data());
-          const double step = 1e-6;
-          Eigen::VectorXd up(m), down(m), z_up, z_down;
-          Eigen::MatrixXd difference(m, m);
-          for (Eigen::Index j = 0; j < m; ++j) {
-            z_up = z;
-            z_down = z;
-            z_up(j) += step;
-            z_down(j) -= step;
-            system.rhs(z_up.data(), up.data(), t);
-            system.rhs(z_down.data(), down.data(), t);
-            difference.col(j) = (up - down) / (2 * step);
-          }
+          const auto check = check_derivatives(system, z, t, 1e-6);
+          const auto& J = check.J;
           const double scale = std::max(1.0, J.cwiseAbs().maxCoeff());
-          CHECK((Eigen::MatrixXd(J) - difference).cwiseAbs().maxCoeff() <= 1e-6 * scale);
+          CHECK(check.jacobian_gap <= 1e-6 * scale);
           // Both read-out coordinates reach alpha' and xhat': the difference sees them.
           CHECK(J.block(4, 0, n, 1).cwiseAbs().maxCoeff() > 0);
           CHECK(J.block(4, 1, n, 1).cwiseAbs().maxCoeff() > 0);
@@ -391,9 +395,7 @@ TEST_CASE("with a read-out of two coordinates the Jacobian and dF/dt are the rhs
           planar_f_gradient(y, g);
           CHECK(J(1, 0) == Approx(-1.0 + g[0]).epsilon(1e-14));
           CHECK(J(1, 1) == Approx(-0.5 + g[1]).epsilon(1e-14));
-          system.rhs(z.data(), up.data(), t + step);
-          system.rhs(z.data(), down.data(), t - step);
-          CHECK(((up - down) / (2 * step) - dfdt).cwiseAbs().maxCoeff() <= 1e-6 * scale);
+          CHECK(check.time_gap <= 1e-6 * scale);
         }
         Eigen::MatrixXd J(m, m);
         CHECK_THROWS_AS(system.jacobian_matrix(0.0, J.data()), std::logic_error);
@@ -516,22 +518,10 @@ TEST_CASE("f of a two-coordinate read-out is learnt near the orbit, and V never 
 }
 
 TEST_CASE("a domain of d > 1 needs a plant that reads out d coordinates", "[adaptive][state]") {
-  const auto error = [](const std::string& text) {
-    try {
-      parse_study(text, "planar.toml");
-    } catch (const StudyError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  auto with = [](std::string text, const std::string& from, const std::string& to) {
-    const auto at = text.find(from);
-    REQUIRE(at != std::string::npos);
-    return text.replace(at, from.size(), to);
-  };
+  const auto error = [](const std::string& text) { return study_error(text, "planar.toml"); };
   const std::string study = planar_duffing_study("target");
   CHECK(error(study) == "no error");
-  CHECK_THAT(error(with(study, "readout = \"state\"\n", "")),
+  CHECK_THAT(error(replaced(study, "readout = \"state\"\n", "")),
              Catch::Contains("planar.toml:") && Catch::Contains("has 1 coordinate, and f") &&
                  Catch::Contains("d = 2"));
   const auto plant = study.find("[[plant]]"), law = study.find("[[law]]");
@@ -590,25 +580,12 @@ TEST_CASE("vehicle_surface: the wheel follows its path and the quarter car feels
       z.segment(4, 2) << unit(random), unit(random);  // the wheel inside the square
       z.segment(10, 2) = z.segment(4, 2);
       const double t = 0.2 + 1.3 * sample;  // inside a segment, away from its corners
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, m);
-      Eigen::VectorXd dfdt(m), up(m), down(m);
-      system.jacobian(z.data(), J.data(), t, dfdt.data());
-      const double step = 1e-7;
-      Eigen::MatrixXd difference(m, m);
-      for (Eigen::Index j = 0; j < m; ++j) {
-        Eigen::VectorXd z_up = z, z_down = z;
-        z_up(j) += step;
-        z_down(j) -= step;
-        system.rhs(z_up.data(), up.data(), t);
-        system.rhs(z_down.data(), down.data(), t);
-        difference.col(j) = (up - down) / (2 * step);
-      }
-      const double scale = J.cwiseAbs().maxCoeff();  // k1 / m1 = 1e5
-      CHECK((Eigen::MatrixXd(J) - difference).cwiseAbs().maxCoeff() <= 1e-8 * scale);
-      CHECK(J.block(12, 4, 9, 2).cwiseAbs().maxCoeff() > 0);  // alpha' sees the wheel's position
-      system.rhs(z.data(), up.data(), t + step);
-      system.rhs(z.data(), down.data(), t - step);
-      CHECK(((up - down) / (2 * step) - dfdt).cwiseAbs().maxCoeff() <= 1e-8 * scale);
+      const auto check = check_derivatives(system, z, t, 1e-7);
+      const double scale = check.J.cwiseAbs().maxCoeff();  // k1 / m1 = 1e5
+      CHECK(check.jacobian_gap <= 1e-8 * scale);
+      // alpha' sees the wheel's position.
+      CHECK(check.J.block(12, 4, 9, 2).cwiseAbs().maxCoeff() > 0);
+      CHECK(check.time_gap <= 1e-8 * scale);
     }
   }
 

@@ -51,6 +51,22 @@ LAPS, SAMPLES_PER_LAP = 10, 50
 STEPS_PER_SAMPLE = 60
 EVALUATION_POINTS = 512
 
+# Both laws at Gamma = 0.1, radau5 at rtol 1e-11 (the exact Jacobian, dense stage solves).
+LAWS_AND_INTEGRATOR = f"""[[law]]
+name = "rkhs"
+gamma = 0.1
+[[law]]
+name = "gradient"
+gamma = 0.1
+[[integrator]]
+name = "radau5"
+rtol = 1e-11
+atol = 1e-12
+[adaptive]
+laps = {LAPS}
+samples_per_lap = {SAMPLES_PER_LAP}
+"""
+
 STUDY = f"""[study]
 name = "state_dependent_reference"
 kind = "adaptive"
@@ -79,20 +95,7 @@ name = "pendulum"
 offset = {OFFSET}
 omega = {OMEGA}
 amplitude = 3.0
-[[law]]
-name = "rkhs"
-gamma = 0.1
-[[law]]
-name = "gradient"
-gamma = 0.1
-[[integrator]]
-name = "radau5"
-rtol = 1e-11
-atol = 1e-12
-[adaptive]
-laps = {LAPS}
-samples_per_lap = {SAMPLES_PER_LAP}
-"""
+{LAWS_AND_INTEGRATOR}"""
 
 WIDTH, VELOCITY_OFFSET, SIGMA, SIDE = 4.0, 2.0, 0.9, 4
 
@@ -121,20 +124,7 @@ offset = {OFFSET}
 velocity_offset = {VELOCITY_OFFSET}
 omega = {OMEGA}
 amplitude = 2.0
-[[law]]
-name = "rkhs"
-gamma = 0.1
-[[law]]
-name = "gradient"
-gamma = 0.1
-[[integrator]]
-name = "radau5"
-rtol = 1e-11
-atol = 1e-12
-[adaptive]
-laps = {LAPS}
-samples_per_lap = {SAMPLES_PER_LAP}
-"""
+{LAWS_AND_INTEGRATOR}"""
 
 VEHICLE_SIGMA, VEHICLE_SPEED, VEHICLE_LAPS, VEHICLE_SAMPLES = 0.3, 0.5, 2, 60
 VEHICLE_STEPS_PER_SAMPLE = 500
@@ -206,9 +196,9 @@ def f_2d(y1, y2):
     return -(y1 - 1.8) ** 3 - 0.3 * (y2 - 2.0)
 
 
-def gaussian(a, b):
+def gaussian(a, b, sigma):
     """exp(-|a - b|^2 / (2 sigma^2)) for arrays of points (..., 2)."""
-    return np.exp(-np.sum((a - b) ** 2, axis=-1) / (2 * SIGMA ** 2))
+    return np.exp(-np.sum((a - b) ** 2, axis=-1) / (2 * sigma ** 2))
 
 
 def wendland(r):
@@ -240,17 +230,20 @@ def lyapunov(A):
     return np.linalg.solve(K, -identity.reshape(-1)).reshape(d, d)
 
 
-def integrate(rhs, n):
-    """Classical RK4 from rest, STEPS_PER_SAMPLE steps per output sample: times and states."""
-    period = 2 * math.pi / OMEGA
-    final_time = LAPS * period
-    samples = LAPS * SAMPLES_PER_LAP
-    z = np.zeros(4 + n)
+# The oscillators' runs: LAPS forcing periods.
+FINAL_TIME = LAPS * (2 * math.pi / OMEGA)
+
+
+def integrate(rhs, size, final_time=FINAL_TIME, samples=LAPS * SAMPLES_PER_LAP,
+              steps_per_sample=STEPS_PER_SAMPLE):
+    """Classical RK4 from rest (`size` states) to final_time, steps_per_sample steps per output
+    sample: times and states at the samples."""
+    z = np.zeros(size)
     times, states = [0.0], [z.copy()]
-    step = final_time / samples / STEPS_PER_SAMPLE
+    step = final_time / samples / steps_per_sample
     for k in range(1, samples + 1):
         t0 = final_time * (k - 1) / samples
-        for j in range(STEPS_PER_SAMPLE):
+        for j in range(steps_per_sample):
             t = t0 + j * step
             k1 = rhs(t, z)
             k2 = rhs(t + step / 2, z + step / 2 * k1)
@@ -259,7 +252,38 @@ def integrate(rhs, n):
             z = z + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         times.append(final_time * k / samples)
         states.append(z.copy())
-    return final_time, times, states
+    return times, states
+
+
+def box_grid(length, width):
+    """The evaluation grid of EVALUATION_POINTS on [0, length] x [0, width] (axis 1 fastest) and
+    the weights of the trapezoid rule's tensor product."""
+    side = round(math.sqrt(EVALUATION_POINTS))
+    grid = np.array([[x, y] for y in np.linspace(0.0, width, side)
+                     for x in np.linspace(0.0, length, side)])
+    wx = np.full(side, length / (side - 1))
+    wy = np.full(side, width / (side - 1))
+    wx[[0, -1]] *= 0.5
+    wy[[0, -1]] *= 0.5
+    return grid, np.outer(wy, wx).reshape(-1)
+
+
+def compared_values(weights, truth, interpolant, estimate, visited, states, d, excitation):
+    """The values compared with the run's: errors of the interpolant and of fhat(T) on the grid
+    (with the quadrature `weights`), split by the visited mask, |x - xhat| over the samples (d
+    plant states), and (pe_level, unexcited_dimension)."""
+    residual_squared = weights * (truth - estimate) ** 2
+    pe_level, unexcited = excitation
+    return {
+        "interpolant_l2_error": math.sqrt(np.sum(weights * (truth - interpolant) ** 2)),
+        "l2_error": math.sqrt(np.sum(residual_squared)),
+        "path_l2_error": math.sqrt(np.sum(residual_squared[visited])),
+        "off_path_l2_error": math.sqrt(np.sum(residual_squared[~visited])),
+        "max_state_error": max(np.linalg.norm(s[:d] - s[d:2 * d]) for s in states),
+        "final_state_error": float(np.linalg.norm(states[-1][:d] - states[-1][d:2 * d])),
+        "pe_level": pe_level,
+        "unexcited_dimension": unexcited,
+    }
 
 
 def excitation_values(gram, second_half_phis):
@@ -299,7 +323,7 @@ def reference_trial_2d(row):
     # Axis 1 varies fastest.
     centres = np.array([[x, y] for y in axis_y for x in axis_x])
     n = len(centres)
-    gram = gaussian(centres[:, None, :], centres[None, :, :])
+    gram = gaussian(centres[:, None, :], centres[None, :, :], SIGMA)
     A = np.array([[0.0, 1.0], [-1.0, -0.5]])
     B = np.array([0.0, 1.0])
     P = lyapunov(A)
@@ -312,41 +336,24 @@ def reference_trial_2d(row):
     def rhs(t, z):
         x, xhat, alpha = z[:2], z[2:4], z[4:]
         y = x + offsets
-        phi = gaussian(y[None, :], centres)
+        phi = gaussian(y[None, :], centres, SIGMA)
         known = np.array([0.0, amplitude * math.cos(OMEGA * t)])
         e = b @ (x - xhat)
         return np.concatenate([A @ x + B * f_2d(*y) + known,
                                A @ xhat + B * (phi @ alpha) + known, (M @ phi) * e])
 
-    final_time, times, states = integrate(rhs, n)
-    z = states[-1]
-    side = round(math.sqrt(EVALUATION_POINTS))
-    grid = np.array([[x, y] for y in np.linspace(0.0, WIDTH, side)
-                     for x in np.linspace(0.0, LENGTH, side)])
-    wx = np.full(side, LENGTH / (side - 1))
-    wy = np.full(side, WIDTH / (side - 1))
-    wx[[0, -1]] *= 0.5
-    wy[[0, -1]] *= 0.5
-    weights = np.outer(wy, wx).reshape(-1)
-    cross = gaussian(grid[:, None, :], centres[None, :, :])
+    times, states = integrate(rhs, 4 + n)
+    final_time = FINAL_TIME
+    grid, weights = box_grid(LENGTH, WIDTH)
+    cross = gaussian(grid[:, None, :], centres[None, :, :], SIGMA)
     alpha_star = np.linalg.solve(gram, f_2d(centres[:, 0], centres[:, 1]))
-    truth = f_2d(grid[:, 0], grid[:, 1])
-    residual = truth - cross @ z[4:]
     second_half = [s for t, s in zip(times, states) if t >= 0.5 * final_time]
     readouts = np.array([s[:2] + offsets for s in second_half])
     visited = segment_distances(grid, readouts) <= float(row["fill_distance"])
-    pe_level, unexcited = excitation_values(
-        gram, [gaussian(y[None, :], centres) for y in readouts])
-    return {
-        "interpolant_l2_error": math.sqrt(np.sum(weights * (truth - cross @ alpha_star) ** 2)),
-        "l2_error": math.sqrt(np.sum(weights * residual ** 2)),
-        "path_l2_error": math.sqrt(np.sum((weights * residual ** 2)[visited])),
-        "off_path_l2_error": math.sqrt(np.sum((weights * residual ** 2)[~visited])),
-        "max_state_error": max(np.linalg.norm(s[:2] - s[2:4]) for s in states),
-        "final_state_error": float(np.linalg.norm(z[:2] - z[2:4])),
-        "pe_level": pe_level,
-        "unexcited_dimension": unexcited,
-    }
+    return compared_values(
+        weights, f_2d(grid[:, 0], grid[:, 1]), cross @ alpha_star, cross @ states[-1][4:],
+        visited, states, 2,
+        excitation_values(gram, [gaussian(y[None, :], centres, SIGMA) for y in readouts]))
 
 
 def reference_trial_vehicle(row):
@@ -355,7 +362,7 @@ def reference_trial_vehicle(row):
     n = len(centres)
 
     def kernel(a, b):
-        return np.exp(-np.sum((a - b) ** 2, axis=-1) / (2 * VEHICLE_SIGMA ** 2))
+        return gaussian(a, b, VEHICLE_SIGMA)
 
     gram = kernel(centres[:, None, :], centres[None, :, :])
     m1, m2, k1, k2, c2 = 0.5, 0.5, 500.0, 300.0, 20.0
@@ -377,45 +384,17 @@ def reference_trial_vehicle(row):
                                (M @ phi) * e])
 
     final_time = VEHICLE_LAPS * 3.0 / VEHICLE_SPEED
-    samples = VEHICLE_LAPS * VEHICLE_SAMPLES
-    z = np.zeros(8 + n)
-    times, states = [0.0], [z.copy()]
-    step = final_time / samples / VEHICLE_STEPS_PER_SAMPLE
-    for k in range(1, samples + 1):  # the corners (t = 2, 3, 5, 6 s) are sample times
-        t0 = final_time * (k - 1) / samples
-        for j in range(VEHICLE_STEPS_PER_SAMPLE):
-            t = t0 + j * step
-            k1v = rhs(t, z)
-            k2v = rhs(t + step / 2, z + step / 2 * k1v)
-            k3v = rhs(t + step / 2, z + step / 2 * k2v)
-            k4v = rhs(t + step, z + step * k3v)
-            z = z + step / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        times.append(final_time * k / samples)
-        states.append(z.copy())
-    side = round(math.sqrt(EVALUATION_POINTS))
-    line = np.linspace(0.0, 1.0, side)
-    grid = np.array([[x, y] for y in line for x in line])
-    w = np.full(side, 1.0 / (side - 1))
-    w[[0, -1]] *= 0.5
-    weights = np.outer(w, w).reshape(-1)
+    # The corners (t = 2, 3, 5, 6 s) are sample times: no RK4 step straddles one.
+    times, states = integrate(rhs, 8 + n, final_time, VEHICLE_LAPS * VEHICLE_SAMPLES,
+                              VEHICLE_STEPS_PER_SAMPLE)
+    grid, weights = box_grid(1.0, 1.0)
     cross = kernel(grid[:, None, :], centres[None, :, :])
     alpha_star = np.linalg.solve(gram, surface(centres[:, 0], centres[:, 1]))
-    truth = surface(grid[:, 0], grid[:, 1])
-    residual = truth - cross @ z[8:]
     readouts = np.array([wheel_path(t) for t in times if t >= 0.5 * final_time])
     visited = segment_distances(grid, readouts) <= float(row["fill_distance"])
-    pe_level, unexcited = excitation_values(
-        gram, [kernel(y[None, :], centres) for y in readouts])
-    return {
-        "interpolant_l2_error": math.sqrt(np.sum(weights * (truth - cross @ alpha_star) ** 2)),
-        "l2_error": math.sqrt(np.sum(weights * residual ** 2)),
-        "path_l2_error": math.sqrt(np.sum((weights * residual ** 2)[visited])),
-        "off_path_l2_error": math.sqrt(np.sum((weights * residual ** 2)[~visited])),
-        "max_state_error": max(np.linalg.norm(s[:4] - s[4:8]) for s in states),
-        "final_state_error": float(np.linalg.norm(z[:4] - z[4:8])),
-        "pe_level": pe_level,
-        "unexcited_dimension": unexcited,
-    }
+    return compared_values(
+        weights, surface(grid[:, 0], grid[:, 1]), cross @ alpha_star, cross @ states[-1][8:],
+        visited, states, 4, excitation_values(gram, [kernel(y[None, :], centres) for y in readouts]))
 
 
 def reference_trial(row):
@@ -439,29 +418,20 @@ def reference_trial(row):
         return np.concatenate([A @ x + B * f(y) + known, A @ xhat + B * (phi @ alpha) + known,
                                (M @ phi) * e])
 
-    final_time, times, states = integrate(rhs, n)
-    z = states[-1]
+    times, states = integrate(rhs, 4 + n)
+    final_time = FINAL_TIME
 
     grid = np.linspace(0.0, LENGTH, EVALUATION_POINTS)
     weights = np.full(EVALUATION_POINTS, LENGTH / (EVALUATION_POINTS - 1))
     weights[[0, -1]] *= 0.5
     cross = wendland(np.abs(grid[:, None] - centres[None, :]) / RADIUS)
     alpha_star = np.linalg.solve(gram, f(centres))
-    residual = f(grid) - cross @ z[4:]
     second_half = [s for t, s in zip(times, states) if t >= 0.5 * final_time]
     readouts = np.array([s[coordinate] + OFFSET for s in second_half])
     visited = (grid >= readouts.min()) & (grid <= readouts.max())
-    pe_level, unexcited = excitation_values(gram, [sections(y, centres) for y in readouts])
-    return {
-        "interpolant_l2_error": math.sqrt(np.sum(weights * (f(grid) - cross @ alpha_star) ** 2)),
-        "l2_error": math.sqrt(np.sum(weights * residual ** 2)),
-        "path_l2_error": math.sqrt(np.sum((weights * residual ** 2)[visited])),
-        "off_path_l2_error": math.sqrt(np.sum((weights * residual ** 2)[~visited])),
-        "max_state_error": max(np.linalg.norm(s[:2] - s[2:4]) for s in states),
-        "final_state_error": float(np.linalg.norm(z[:2] - z[2:4])),
-        "pe_level": pe_level,
-        "unexcited_dimension": unexcited,
-    }
+    return compared_values(
+        weights, f(grid), cross @ alpha_star, cross @ states[-1][4:], visited, states, 2,
+        excitation_values(gram, [sections(y, centres) for y in readouts]))
 
 
 def main():
