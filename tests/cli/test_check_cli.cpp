@@ -221,19 +221,6 @@ rate = -3.0
   CHECK(parsed == 0);
 }
 
-TEST_CASE("the project's studies pass their quick tier", "[cli][check]") {
-  for (const auto& entry : fs::directory_iterator(fs::path(RKHS_STUDY_SOURCE_DIR) / "studies")) {
-    if (entry.path().extension() != ".toml") continue;
-    if (read(entry.path()).find("tier = \"quick\"") == std::string::npos) continue;
-    // The data root of the repository: a study may read a measured surface or road.
-    const auto data = fs::path(RKHS_STUDY_SOURCE_DIR) / "studies" / "data";
-    const auto outcome = rkhs_study("check --tier quick --quiet --threads 2 --data-dir " +
-                                    data.string() + " " + entry.path().string());
-    INFO(outcome.output);
-    CHECK(outcome.exit_code == 0);
-  }
-}
-
 // ---- What CI users of pytest expect: several files, -k, xfail, --allow, JUnit, summary.json ----
 
 namespace {
