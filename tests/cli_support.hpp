@@ -12,14 +12,17 @@
 #include <string>
 #include <thread>
 
-#include "rkhs/plugin/build_configuration.hpp"
+#ifndef RKHS_TEST_SLOWDOWN
+#error "RKHS_TEST_SLOWDOWN is defined by tests/CMakeLists.txt for every target that runs commands"
+#endif
 
 namespace rkhs::test {
 
-/// How many times longer than in a plain build a test waits for a command to reach a point (a
-/// trial stored, a rank started): a sanitizer build runs every program several times slower
-/// (docs/sanitizers.md), so a wait that is generous in a release build is not one there.
-inline constexpr int patience = RKHS_DETAIL_SANITIZER == rkhs::SanitizerKind::none ? 1 : 10;
+/// How many times longer than in a release build a test waits for a command to reach a point (a
+/// trial stored, a rank started): 1, and 12 in a sanitizer build, which runs every program
+/// several times slower (docs/sanitizers.md). The same factor scales the tests' ctest limits
+/// (RKHS_TEST_SLOWDOWN, tests/CMakeLists.txt).
+inline constexpr int patience = RKHS_TEST_SLOWDOWN;
 
 /// Polls `reached` every 50 ms for up to `seconds` x `patience`; true once it held.
 template <class Predicate>
