@@ -19,9 +19,9 @@
 namespace rkhs::test {
 
 /// How many times longer than in a release build a test waits for a command to reach a point (a
-/// trial stored, a rank started): 1, and 12 in a sanitizer build, which runs every program
-/// several times slower (docs/sanitizers.md). The same factor scales the tests' ctest limits
-/// (RKHS_TEST_SLOWDOWN, tests/CMakeLists.txt).
+/// trial stored, a rank started): RKHS_TEST_SLOWDOWN, set in tests/CMakeLists.txt (1 there, more
+/// in a sanitizer build, which runs every program several times slower, docs/sanitizers.md). The
+/// same factor scales the tests' ctest limits.
 inline constexpr int patience = RKHS_TEST_SLOWDOWN;
 
 /// Polls `reached` every 50 ms for up to `seconds` x `patience`; true once it held.
