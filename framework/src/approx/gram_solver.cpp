@@ -2,19 +2,106 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstdint>
 #include <limits>
+
+#include "rkhs/approx/dense_kernels.hpp"
 
 namespace rkhs {
 
-GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options)
+namespace {
+constexpr double eps = std::numeric_limits<double>::epsilon();
+
+// A fixed start vector with components in every direction (splitmix64 of the index, in
+// [-1, 1)): Lanczos from it is deterministic, and no eigenvector of a structured Gram matrix
+// (a constant or an alternating vector) is orthogonal to it.
+Eigen::VectorXd lanczos_start(Eigen::Index n) {
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    std::uint64_t z = static_cast<std::uint64_t>(i) + 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    v[i] = static_cast<double>(z >> 11) * 0x1.0p-52 - 1.0;
+  }
+  return v.normalized();
+}
+
+// The largest eigenvalue of the symmetric positive semi-definite operator `apply` (out = A in)
+// of size n: the largest Ritz value of Lanczos with full reorthogonalisation, from
+// lanczos_start, stopped when it changes by less than `tolerance` relative in one step, at an
+// invariant subspace, or after `max_steps`. A Ritz value never exceeds the eigenvalue.
+template <class Apply>
+double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::Index max_steps) {
+  const Eigen::Index steps = std::min(n, max_steps);
+  Eigen::MatrixXd basis(n, steps);
+  basis.col(0) = lanczos_start(n);
+  Eigen::VectorXd diagonal(steps), off_diagonal(steps), w(n);
+  double ritz = 0;
+  for (Eigen::Index k = 0; k < steps; ++k) {
+    apply(basis.col(k), w);
+    diagonal[k] = basis.col(k).dot(w);
+    // Full reorthogonalisation, twice (Gram-Schmidt twice is enough).
+    for (int pass = 0; pass < 2; ++pass)
+      w.noalias() -= basis.leftCols(k + 1) * (basis.leftCols(k + 1).transpose() * w);
+    const double beta = w.norm();
+    double next = diagonal[0];
+    if (k > 0) {
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> tridiagonal;
+      const Eigen::VectorXd d = diagonal.head(k + 1), e = off_diagonal.head(k);
+      tridiagonal.computeFromTridiagonal(d, e, Eigen::EigenvaluesOnly);
+      next = tridiagonal.eigenvalues()[k];
+    }
+    const bool converged = k > 0 && std::abs(next - ritz) <= tolerance * std::abs(next);
+    ritz = next;
+    if (converged || beta <= eps * std::abs(ritz) || k + 1 == steps) break;
+    off_diagonal[k] = beta;
+    basis.col(k + 1) = w / beta;
+  }
+  return ritz;
+}
+}  // namespace
+
+GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options,
+                       GramSpectrumMode mode)
     : n_(gram.rows()) {
   if (n_ == 0 || gram.cols() != n_) throw std::invalid_argument("Gram matrix must be square, n >= 1");
   if (!gram.allFinite()) throw std::invalid_argument("Gram matrix has non-finite entries");
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram);
+  if (mode == GramSpectrumMode::estimate) {
+    factorise(gram);
+    if (factored_) {
+      const double lambda_max = lanczos_largest(
+          [&](const auto& in, Eigen::VectorXd& out) { out.noalias() = gram * in; }, n_, 1e-13, 80);
+      const double inverse_max = lanczos_largest(
+          [&](const auto& in, Eigen::VectorXd& out) {
+            out = in;
+            solve_lower_in_place(out);
+            solve_lower_transposed_in_place(out);
+          },
+          n_, 1e-8, 60);
+      const double lambda_min = 1.0 / inverse_max;  // >= the true lambda_min
+      const double cutoff = static_cast<double>(n_) * eps * lambda_max;
+      if (lambda_min > 100.0 * cutoff) {
+        spectrum_ = {lambda_min, lambda_max, lambda_max / lambda_min, false, true};
+        method_ = "cholesky";
+        return;
+      }
+    }
+  }
+  decide_from_eigenvalues(gram, options);
+}
+
+void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
+                                         const SolverOptions& options) {
+  // The eigenvalues alone (the same values as with the eigenvectors: the tridiagonal QR
+  // iteration does not depend on whether they are accumulated); the vectors only when the
+  // pseudo-inverse needs them.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram, Eigen::EigenvaluesOnly);
   if (eigen.info() != Eigen::Success)
     throw std::runtime_error("symmetric eigen-decomposition of the Gram matrix did not converge");
   const Eigen::VectorXd& values = eigen.eigenvalues();  // increasing
-  constexpr double eps = std::numeric_limits<double>::epsilon();
+  spectrum_ = {};
   spectrum_.lambda_min = values(0);
   spectrum_.lambda_max = values(n_ - 1);
   const double cutoff = static_cast<double>(n_) * eps * spectrum_.lambda_max;
@@ -24,15 +111,17 @@ GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options
                                    : spectrum_.lambda_max / spectrum_.lambda_min;
 
   if (!spectrum_.singular) {
-    cholesky_.emplace(gram);
-    if (cholesky_->info() == Eigen::Success) {
+    if (!factored_) factorise(gram);
+    if (factored_) {
       method_ = "cholesky";
       return;
     }
-    cholesky_.reset();  // not numerically positive definite after all: treat as singular
+    // Not numerically positive definite after all: treat as singular.
     spectrum_.singular = true;
     spectrum_.condition_number = std::numeric_limits<double>::infinity();
   }
+  factored_ = false;
+  factor_.resize(0, 0);
 
   switch (options.singular) {
     case SingularPolicy::fail:
@@ -41,24 +130,19 @@ GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options
           "n eps lambda_max = {:.3e}); choose solver.singular = \"pseudo_inverse\" or "
           "\"regularised\" to proceed",
           spectrum_.lambda_min, spectrum_.lambda_max, cutoff));
-    case SingularPolicy::regularised: {
-      const double mu =
-          options.regularisation > 0 ? options.regularisation : static_cast<double>(n_) * eps;
-      Eigen::MatrixXd shifted = gram;
-      shifted.diagonal().array() += mu * spectrum_.lambda_max;
-      cholesky_.emplace(shifted);
-      if (cholesky_->info() != Eigen::Success)
-        throw SingularGramError(fmt::format(
-            "regularised Gram matrix (mu = {:.3e} lambda_max) is still not positive definite", mu));
-      method_ = fmt::format("regularised (mu = {:.3e} lambda_max)", mu);
+    case SingularPolicy::regularised:
+      factorise_shifted(gram, options);
       return;
-    }
     case SingularPolicy::pseudo_inverse: {
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> pairs(gram);
+      if (pairs.info() != Eigen::Success)
+        throw std::runtime_error("symmetric eigen-decomposition of the Gram matrix did not converge");
+      const Eigen::VectorXd& pair_values = pairs.eigenvalues();
       Eigen::Index first = 0;
-      while (first < n_ && !(values(first) > cutoff)) ++first;
+      while (first < n_ && !(pair_values(first) > cutoff)) ++first;
       const Eigen::Index rank = n_ - first;
-      kept_vectors_ = eigen.eigenvectors().rightCols(rank);
-      kept_values_ = values.tail(rank);
+      kept_vectors_ = pairs.eigenvectors().rightCols(rank);
+      kept_values_ = pair_values.tail(rank);
       method_ = fmt::format("pseudo-inverse (rank {} of {}, cutoff {:.3e} lambda_max)", rank, n_,
                             static_cast<double>(n_) * eps);
       return;
@@ -66,8 +150,42 @@ GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options
   }
 }
 
+void GramSolver::factorise_shifted(const Eigen::MatrixXd& gram, const SolverOptions& options) {
+  const double mu =
+      options.regularisation > 0 ? options.regularisation : static_cast<double>(n_) * eps;
+  Eigen::MatrixXd shifted = gram;
+  shifted.diagonal().array() += mu * spectrum_.lambda_max;
+  factorise(shifted);
+  if (!factored_)
+    throw SingularGramError(fmt::format(
+        "regularised Gram matrix (mu = {:.3e} lambda_max) is still not positive definite", mu));
+  method_ = fmt::format("regularised (mu = {:.3e} lambda_max)", mu);
+}
+
+void GramSolver::factorise(const Eigen::MatrixXd& matrix) {
+  factor_ = matrix;
+  factored_ = dense::kernels().cholesky(factor_.data(), n_, factor_.outerStride());
+}
+
+void GramSolver::solve_lower_in_place(Eigen::Ref<Eigen::MatrixXd> x) const {
+  if (!factored_) throw std::logic_error("GramSolver: no Cholesky factor to solve with");
+  dense::kernels().solve_lower(factor_.data(), n_, factor_.outerStride(), x.data(), x.cols(),
+                               x.outerStride());
+}
+
+void GramSolver::solve_lower_transposed_in_place(Eigen::Ref<Eigen::MatrixXd> x) const {
+  if (!factored_) throw std::logic_error("GramSolver: no Cholesky factor to solve with");
+  dense::kernels().solve_lower_transposed(factor_.data(), n_, factor_.outerStride(), x.data(),
+                                          x.cols(), x.outerStride());
+}
+
 Eigen::MatrixXd GramSolver::solve(const Eigen::MatrixXd& b) const {
-  if (cholesky_) return cholesky_->solve(b);
+  if (factored_) {
+    Eigen::MatrixXd x = b;
+    solve_lower_in_place(x);
+    solve_lower_transposed_in_place(x);
+    return x;
+  }
   Eigen::MatrixXd projected = kept_vectors_.transpose() * b;
   projected.array().colwise() /= kept_values_.array();
   return kept_vectors_ * projected;
@@ -79,19 +197,35 @@ Eigen::VectorXd GramSolver::solve(const Eigen::VectorXd& b) const {
 
 void GramSolver::quadratic_forms(const Eigen::MatrixXd& columns, Eigen::VectorXd& quadratic,
                                  Eigen::VectorXd& solution_norm_squared) const {
-  if (cholesky_) {
+  Eigen::MatrixXd scratch = columns;
+  quadratic.resize(columns.cols());
+  solution_norm_squared.resize(columns.cols());
+  quadratic_forms_in_place(scratch, quadratic.data(), solution_norm_squared.data());
+}
+
+void GramSolver::quadratic_forms_in_place(Eigen::Ref<Eigen::MatrixXd> columns, double* quadratic,
+                                          double* solution_norm_squared) const {
+  const Eigen::Index count = columns.cols();
+  Eigen::Map<Eigen::VectorXd> q(quadratic, count);
+  if (factored_) {
     // k^T G^-1 k = |L^-1 k|^2 and G^-1 k = L^-T (L^-1 k).
-    Eigen::MatrixXd half = cholesky_->matrixL().solve(columns);
-    quadratic = half.colwise().squaredNorm().transpose();
-    cholesky_->matrixU().solveInPlace(half);
-    solution_norm_squared = half.colwise().squaredNorm().transpose();
+    solve_lower_in_place(columns);
+    q = columns.colwise().squaredNorm().transpose();
+    if (solution_norm_squared) {
+      solve_lower_transposed_in_place(columns);
+      Eigen::Map<Eigen::VectorXd>(solution_norm_squared, count) =
+          columns.colwise().squaredNorm().transpose();
+    }
     return;
   }
   Eigen::MatrixXd projected = kept_vectors_.transpose() * columns;  // V^T k
   Eigen::MatrixXd scaled = projected.array().colwise() / kept_values_.array().sqrt();
-  quadratic = scaled.colwise().squaredNorm().transpose();
-  projected.array().colwise() /= kept_values_.array();
-  solution_norm_squared = projected.colwise().squaredNorm().transpose();
+  q = scaled.colwise().squaredNorm().transpose();
+  if (solution_norm_squared) {
+    projected.array().colwise() /= kept_values_.array();
+    Eigen::Map<Eigen::VectorXd>(solution_norm_squared, count) =
+        projected.colwise().squaredNorm().transpose();
+  }
 }
 
 }  // namespace rkhs
