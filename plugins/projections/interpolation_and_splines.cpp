@@ -48,34 +48,8 @@ class Interpolation final : public Projection {
     const auto n = request.centres.size() / d;
     if (n == 0) throw std::invalid_argument("projection 'interpolation' needs centres");
     const Eigen::MatrixXd gram = request.kernel.gram(request.centres);
-    const GramSolver solver(gram, request.solver);
-    // An H-orthonormal basis of H_n, b = E^T k_X, with W = E^T (c = E^T f(X), so Pi f =
-    // k_X^T E E^T f(X) = k_X^T G^-1 f(X)): E = L^-T from G = L L^T, or V diag(lambda^-1/2)
-    // over the pseudo-inverse's kept eigenpairs. Then ||(I - Pi)^* k(s, .)||^2 comes out as
-    // k(s, s) - |L^-1 k_X(s)|^2, the power function's backward-stable form, rather than as a
-    // difference of quadratic forms in an explicit inverse (which loses cond(G) eps).
-    Eigen::MatrixXd E, W;  // W = E^T for the orthonormal bases
-    if (const auto* vectors = solver.kept_vectors()) {
-      E = *vectors * solver.kept_values()->cwiseSqrt().cwiseInverse().asDiagonal();
-    } else if (solver.method() == "cholesky") {
-      const auto size = static_cast<Eigen::Index>(n);
-      const Eigen::LLT<Eigen::MatrixXd> factor(gram);
-      E = factor.matrixL()
-              .solve(Eigen::MatrixXd(Eigen::MatrixXd::Identity(size, size)))
-              .transpose();
-    } else {  // regularised: G_mu^-1 through the solver, the basis k(c_i, .) itself
-      const auto size = static_cast<Eigen::Index>(n);
-      E = Eigen::MatrixXd::Identity(size, size);
-      W = solver.solve(E);
-    }
-    if (W.size() == 0) W = E.transpose();
-    out.resize(static_cast<std::size_t>(E.cols()), n, n, d);
-    std::copy(request.centres.begin(), request.centres.end(), out.samples().begin());
-    std::copy(request.centres.begin(), request.centres.end(), out.basis_points().begin());
-    out.basis_coefficients() = E;
-    out.weights() = W;
-    out.set_mesh(request.centres);
-    out.set_solve_method(solver.method());
+    interpolation_operator(request.kernel, request.centres, gram,
+                           GramSolver(gram, request.solver), out);
   }
 };
 

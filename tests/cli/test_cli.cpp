@@ -199,6 +199,21 @@ TEST_CASE("validate names every axis of the grid, in words that agree in number"
   CHECK_THAT(one_thread.output, Catch::Contains("cli_small (6 trials, 1 thread) -> "));
 }
 
+TEST_CASE("validate and run say which metrics a trial will compute", "[cli][work]") {
+  const auto iso = run("validate " + std::string(RKHS_STUDY_SOURCE_DIR) + "/studies/iso8608.toml");
+  CHECK(iso.exit_code == 0);
+  CHECK_THAT(iso.output, Catch::Contains("metrics computed: gram_condition_number, "
+                                         "power_function_sup, l2_error, sup_error (4 of 13)"));
+  // Rates against h need the fill distance, theory expectations the centres' quasi-uniformity.
+  const auto scattered =
+      run("validate " + std::string(RKHS_STUDY_SOURCE_DIR) + "/studies/scattered_centres.toml");
+  CHECK_THAT(scattered.output, Catch::Contains("metrics computed: fill_distance, "
+                                               "separation_distance, gram_condition_number"));
+  const auto all = run("validate " + std::string(RKHS_STUDY_SOURCE_DIR) +
+                       "/studies/gram_and_power.toml");
+  CHECK_THAT(all.output, Catch::Contains("metrics computed: all 13 of an approximation trial"));
+}
+
 TEST_CASE("an evaluation grid that cannot measure the metrics is refused or warned", "[cli]") {
   const auto dir = scratch("evaluation_grid");
   std::string coarse = small_study;

@@ -183,3 +183,46 @@ TEST_CASE("a laps axis: each lap count is its own trial identity, and adding one
   // One lap count is a setting, not an axis: a different identity from the axis's trial.
   CHECK(trial_hashes(with_laps("laps = 2"), with_laps("laps = 2").trials()).front() != h2[2]);
 }
+
+TEST_CASE("an approximation trial computes only its study's metrics, and that is its identity",
+          "[store][identity][work]") {
+  const std::string head = R"(
+[study]
+name = "selected"
+kind = "approximation"
+evaluation_points = 512
+)";
+  const std::string rest = R"(
+[domain]
+radius = 1.0
+[grid]
+n = [8]
+[[kernel]]
+name = "gaussian"
+sigma = 0.5
+[[target]]
+name = "sine"
+[[centres]]
+name = "uniform"
+)";
+  const auto all = parse_study(head + rest, "all.toml");
+  const auto some = parse_study(head + "metrics = [\"l2_error\"]\n" + rest, "some.toml");
+  const auto against_h =
+      parse_study(head + "metrics = [\"l2_error\"]\nabscissa = \"h\"\n" + rest, "h.toml");
+  CHECK(some.computed_metric_names() == std::vector<std::string>{"l2_error"});
+  CHECK(against_h.computed_metric_names() ==
+        std::vector<std::string>{"fill_distance", "l2_error"});
+  CHECK(all.computed_metric_names() == all.all_metrics());
+  // A record of fewer metrics never serves a study that asks for more.
+  CHECK(trial_hashes(some, some.trials()) != trial_hashes(all, all.trials()));
+  CHECK(trial_hashes(some, some.trials()) != trial_hashes(against_h, against_h.trials()));
+
+  const auto full = run_trial(all, all.trials().front(), {});
+  const auto selected = run_trial(some, some.trials().front(), {});
+  REQUIRE(full.ok);
+  REQUIRE(selected.ok);
+  const auto l2 = all.metric_index("l2_error");
+  CHECK(selected.metrics[l2] == full.metrics[l2]);
+  for (std::size_t i = 0; i < selected.metrics.size(); ++i)
+    if (i != l2) CHECK(std::isnan(selected.metrics[i]));
+}

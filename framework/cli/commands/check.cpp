@@ -130,7 +130,8 @@ class Check {
     if (!quiet())
       std::cerr << fmt::format("rkhs-study check: {}{}: {}, {}\n", checked.study.name, tier_text_,
                                counted(checked.trials.size(), "trial", "trials"),
-                               counted(threads, "thread", "threads"));
+                               counted(threads, "thread", "threads"))
+                << "  " << computed_metrics_text(checked.study) << "\n";
     RunOptions options;
     options.threads = threads;
     stop_on_signals(options);

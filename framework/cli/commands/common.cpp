@@ -1,6 +1,9 @@
 #include "commands/common.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
 
 #include <atomic>
 #include <csignal>
@@ -26,6 +29,30 @@ extern "C" void request_stop(int) {
 
 std::string counted(std::size_t count, const char* singular, const char* plural) {
   return fmt::format("{} {}", count, count == 1 ? singular : plural);
+}
+
+std::string computed_metrics_text(const StudyDefinition& study) {
+  const auto computed = study.computed_metric_names();
+  const auto total = study.all_metrics().size();
+  if (computed.size() == total)
+    return fmt::format("metrics computed: all {} of an {} trial", total, study_kind_name(study.kind));
+  std::vector<std::string> extra;
+  for (const auto& metric : computed)
+    if (std::find(study.metrics.begin(), study.metrics.end(), metric) == study.metrics.end())
+      extra.push_back(metric);
+  std::string why;
+  if (!extra.empty()) {
+    std::vector<std::string> reasons;
+    if (study.abscissa == Abscissa::fill_distance) reasons.emplace_back("abscissa = \"h\"");
+    for (const auto& e : study.expectations)
+      if (e.kind == ExpectationKind::theory) {
+        reasons.emplace_back("theory expectations (quasi-uniformity)");
+        break;
+      }
+    why = fmt::format("; {} for {}", fmt::join(extra, ", "), fmt::join(reasons, " and "));
+  }
+  return fmt::format("metrics computed: {} ({} of {}{})", fmt::join(computed, ", "),
+                     computed.size(), total, why);
 }
 
 void print_warnings(const StudyDefinition& study) {

@@ -18,6 +18,11 @@ std::string counted(std::size_t count, const char* singular, const char* plural)
 /// A study file's warnings (valid but doubtful settings), one line each, on stderr.
 void print_warnings(const StudyDefinition& study);
 
+/// "metrics computed: l2_error, sup_error (2 of 13)", with the metrics computed beyond
+/// study.metrics and why ("fill_distance for abscissa = h"): what `validate` and the start line
+/// of `run` and `check` say a trial will compute (StudyDefinition::computed_metrics()).
+std::string computed_metrics_text(const StudyDefinition& study);
+
 /// Installs the SIGINT / SIGTERM handlers and makes `options` stop at them: no new trial
 /// starts, trials in flight stop at their next cancellation point (rkhs/core/cancellation.hpp)
 /// or are abandoned 2 s later (in this process; main() then ends at once). Neither kind is

@@ -88,7 +88,8 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
     std::cerr << fmt::format("rkhs-study: {} ({}, {}{}) -> {}\n", study.name,
                              counted(trials.size(), "trial", "trials"),
                              counted(thread_count, "thread", "threads"), executor.where(),
-                             out_dir);
+                             out_dir)
+              << "  " << computed_metrics_text(study) << "\n";
   std::optional<Progress> progress;
   if (!quiet) progress.emplace(std::cerr, isatty(STDERR_FILENO) != 0);
   RunOptions options;

@@ -22,6 +22,7 @@ int command_validate(const std::string& study_file) {
   }
   std::cout << fmt::format("{}: valid; {} = {}\n", study_file, fmt::join(factors, " x "),
                            counted(trials, "trial", "trials"));
+  std::cout << "  " << computed_metrics_text(study) << "\n";
   if (const auto tiers = study_tiers(study); !study.expectations.empty() || !tiers.empty())
     std::cout << fmt::format(
         "  {} expectation{}; tiers: {}\n", study.expectations.size(),

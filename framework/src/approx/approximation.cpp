@@ -4,9 +4,11 @@
 #include <cmath>
 #include <array>
 #include <limits>
+#include <optional>
 #include <queue>
 
 #include "rkhs/core/cancellation.hpp"
+#include "rkhs/core/concurrency.hpp"
 
 namespace rkhs {
 
@@ -121,40 +123,196 @@ const std::vector<std::string>& approximation_metric_names() {
 }
 
 namespace {
-// P_n^2 on the points, with what the error estimates need.
-struct PowerFunctionData {
-  Eigen::MatrixXd cross;                  // K_mi = k(s_m, c_i)
+// Evaluation points per block of the blocked pass: the cross matrix, the triangular solves and
+// the residual are formed for this many points at a time (memory O(n^2 + n x block), never
+// M x n), each block by itself, so the result does not depend on how blocks are scheduled.
+constexpr std::size_t points_per_block = 256;
+
+// What the blocked pass over the evaluation points gives, one entry per point.
+struct GridPass {
   Eigen::VectorXd power_squared;          // max(0, k(s,s) - k_X^T G^-1 k_X)
-  Eigen::VectorXd solution_norm_squared;  // |G^-1 k_X(s_m)|^2
+  Eigen::VectorXd solution_norm_squared;  // |G^-1 k_X(s_m)|^2 (work_cardinal)
+  Eigen::VectorXd residual;               // f(s_m) - Pi_n f(s_m) (work_residual)
 };
 
-PowerFunctionData power_function_data(const AnyKernel& kernel, const GramSolver& solver,
-                                      std::span<const double> centres,
-                                      std::span<const double> points) {
-  PowerFunctionData data;
-  data.cross = kernel.cross(points, centres);
+// One pass over the evaluation points in blocks (run_parts: on idle threads of the trial's
+// arena): the cross matrix K_b = k(s_b, X) of each block, then what `work` asks of it.
+// `alpha` and `at_points` are needed for work_residual; `cross` (M x n), when not null,
+// receives the whole cross matrix.
+GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
+                   std::span<const double> centres, std::span<const double> points,
+                   unsigned work, const Eigen::VectorXd& alpha, const Eigen::VectorXd& at_points,
+                   Eigen::MatrixXd* cross) {
+  const Domain& domain = kernel.domain();
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const std::size_t point_count = domain.point_count(points);
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
+  const auto m_total = static_cast<Eigen::Index>(point_count);
+  const bool power = work & (work_power | work_cardinal);
+  const bool cardinal = work & work_cardinal;
+  const bool residual = work & work_residual;
+  GridPass out;
   Eigen::VectorXd quadratic;
-  solver.quadratic_forms(data.cross.transpose(), quadratic, data.solution_norm_squared);
-  data.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
-  return data;
+  if (power) {
+    quadratic.resize(m_total);
+    if (cardinal) out.solution_norm_squared.resize(m_total);
+  }
+  if (residual) out.residual.resize(m_total);
+  if (cross) cross->resize(m_total, n);
+  const std::size_t blocks = (point_count + points_per_block - 1) / points_per_block;
+  run_parts(blocks, [&](std::size_t b) {
+    const std::size_t first = b * points_per_block;
+    const std::size_t rows = std::min(points_per_block, point_count - first);
+    const auto offset = static_cast<Eigen::Index>(first), count = static_cast<Eigen::Index>(rows);
+    const auto block_points = points.subspan(first * d, rows * d);
+    Eigen::MatrixXd local;
+    if (!cross) local.resize(count, n);
+    Eigen::Ref<Eigen::MatrixXd> block =
+        cross ? Eigen::Ref<Eigen::MatrixXd>(cross->middleRows(offset, count))
+              : Eigen::Ref<Eigen::MatrixXd>(local);
+    kernel.cross_into(block_points, centres, block);
+    check_cancelled();
+    if (residual)
+      out.residual.segment(offset, count).noalias() =
+          at_points.segment(offset, count) - block * alpha;
+    if (power) {
+      Eigen::MatrixXd columns = block.transpose();
+      solver.quadratic_forms_in_place(columns, quadratic.data() + offset,
+                                      cardinal ? out.solution_norm_squared.data() + offset
+                                               : nullptr);
+      check_cancelled();
+    }
+  });
+  if (power) out.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+  return out;
+}
+
+// Leaves NaN in every metric `selection` does not name (MetricSelection; empty: keep all), so
+// a trial's record holds exactly what it was asked to compute.
+void keep_selected(const MetricSelection& selection, ApproximationMeasurement& out) {
+  if (selection.empty()) return;
+  for (std::size_t i = 0; i < MetricValues<ApproximationMetric>::count; ++i)
+    if (i >= selection.size() || !selection[i])
+      out.metrics[static_cast<ApproximationMetric>(i)] = nan;
+}
+
+// measure_approximation on a built Gram matrix and solver, computing what `work` asks.
+ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const TargetFunction& target,
+                                             std::span<const double> centres,
+                                             std::size_t evaluation_points,
+                                             const Eigen::MatrixXd& gram, const GramSolver& solver,
+                                             unsigned work, Eigen::MatrixXd* cross_out) {
+  const Domain& domain = kernel.domain();
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
+  const auto points = domain.uniform_points(evaluation_points);
+  const std::size_t point_count = domain.point_count(points);
+
+  ApproximationMeasurement out;
+  using M = ApproximationMetric;
+  auto& metrics = out.metrics;
+  if (work & work_fill) metrics[M::fill_distance] = fill_distance(centres, domain);
+  if (work & work_separation) metrics[M::separation_distance] = separation_distance(centres, domain);
+
+  const auto& spectrum = solver.spectrum();
+  out.solve_method = solver.method();
+  if (work & work_spectrum) {
+    metrics[M::gram_condition_number] = spectrum.condition_number;
+    metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
+    metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+  }
+  if (spectrum.singular) out.flags.push_back("gram_singular");
+
+  // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
+  Eigen::VectorXd alpha, at_points;
+  if (work & (work_interpolant | work_residual)) {
+    Eigen::VectorXd at_centres(n);
+    target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
+    alpha = solver.solve(at_centres);
+  }
+  if (work & work_residual) {
+    at_points.resize(static_cast<Eigen::Index>(point_count));
+    target.evaluate(points, std::span<double>(at_points.data(), point_count));
+  }
+
+  // The power function from the cross matrix K_mi = k(s_m, c_i), O(n^2) per point, and the
+  // residual, in one blocked pass.
+  const unsigned grid_work = work & (work_power | work_cardinal | work_residual);
+  GridPass pass;
+  if (grid_work || cross_out)
+    pass = grid_pass(kernel, solver, centres, points, grid_work, alpha, at_points, cross_out);
+  check_cancelled();
+  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
+  const bool cardinal = work & work_cardinal;
+  const double largest_solution_norm_squared =
+      cardinal ? pass.solution_norm_squared.maxCoeff() : nan;
+  if (work & (work_power | work_cardinal)) {
+    const double power_sup = std::sqrt(pass.power_squared.maxCoeff());
+    const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
+    metrics[M::power_function_sup] = power_sup;
+    metrics[M::power_function_floor] = power_floor;
+    if (cardinal && power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+  }
+  if (work & work_interpolant) {
+    metrics[M::interpolant_native_norm] = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
+    if (cardinal)
+      metrics[M::error_floor] = round_off * std::sqrt(largest_solution_norm_squared) * alpha.norm();
+  }
+  if (work & work_residual) {
+    const Eigen::VectorXd& residual = pass.residual;
+    const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
+    const double sup = residual.cwiseAbs().maxCoeff();
+    metrics[M::l2_error] = l2;
+    metrics[M::sup_error] = sup;
+    if (cardinal) {
+      const double error_floor = metrics[M::error_floor];
+      if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
+      if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
+    }
+  }
+  // ||I - Pi_n||_{H -> C} of the H-orthogonal projection onto span{k(c_i, .)} is the power
+  // function (projection.hpp; tests/approx check it against the operator's own definition).
+  if (work & work_projection_residual) {
+    const double norm = metrics[M::power_function_sup];
+    metrics[M::projection_norm_H_to_C] = norm;
+    if (norm <= std::sqrt(static_cast<double>(n) * eps * kernel.diagonal(points).maxCoeff()))
+      out.flags.push_back("projection_norm_at_floor");
+  }
+  return out;
 }
 }  // namespace
 
 Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,
                                std::span<const double> centres, std::span<const double> points) {
-  return power_function_data(kernel, solver, centres, points).power_squared.cwiseSqrt();
+  return grid_pass(kernel, solver, centres, points, work_power, {}, {}, nullptr)
+      .power_squared.cwiseSqrt();
 }
 
 ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const TargetFunction& target,
                                                std::span<const double> centres,
                                                std::size_t evaluation_points,
-                                               const SolverOptions& solver_options) {
+                                               const SolverOptions& solver_options,
+                                               const MetricSelection& selection) {
+  unsigned work = work_needed<ApproximationMetric>(selection);
+  // The interpolation projection's own norms: the power function, and ||Pi|| of the operator
+  // built from the same solver.
+  if (work & work_projection_residual) work |= work_power;
   const Eigen::MatrixXd gram = kernel.gram(centres);
   check_cancelled();
-  const GramSolver solver(gram, solver_options);
+  const GramSolver solver(gram, solver_options,
+                          work & work_spectrum ? GramSpectrumMode::exact
+                                               : GramSpectrumMode::estimate);
   check_cancelled();
-  return measure_approximation(kernel, target, centres, evaluation_points, gram, solver);
+  auto out = measure_interpolant(kernel, target, centres, evaluation_points, gram, solver, work,
+                                 nullptr);
+  if (work & work_operator_norm) {
+    ProjectionOperator op;
+    interpolation_operator(kernel, centres, gram, solver, op);
+    check_cancelled();
+    out.metrics[ApproximationMetric::projection_operator_norm] = projection_operator_norm(kernel, op);
+  }
+  keep_selected(selection, out);
+  return out;
 }
 
 ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
@@ -164,127 +322,114 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const Eigen::MatrixXd& gram,
                                                const GramSolver& solver,
                                                Eigen::MatrixXd* cross_out) {
-  const Domain& domain = kernel.domain();
-  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
-  const auto points = domain.uniform_points(evaluation_points);
-  const std::size_t point_count = domain.point_count(points);
-
-  ApproximationMeasurement out;
-  using M = ApproximationMetric;
-  auto& metrics = out.metrics;
-  metrics[M::fill_distance] = fill_distance(centres, domain);
-  metrics[M::separation_distance] = separation_distance(centres, domain);
-
-  const auto& spectrum = solver.spectrum();
-  out.solve_method = solver.method();
-  metrics[M::gram_condition_number] = spectrum.condition_number;
-  metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
-  metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
-  if (spectrum.singular) out.flags.push_back("gram_singular");
-
-  // Power function from the cross matrix K_mi = k(s_m, c_i), O(n^2) per point.
-  auto data = power_function_data(kernel, solver, centres, points);
-  check_cancelled();
-  const Eigen::MatrixXd& cross = data.cross;
-  const Eigen::VectorXd& solution_norm_squared = data.solution_norm_squared;
-  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
-  const double power_sup = std::sqrt(data.power_squared.maxCoeff());
-  const double power_floor = std::sqrt(round_off * solution_norm_squared.maxCoeff());
-  metrics[M::power_function_sup] = power_sup;
-  metrics[M::power_function_floor] = power_floor;
-  if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
-
-  // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
-  Eigen::VectorXd at_centres(n), at_points(static_cast<Eigen::Index>(point_count));
-  target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
-  target.evaluate(points, std::span<double>(at_points.data(), point_count));
-  const Eigen::VectorXd alpha = solver.solve(at_centres);
-  const Eigen::VectorXd residual = at_points - cross * alpha;
-  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
-  const double sup = residual.cwiseAbs().maxCoeff();
-  const double error_floor =
-      round_off * std::sqrt(solution_norm_squared.maxCoeff()) * alpha.norm();
-  metrics[M::l2_error] = l2;
-  metrics[M::sup_error] = sup;
-  metrics[M::error_floor] = error_floor;
-  metrics[M::interpolant_native_norm] = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
-  if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
-  if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
-  if (cross_out) *cross_out = std::move(data.cross);
-  return out;
+  constexpr unsigned without_operator = ~(work_projection_residual | work_operator_norm);
+  return measure_interpolant(kernel, target, centres, evaluation_points, gram, solver,
+                             work_needed<ApproximationMetric>({}) & without_operator, cross_out);
 }
 
 void measure_projection_norms(const AnyKernel& kernel, const ProjectionOperator& op,
-                              std::size_t evaluation_points, ApproximationMeasurement& out) {
+                              std::size_t evaluation_points, ApproximationMeasurement& out,
+                              unsigned work) {
   using M = ApproximationMetric;
   const auto points = kernel.domain().uniform_points(evaluation_points);
-  const Eigen::VectorXd residual = projection_residual_norms(kernel, op, points);
-  check_cancelled();
-  const double norm = residual.maxCoeff();
-  out.metrics[M::projection_norm_H_to_C] = norm;
-  out.metrics[M::projection_operator_norm] = projection_operator_norm(kernel, op);
-  if (norm <= projection_norm_floor(kernel, op, points))
-    out.flags.push_back("projection_norm_at_floor");
+  if (work & work_projection_residual) {
+    const Eigen::VectorXd residual = projection_residual_norms(kernel, op, points);
+    check_cancelled();
+    const double norm = residual.maxCoeff();
+    out.metrics[M::projection_norm_H_to_C] = norm;
+    if (norm <= projection_norm_floor(kernel, op, points))
+      out.flags.push_back("projection_norm_at_floor");
+  }
+  if (work & work_operator_norm)
+    out.metrics[M::projection_operator_norm] = projection_operator_norm(kernel, op);
 }
 
 ApproximationMeasurement measure_projection(const AnyKernel& kernel, const TargetFunction& target,
                                             const ProjectionOperator& op,
                                             std::size_t evaluation_points,
-                                            const SolverOptions& solver_options) {
+                                            const SolverOptions& solver_options,
+                                            const MetricSelection& selection) {
+  const unsigned work = work_needed<ApproximationMetric>(selection);
   const Domain& domain = kernel.domain();
   const auto points = domain.uniform_points(evaluation_points);
   const auto dim = static_cast<Eigen::Index>(op.dimension());
   ApproximationMeasurement out;
   using M = ApproximationMetric;
   auto& metrics = out.metrics;
-  metrics[M::fill_distance] = fill_distance(op.mesh(), domain);
-  metrics[M::separation_distance] = separation_distance(op.mesh(), domain);
+  if (work & work_fill) metrics[M::fill_distance] = fill_distance(op.mesh(), domain);
+  if (work & work_separation) metrics[M::separation_distance] = separation_distance(op.mesh(), domain);
+  out.solve_method = op.solve_method();
 
   // H_j through the H-Gram matrix of its basis.
-  const Eigen::MatrixXd gram = projection_basis_gram(kernel, op);
-  check_cancelled();
-  const GramSolver solver(gram, solver_options);
-  const auto& spectrum = solver.spectrum();
-  out.solve_method = op.solve_method() + "; basis: " + solver.method();
-  metrics[M::gram_condition_number] = spectrum.condition_number;
-  metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
-  metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
-  if (spectrum.singular) out.flags.push_back("gram_singular");
+  const bool basis_gram = work & (work_spectrum | work_power | work_cardinal | work_interpolant);
+  Eigen::MatrixXd gram;
+  std::optional<GramSolver> solver;
+  if (basis_gram) {
+    gram = projection_basis_gram(kernel, op);
+    check_cancelled();
+    solver.emplace(gram, solver_options,
+                   work & work_spectrum ? GramSpectrumMode::exact : GramSpectrumMode::estimate);
+    const auto& spectrum = solver->spectrum();
+    out.solve_method += "; basis: " + solver->method();
+    if (work & work_spectrum) {
+      metrics[M::gram_condition_number] = spectrum.condition_number;
+      metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
+      metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+    }
+    if (spectrum.singular) out.flags.push_back("gram_singular");
+  }
 
   // The power function of H_j: (b_i, k(s, .))_H = b_i(s).
-  const Eigen::MatrixXd values = projection_basis_values(kernel, op, points);  // M x dim
-  check_cancelled();
-  Eigen::VectorXd quadratic, solution_norm_squared;
-  solver.quadratic_forms(values.transpose(), quadratic, solution_norm_squared);
-  const Eigen::VectorXd power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
-  const double round_off = static_cast<double>(dim) * eps * spectrum.lambda_max;
-  const double power_sup = std::sqrt(power_squared.maxCoeff());
-  const double power_floor = std::sqrt(round_off * solution_norm_squared.maxCoeff());
-  metrics[M::power_function_sup] = power_sup;
-  metrics[M::power_function_floor] = power_floor;
-  if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+  const bool power = work & (work_power | work_cardinal);
+  const bool cardinal = work & work_cardinal;
+  Eigen::MatrixXd values;  // M x dim
+  if (power || (work & work_residual)) {
+    values = projection_basis_values(kernel, op, points);
+    check_cancelled();
+  }
+  const double round_off =
+      solver ? static_cast<double>(dim) * eps * solver->spectrum().lambda_max : nan;
+  double largest_solution_norm_squared = nan;
+  if (power) {
+    Eigen::VectorXd quadratic, solution_norm_squared;
+    solver->quadratic_forms(values.transpose(), quadratic, solution_norm_squared);
+    const Eigen::VectorXd power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+    largest_solution_norm_squared = solution_norm_squared.maxCoeff();
+    const double power_sup = std::sqrt(power_squared.maxCoeff());
+    const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
+    metrics[M::power_function_sup] = power_sup;
+    metrics[M::power_function_floor] = power_floor;
+    if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+  }
 
   // Pi f = sum_i c_i b_i, c = W f(S).
-  const auto samples = op.samples();
-  const std::size_t sample_count = op.sample_count(), point_count = domain.point_count(points);
-  Eigen::VectorXd at_samples(static_cast<Eigen::Index>(sample_count));
-  Eigen::VectorXd at_points(static_cast<Eigen::Index>(point_count));
-  target.evaluate(samples, std::span<double>(at_samples.data(), sample_count));
-  target.evaluate(points, std::span<double>(at_points.data(), point_count));
-  const Eigen::VectorXd coefficients = op.weights() * at_samples;
-  const Eigen::VectorXd residual = at_points - values * coefficients;
-  const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
-  const double sup = residual.cwiseAbs().maxCoeff();
-  const double error_floor =
-      round_off * std::sqrt(solution_norm_squared.maxCoeff()) * coefficients.norm();
-  metrics[M::l2_error] = l2;
-  metrics[M::sup_error] = sup;
-  metrics[M::error_floor] = error_floor;
-  metrics[M::interpolant_native_norm] =
-      std::sqrt(std::max(0.0, coefficients.dot(gram * coefficients)));
-  if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
-  if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
-  measure_projection_norms(kernel, op, evaluation_points, out);
+  if (work & (work_interpolant | work_residual)) {
+    const auto samples = op.samples();
+    const std::size_t sample_count = op.sample_count(), point_count = domain.point_count(points);
+    Eigen::VectorXd at_samples(static_cast<Eigen::Index>(sample_count));
+    target.evaluate(samples, std::span<double>(at_samples.data(), sample_count));
+    const Eigen::VectorXd coefficients = op.weights() * at_samples;
+    const double error_floor =
+        round_off * std::sqrt(largest_solution_norm_squared) * coefficients.norm();
+    if (cardinal) metrics[M::error_floor] = error_floor;
+    if (work & work_interpolant)
+      metrics[M::interpolant_native_norm] =
+          std::sqrt(std::max(0.0, coefficients.dot(gram * coefficients)));
+    if (work & work_residual) {
+      Eigen::VectorXd at_points(static_cast<Eigen::Index>(point_count));
+      target.evaluate(points, std::span<double>(at_points.data(), point_count));
+      const Eigen::VectorXd residual = at_points - values * coefficients;
+      const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
+      const double sup = residual.cwiseAbs().maxCoeff();
+      metrics[M::l2_error] = l2;
+      metrics[M::sup_error] = sup;
+      if (cardinal && sup <= error_floor) out.flags.push_back("sup_error_at_floor");
+      if (cardinal && l2 <= error_floor * std::sqrt(domain.volume()))
+        out.flags.push_back("l2_error_at_floor");
+    }
+  }
+  measure_projection_norms(kernel, op, evaluation_points, out, work);
+  keep_selected(selection, out);
   return out;
 }
 

@@ -72,6 +72,35 @@ ProjectionOperator build_projection(std::string_view name, const ParameterSet& p
   return out;
 }
 
+void interpolation_operator(const AnyKernel& kernel, std::span<const double> centres,
+                            const Eigen::MatrixXd& gram, const GramSolver& solver,
+                            ProjectionOperator& out) {
+  const auto d = static_cast<std::size_t>(kernel.domain().dimension);
+  const auto n = centres.size() / d;
+  const auto size = static_cast<Eigen::Index>(n);
+  if (n == 0 || gram.rows() != size)
+    throw std::invalid_argument("interpolation_operator: one Gram row per centre is needed");
+  Eigen::MatrixXd E, W;  // W = E^T for the orthonormal bases
+  if (const auto* vectors = solver.kept_vectors()) {
+    E = *vectors * solver.kept_values()->cwiseSqrt().cwiseInverse().asDiagonal();
+  } else if (solver.cholesky_lower()) {
+    Eigen::MatrixXd inverse = Eigen::MatrixXd::Identity(size, size);
+    solver.solve_lower_in_place(inverse);  // L^-1
+    E = inverse.transpose();
+  } else {  // regularised: G_mu^-1 through the solver, the basis k(c_i, .) itself
+    E = Eigen::MatrixXd::Identity(size, size);
+    W = solver.solve(E);
+  }
+  if (W.size() == 0) W = E.transpose();
+  out.resize(static_cast<std::size_t>(E.cols()), n, n, d);
+  std::copy(centres.begin(), centres.end(), out.samples().begin());
+  std::copy(centres.begin(), centres.end(), out.basis_points().begin());
+  out.basis_coefficients() = E;
+  out.weights() = W;
+  out.set_mesh(centres);
+  out.set_solve_method(solver.method());
+}
+
 Eigen::MatrixXd projection_basis_values(const AnyKernel& kernel, const ProjectionOperator& op,
                                         std::span<const double> points) {
   return kernel.cross(points, op.basis_points()) * op.basis_coefficients();

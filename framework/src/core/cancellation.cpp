@@ -27,6 +27,19 @@ CancellationScope::~CancellationScope() {
   current_scope = previous_;
 }
 
+const CancellationScope* current_cancellation_scope() noexcept {
+  return current_scope;
+}
+
+SharedCancellationScope::SharedCancellationScope(const CancellationScope* scope) noexcept
+    : previous_(current_scope) {
+  current_scope = scope;
+}
+
+SharedCancellationScope::~SharedCancellationScope() {
+  current_scope = previous_;
+}
+
 void check_cancelled() {
   const CancellationScope* scope = current_scope;
   if (!scope) return;

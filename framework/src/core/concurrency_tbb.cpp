@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include "rkhs/core/concurrency.hpp"
+#include "rkhs/core/cancellation.hpp"
 
 namespace rkhs {
 
@@ -16,6 +17,23 @@ void run_concurrently(std::size_t count, int threads,
   arena.execute([&] {
     tbb::parallel_for(
         std::size_t{0}, count, std::size_t{1}, [&](std::size_t i) { task(i); },
+        tbb::simple_partitioner());
+  });
+}
+
+void run_parts(std::size_t count, const std::function<void(std::size_t)>& part) {
+  if (count <= 1) {
+    if (count == 1) part(0);
+    return;
+  }
+  const CancellationScope* scope = current_cancellation_scope();
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_for(
+        std::size_t{0}, count, std::size_t{1},
+        [&](std::size_t i) {
+          const SharedCancellationScope shared(scope);
+          part(i);
+        },
         tbb::simple_partitioner());
   });
 }

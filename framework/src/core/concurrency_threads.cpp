@@ -42,6 +42,10 @@ void run_concurrently(std::size_t count, int threads,
   if (first_error) std::rethrow_exception(first_error);
 }
 
+void run_parts(std::size_t count, const std::function<void(std::size_t)>& part) {
+  for (std::size_t i = 0; i < count; ++i) part(i);
+}
+
 int default_concurrency() {
   cpu_set_t set;
   CPU_ZERO(&set);

@@ -135,21 +135,19 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     } else {
       const std::string_view projection =
           trial.projection.name.empty() ? default_projection : trial.projection.name;
-      const ProjectionRequest request{*kernel, trial.n, centres, study.solver};
+      const auto computed = study.computed_metrics();
       ApproximationMeasurement measured;
       if (projection == default_projection) {
-        // Interpolation at the centres: the Gram solve of measure_approximation, and its
-        // projection norms from the operator's own definition.
+        // Interpolation at the centres: one Gram factorisation serves the interpolant, the
+        // power function (its norm ||I - Pi||_{H -> C}) and the operator, when asked for.
         measured = measure_approximation(*kernel, *target, centres, study.evaluation_points,
-                                         study.solver);
-        const auto op = build_projection(projection, trial.projection.parameters, request);
-        check_cancelled();
-        measure_projection_norms(*kernel, op, study.evaluation_points, measured);
+                                         study.solver, computed);
       } else {
+        const ProjectionRequest request{*kernel, trial.n, centres, study.solver};
         const auto op = build_projection(projection, trial.projection.parameters, request);
         check_cancelled();
         measured = measure_projection(*kernel, *target, op, study.evaluation_points,
-                                      study.solver);
+                                      study.solver, computed);
       }
       result.metrics = std::move(measured.metrics).values();
       result.solve_method = std::move(measured.solve_method);
@@ -159,8 +157,9 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     // Metrics that are undefined by design in some trials (MetricRow::may_be_nan: a single
     // centre has no separation; coefficient and Lyapunov metrics need a road in H_n).
     const auto& names = study.all_metrics();
+    const auto computed = study.computed_metrics();
     for (std::size_t i = 0; i < names.size(); ++i)
-      if (std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
+      if (computed[i] && std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
     result.ok = true;
   } catch (const TrialCancelled&) {

@@ -1,6 +1,7 @@
 #include "rkhs/run/trial_identity.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <boost/pfr.hpp>
 #include <map>
@@ -89,10 +90,14 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
       {&study.laws, "laws", "each trial's learning law is in its key"},
       {&study.integrators, "integrators", "each trial's integrator is in its key"},
       {&study.metrics, "metrics",
-       "which metrics are written and fitted; a trial measures and stores all of its kind's"},
-      {&study.abscissa, "abscissa", "what rates are fitted against, after the trials"},
+       "which metrics are written and fitted; what trials compute of them enters as "
+       "computed_metrics()"},
+      {&study.abscissa, "abscissa",
+       "what rates are fitted against, after the trials; what trials compute for it enters as "
+       "computed_metrics()"},
       {&study.rates_window, "rates_window", "which points rates are fitted on, after the trials"},
-      {&study.expectations, "expectations", "judged after the trials"},
+      {&study.expectations, "expectations",
+       "judged after the trials; what trials compute for them enters as computed_metrics()"},
       {&study.warnings, "warnings", "messages about the file"},
   };
 }
@@ -118,8 +123,11 @@ std::string study_settings_text(const StudyDefinition& study) {
 std::vector<std::string> trial_hashes(const StudyDefinition& study,
                                       const std::vector<TrialSpec>& trials) {
   const auto& build = build_info();
-  const std::string common = fmt::format("rkhs-study {} {} | {}", build.version, build.git_commit,
-                                         study_settings_text(study));
+  // The metrics a trial computes are part of what it is: a record of fewer metrics cannot
+  // serve a study that asks for more.
+  const std::string common =
+      fmt::format("rkhs-study {} {} | {} | computes {}", build.version, build.git_commit,
+                  study_settings_text(study), fmt::join(study.computed_metric_names(), ","));
   std::map<std::string, std::string> data_of_target;  // target label -> data provenance
   std::vector<std::string> out;
   out.reserve(trials.size());

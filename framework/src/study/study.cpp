@@ -58,6 +58,33 @@ std::size_t StudyDefinition::metric_index(std::string_view metric) const {
   return static_cast<std::size_t>(it - names.begin());
 }
 
+MetricSelection StudyDefinition::computed_metrics() const {
+  const auto& names = all_metrics();
+  if (kind == StudyKind::adaptive) return MetricSelection(names.size(), true);
+  MetricSelection computed(names.size(), false);
+  auto compute = [&](std::string_view metric) {
+    const auto it = std::find(names.begin(), names.end(), metric);
+    if (it != names.end()) computed[static_cast<std::size_t>(it - names.begin())] = true;
+  };
+  for (const auto& metric : metrics) compute(metric);
+  if (abscissa == Abscissa::fill_distance) compute("fill_distance");
+  for (const auto& expectation : expectations)
+    if (expectation.kind == ExpectationKind::theory) {
+      compute("fill_distance");
+      compute("separation_distance");
+    }
+  return computed;
+}
+
+std::vector<std::string> StudyDefinition::computed_metric_names() const {
+  const auto& names = all_metrics();
+  const auto computed = computed_metrics();
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (computed[i]) out.push_back(names[i]);
+  return out;
+}
+
 std::vector<StudyDefinition::GridAxis> StudyDefinition::grid_axes() const {
   std::vector<GridAxis> axes{{"kernel", "kernels", kernels.size()},
                              {"target", "targets", targets.size()},

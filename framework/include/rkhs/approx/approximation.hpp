@@ -45,15 +45,25 @@ struct ApproximationMeasurement {
 };
 
 /// Measures Pi_n for `kernel` at `centres` on `evaluation_points` uniform points of the
-/// kernel's domain. Throws SingularGramError (policy `fail`) and std::exception on bad input.
+/// kernel's domain: the metrics `selection` names (empty: all), computing only what they need
+/// (MetricRow::needs; the others are NaN). The Gram matrix is assembled and factorised once;
+/// the power function, the errors and their floors come from one blocked pass over the points
+/// (rkhs/core/concurrency.hpp run_parts: blocks run on idle threads of the caller's arena,
+/// with results independent of how they are scheduled); projection_norm_H_to_C is the power
+/// function and projection_operator_norm is measured on the operator built from the same
+/// solver (interpolation_operator). The extreme eigenvalues are computed exactly only when a
+/// gram_* metric is selected (GramSpectrumMode). Throws SingularGramError (policy `fail`) and
+/// std::exception on bad input.
 ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const TargetFunction& target,
                                                std::span<const double> centres,
                                                std::size_t evaluation_points,
-                                               const SolverOptions& solver);
+                                               const SolverOptions& solver,
+                                               const MetricSelection& selection = {});
 
 /// The same measurement from a Gram matrix `gram` of `centres` and its `solver` already built
-/// by the caller (who needs them too: an adaptive trial). The cross matrix
+/// by the caller (who needs them too: an adaptive trial), of every metric but the two
+/// projection norms. The cross matrix
 /// K_mi = k(s_m, c_i) on the evaluation points is moved into `*cross` when it is not null.
 ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const TargetFunction& target,
@@ -63,24 +73,29 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const GramSolver& solver,
                                                Eigen::MatrixXd* cross = nullptr);
 
-/// Sets projection_norm_H_to_C and projection_operator_norm of `op` (projection.hpp's exact
-/// formulas, on `evaluation_points` uniform points); flags projection_norm_at_floor
-/// when the norm is below the round-off level sqrt(|S| eps max k(s, s)).
+/// Sets projection_norm_H_to_C (work_projection_residual in `work`) and
+/// projection_operator_norm (work_operator_norm) of `op` (projection.hpp's exact formulas, on
+/// `evaluation_points` uniform points); flags projection_norm_at_floor when the norm is below
+/// the round-off level sqrt(|S| eps max k(s, s)).
 void measure_projection_norms(const AnyKernel& kernel, const ProjectionOperator& op,
-                              std::size_t evaluation_points, ApproximationMeasurement& out);
+                              std::size_t evaluation_points, ApproximationMeasurement& out,
+                              unsigned work = work_projection_residual | work_operator_norm);
 
 /// A trial of a projection whose space is not span{k(c_i, .)} (a level projection): every
 /// metric of the table for H_j = span{b_i} and Pi f = sum_i c_i b_i, c = W f(S):
 /// fill and separation distances of the mesh (the level's knots); Gram metrics and the power
 /// function of the basis' H-Gram matrix G_B (P_j is the norm of the H-orthogonal projection onto
 /// H_j, against which a projection that is not orthogonal can be compared); the errors of Pi f;
-/// ||Pi f||_H = sqrt(c^T G_B c); and the projection norms (measure_projection_norms).
+/// ||Pi f||_H = sqrt(c^T G_B c); and the projection norms (measure_projection_norms). Like
+/// measure_approximation, only what the metrics of `selection` need (empty: all).
 ApproximationMeasurement measure_projection(const AnyKernel& kernel, const TargetFunction& target,
                                             const ProjectionOperator& op,
                                             std::size_t evaluation_points,
-                                            const SolverOptions& solver);
+                                            const SolverOptions& solver,
+                                            const MetricSelection& selection = {});
 
-/// P_n(s) at each point, with the same solver (values below round-off clamped to 0).
+/// P_n(s) at each point, with the same solver (values below round-off clamped to 0), in the
+/// blocks of measure_approximation.
 Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,
                                std::span<const double> centres, std::span<const double> points);
 

@@ -29,6 +29,10 @@ struct MetricRow {
   /// every flag but the adaptive trials' interpolant_*_at_floor, which mark values that fits
   /// still use (making them excluded changes adaptive studies' fitted rates).
   bool flag_excludes_from_fits = true;
+  /// What a trial must compute to give this metric and decide its flag, as bits of the kind's
+  /// work enum (ApproximationWork for approximation trials); 0 for a kind whose trials compute
+  /// every metric (adaptive trials).
+  unsigned needs = 0;
 };
 
 /// Specialised per metric enum with `static constexpr std::array<MetricRow<Metric>, N> rows`.
@@ -77,6 +81,46 @@ class MetricValues {
   std::vector<double> values_;
 };
 
+/// The parts of an approximation trial's work, as bits: a trial computes the union of the needs
+/// of the metrics it is asked for (MetricRow::needs, approximation_work()) and nothing else.
+enum ApproximationWork : unsigned {
+  /// The fill distance of the centres (a branch and bound over the domain in d > 1).
+  work_fill = 1u << 0,
+  /// The separation distance (all pairs of centres in d > 1).
+  work_separation = 1u << 1,
+  /// The extreme eigenvalues of G, exactly (a symmetric eigenvalue solve, O(n^3)); without it
+  /// the solver estimates them (Lanczos) only to decide whether G is singular.
+  work_spectrum = 1u << 2,
+  /// P_n on the grid: the cross matrix block by block and one triangular solve per point.
+  work_power = 1u << 3,
+  /// |G^-1 k_X(s_m)|^2 on the grid, the round-off floors: a second triangular solve per point
+  /// (implies work_power).
+  work_cardinal = 1u << 4,
+  /// The coefficients of Pi_n f (alpha = G^-1 f(X), or c = W f(S)).
+  work_interpolant = 1u << 5,
+  /// f - Pi_n f on the grid (the cross matrix times the coefficients).
+  work_residual = 1u << 6,
+  /// ||(I - Pi)^* k(s, .)||_H on the grid from the projection's own definition; for the
+  /// interpolation projection it is the power function (work_power).
+  work_projection_residual = 1u << 7,
+  /// ||Pi||_{H -> H} of the built operator (the interpolation projection is then built too).
+  work_operator_norm = 1u << 8,
+};
+
+/// Which metrics of a table a trial computes, by table position (true: computed). Empty means
+/// every metric.
+using MetricSelection = std::vector<bool>;
+
+/// The union of MetricRow::needs over the metrics `selection` names (every metric when empty).
+template <class Metric>
+unsigned work_needed(const MetricSelection& selection) {
+  unsigned work = 0;
+  const auto& rows = MetricTable<Metric>::rows;
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if (selection.empty() || (i < selection.size() && selection[i])) work |= rows[i].needs;
+  return work;
+}
+
 /// The metrics of an approximation trial (docs/metrics.md).
 enum class ApproximationMetric : std::size_t {
   fill_distance,
@@ -98,32 +142,45 @@ template <>
 struct MetricTable<ApproximationMetric> {
   using M = ApproximationMetric;
   static constexpr std::array<MetricRow<M>, 13> rows{{
-      {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, ""},
+      {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, "", true,
+       work_fill},
       {M::separation_distance, "separation_distance", "m",
-       "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""},
+       "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, "", true,
+       work_separation},
       {M::gram_condition_number, "gram_condition_number", "1",
-       "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular"},
+       "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular", true,
+       work_spectrum},
       {M::gram_min_eigenvalue, "gram_min_eigenvalue", "[k]", "lambda_min(G)", false,
-       "gram_singular"},
-      {M::gram_max_eigenvalue, "gram_max_eigenvalue", "[k]", "lambda_max(G)", false, ""},
+       "gram_singular", true,
+       work_spectrum},
+      {M::gram_max_eigenvalue, "gram_max_eigenvalue", "[k]", "lambda_max(G)", false, "", true,
+       work_spectrum},
       {M::power_function_sup, "power_function_sup", "sqrt([k])",
-       "max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid", false, "power_function_at_floor"},
+       "max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid", false, "power_function_at_floor", true,
+       work_power | work_cardinal},
       {M::power_function_floor, "power_function_floor", "sqrt([k])",
-       "round-off level of P_n: max_m sqrt(n eps lambda_max |G^-1 k_X(s_m)|^2)", false, ""},
+       "round-off level of P_n: max_m sqrt(n eps lambda_max |G^-1 k_X(s_m)|^2)", false, "", true,
+       work_power | work_cardinal},
       {M::l2_error, "l2_error", "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
-       "l2_error_at_floor"},
+       "l2_error_at_floor", true,
+       work_interpolant | work_residual | work_cardinal},
       {M::sup_error, "sup_error", "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
-       "sup_error_at_floor"},
+       "sup_error_at_floor", true,
+       work_interpolant | work_residual | work_cardinal},
       {M::error_floor, "error_floor", "[f]",
-       "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, ""},
+       "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, "", true,
+       work_interpolant | work_cardinal},
       {M::interpolant_native_norm, "interpolant_native_norm", "[f] / sqrt([k])",
-       "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, ""},
+       "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, "", true,
+       work_interpolant},
       {M::projection_norm_H_to_C, "projection_norm_H_to_C", "sqrt([k])",
        "max_m ||(I - Pi)^* k(s_m, .)||_H = ||I - Pi||_{H -> C} on the grid, from the "
        "projection's own definition (the power function for interpolation)",
-       false, "projection_norm_at_floor"},
+       false, "projection_norm_at_floor", true,
+       work_projection_residual},
       {M::projection_operator_norm, "projection_operator_norm", "1",
-       "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, ""},
+       "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
+       work_operator_norm},
   }};
 };
 static_assert(table_in_enum_order<ApproximationMetric>());

@@ -154,6 +154,16 @@ bool register_projection() noexcept {
 ProjectionOperator build_projection(std::string_view name, const ParameterSet& parameters,
                                     const ProjectionRequest& request);
 
+/// The interpolation projection onto span{k(c_i, .)} (the built-in `interpolation`) from a Gram
+/// matrix of `centres` and its solver already built: an H-orthonormal basis b = E^T k_X with
+/// W = E^T, E = L^-T from G = L L^T, or V diag(lambda^-1/2) over the pseudo-inverse's kept
+/// eigenpairs; with a regularised solver the basis k(c_i, .) itself and W = G_mu^-1. Then
+/// ||(I - Pi)^* k(s, .)||^2 comes out as k(s, s) - |L^-1 k_X(s)|^2, the power function's
+/// backward-stable form. No second factorisation.
+void interpolation_operator(const AnyKernel& kernel, std::span<const double> centres,
+                            const Eigen::MatrixXd& gram, const GramSolver& solver,
+                            ProjectionOperator& out);
+
 // The exact quantities of a built operator for its kernel (the file comment's formulas). Each
 // costs a few kernel matrices on S and Y; nothing is approximated beyond round-off.
 

@@ -53,9 +53,28 @@ class CancellationScope {
  private:
   const CancellationScope* previous_;
   const std::function<bool()>* stop_requested_;
+  friend class SharedCancellationScope;
   std::optional<std::chrono::steady_clock::time_point> deadline_;
   std::chrono::steady_clock::time_point start_;
   friend void check_cancelled();
+};
+
+/// The calling thread's innermost scope, null outside one: what a thread that runs a part of
+/// the same trial installs with SharedCancellationScope (run_parts, core/concurrency.hpp).
+const CancellationScope* current_cancellation_scope() noexcept;
+
+/// Makes `scope` (another thread's, which must outlive this object; may be null) the calling
+/// thread's scope until destruction, so that check_cancelled() in a part of a trial run on a
+/// helper thread stops it like the trial itself. The previous scope is restored.
+class SharedCancellationScope {
+ public:
+  explicit SharedCancellationScope(const CancellationScope* scope) noexcept;
+  ~SharedCancellationScope();
+  SharedCancellationScope(const SharedCancellationScope&) = delete;
+  SharedCancellationScope& operator=(const SharedCancellationScope&) = delete;
+
+ private:
+  const CancellationScope* previous_;
 };
 
 }  // namespace rkhs

@@ -22,6 +22,16 @@ namespace rkhs {
 /// threads >= 1.
 void run_concurrently(std::size_t count, int threads, const std::function<void(std::size_t)>& task);
 
+/// Calls part(i) once for every i in [0, count): the parts of one piece of work of the calling
+/// thread (the blocks of one trial). With oneTBB they run on the threads of the arena the
+/// caller runs in that are idle (a study with fewer trials than threads gives its big trials
+/// the other cores; no thread is added, so nothing is oversubscribed), isolated so that a
+/// waiting thread takes no unrelated task; with the std::thread backend they run one after
+/// the other on the calling thread. Each part runs with the caller's cancellation scope
+/// (check_cancelled() stops the trial). Parts must write disjoint results: their order is
+/// unspecified. The first exception is rethrown once the running parts have returned.
+void run_parts(std::size_t count, const std::function<void(std::size_t)>& part);
+
 /// The number of threads run_concurrently would use when none is asked for (the hardware
 /// threads this process may use).
 int default_concurrency();

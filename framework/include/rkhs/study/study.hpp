@@ -14,6 +14,7 @@
 #include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/study/expectation.hpp"
+#include "rkhs/approx/metrics.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/core/parameters.hpp"
@@ -140,6 +141,16 @@ struct StudyDefinition {
   /// it), and the position of one of them (throws std::out_of_range for an unknown name).
   const std::vector<std::string>& all_metrics() const;
   std::size_t metric_index(std::string_view metric) const;
+
+  /// The metrics a trial of this study computes, by position in all_metrics(): for an
+  /// approximation study `metrics`, with the fill distance when rates are fitted against h and
+  /// the fill and separation distances when an expectation compares with theory (which judges
+  /// the centres' quasi-uniformity); a trial then does only the work these need
+  /// (MetricRow::needs) and leaves the others NaN. Every metric for an adaptive study, whose
+  /// trials compute all of them.
+  MetricSelection computed_metrics() const;
+  /// The names of computed_metrics(), in output order.
+  std::vector<std::string> computed_metric_names() const;
 };
 
 /// A lap count as the laps column, the keys and messages print it: "limit" for +infinity, a
