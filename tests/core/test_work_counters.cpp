@@ -29,6 +29,12 @@ std::vector<double> uniform(std::size_t count, double length) {
   return out;
 }
 
+// `block`, seen by the compiler as used: it may not elide a malloc and free of it.
+void* used(void* block) {
+  asm volatile("" : : "r"(block) : "memory");
+  return block;
+}
+
 }  // namespace
 
 TEST_CASE("work counter scopes nest and restore what was current", "[core][work]") {
@@ -161,7 +167,7 @@ TEST_CASE("the allocation interposer counts a trial's heap blocks and its peak",
   }
   constexpr std::size_t megabyte = 1 << 20;
   const std::uint64_t together = megabyte + 128 * 128 * 8;
-  auto* before = static_cast<char*>(std::malloc(4096));  // allocated outside the scope
+  void* before = used(std::malloc(4096));  // allocated outside the scope
   WorkCounters counters;
   // No Catch assertion inside the scope: it would allocate there too.
   std::int64_t live_with_both = 0, live_after_both = 0, live_after_paths = 0;
@@ -177,13 +183,13 @@ TEST_CASE("the allocation interposer counts a trial's heap blocks and its peak",
     live_after_both = counters.live_bytes.load();
     void* aligned = nullptr;
     aligned_status = posix_memalign(&aligned, 64, 1000);
-    void* zeroed = std::calloc(100, 10);
-    void* grown = std::realloc(std::malloc(10), 5000);
-    std::free(aligned);
+    void* zeroed = used(std::calloc(100, 10));
+    void* grown = used(std::realloc(used(std::malloc(10)), 5000));
+    std::free(used(aligned));
     std::free(zeroed);
     std::free(grown);
     live_after_paths = counters.live_bytes.load();
-    std::free(before);  // allocated before the scope, freed inside: lowers the level only
+    std::free(used(before));  // allocated before the scope, freed inside: lowers the level only
   }
   const auto work = snapshot(counters);
   REQUIRE(work.allocations_tracked);

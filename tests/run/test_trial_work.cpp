@@ -74,7 +74,7 @@ TEST_CASE("work counters are the same for 1, 2 and 4 threads: each trial counts 
   CHECK(one[2].work->kernel_evaluations > one[0].work->kernel_evaluations);
 }
 
-TEST_CASE("a stored record keeps the work counters; an old record has none", "[run][work]") {
+TEST_CASE("a stored record keeps the work counters, an old record has none", "[run][work]") {
   TrialResult result;
   result.ok = true;
   result.metrics = {1.0, 2.0};
