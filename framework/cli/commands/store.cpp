@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "commands/commands.hpp"
@@ -125,6 +126,21 @@ std::string json_reals(const std::vector<double>& values) {
   return fmt::format("[{}]", fmt::join(items, ", "));
 }
 
+// A record's work counters (docs/results.md "Work counters"), null when it holds none; the
+// allocation counts null when the build that stored it did not count them.
+std::string work_json(const std::optional<WorkCounts>& work) {
+  if (!work) return "null";
+  const auto tracked = [&](std::uint64_t value) {
+    return work->allocations_tracked ? std::to_string(value) : std::string("null");
+  };
+  return fmt::format(
+      "{{\"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
+      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
+      "\"peak_bytes\": {}}}",
+      work->kernel_evaluations, work->kernel_derivative_evaluations, work->factorisations,
+      tracked(work->allocations), tracked(work->allocated_bytes), tracked(work->peak_bytes));
+}
+
 std::string export_json(const std::vector<ResultStore::Entry>& entries) {
   std::vector<std::string> records;
   for (const auto& entry : entries) {
@@ -145,11 +161,12 @@ std::string export_json(const std::vector<ResultStore::Entry>& entries) {
       record += fmt::format(
           ", \"status\": {}, \"reason\": {}, \"solve\": {}, \"engine\": {}, \"flags\": {}, "
           "\"seconds\": {}, \"data\": {}, \"metrics\": {{{}}}, \"samples\": [{}], \"road\": {}, "
-          "\"snapshots\": [{}]",
+          "\"snapshots\": [{}], \"work\": {}",
           json_string(r->ok ? "ok" : "failed"), json_string(r->reason),
           json_string(r->solve_method), json_string(r->engine), json_string(flags_text(*r)),
           json_number(r->seconds), json_string(r->data_provenance), fmt::join(metrics, ", "),
-          fmt::join(samples, ", "), json_reals(r->road), fmt::join(snapshots, ", "));
+          fmt::join(samples, ", "), json_reals(r->road), fmt::join(snapshots, ", "),
+          work_json(r->work));
     }
     records.push_back(record + "}");
   }

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -269,6 +270,89 @@ std::string rates_csv(const RunRecord& run) {
   return out;
 }
 
+namespace {
+
+// The integration counts of an adaptive trial that its metrics hold already: reported with
+// the work counters, not counted twice.
+constexpr std::array<std::string_view, 2> adaptive_work_metrics = {"steps", "rhs_evaluations"};
+
+// Per trial: the work counters as a JSON object, or null. `source` says whether they were
+// counted in this run or when the stored record was written (the same code: a trial's hash
+// includes the code version, docs/results.md).
+std::string trial_work_json(const StudyDefinition& study, const TrialResult& result) {
+  if (!result.work) return "null";
+  const auto& w = *result.work;
+  const auto tracked = [&](std::uint64_t value) {
+    return w.allocations_tracked ? std::to_string(value) : std::string("null");
+  };
+  std::string out = fmt::format(
+      "{{\"source\": {}, \"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
+      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
+      "\"peak_bytes\": {}",
+      json_string(result.reused ? "store" : "run"), w.kernel_evaluations,
+      w.kernel_derivative_evaluations, w.factorisations, tracked(w.allocations),
+      tracked(w.allocated_bytes), tracked(w.peak_bytes));
+  if (study.kind == StudyKind::adaptive)
+    for (const auto metric : adaptive_work_metrics)
+      out += fmt::format(", {}: {}", json_string(metric),
+                         json_number(result.metrics[study.metric_index(metric)]));
+  return out + "}";
+}
+
+// Why a trial has no work counters (null when it has them).
+std::string missing_work_json(const TrialResult& result) {
+  if (result.work) return "null";
+  return json_string(result.reused
+                         ? "reused from the result store: its record holds no work counters "
+                           "(stored by an older rkhs-study); run with --fresh to count them"
+                         : "not counted");
+}
+
+// The study's work: sums of every counter over the trials that have counters, the largest
+// peak_bytes, and how many trials have none.
+std::string study_work_json(const StudyDefinition& study, const std::vector<TrialResult>& results) {
+  WorkCounts total;
+  total.allocations_tracked = true;
+  std::size_t counted = 0, from_store = 0;
+  double steps = 0, rhs = 0;
+  for (const auto& r : results) {
+    if (!r.work) continue;
+    ++counted;
+    from_store += r.reused ? 1 : 0;
+    total.kernel_evaluations += r.work->kernel_evaluations;
+    total.kernel_derivative_evaluations += r.work->kernel_derivative_evaluations;
+    total.factorisations += r.work->factorisations;
+    total.allocations_tracked = total.allocations_tracked && r.work->allocations_tracked;
+    total.allocations += r.work->allocations;
+    total.allocated_bytes += r.work->allocated_bytes;
+    total.peak_bytes = std::max(total.peak_bytes, r.work->peak_bytes);
+    if (study.kind == StudyKind::adaptive) {
+      const double s = r.metrics[study.metric_index("steps")];
+      const double e = r.metrics[study.metric_index("rhs_evaluations")];
+      steps += std::isfinite(s) ? s : 0;
+      rhs += std::isfinite(e) ? e : 0;
+    }
+  }
+  total.allocations_tracked = total.allocations_tracked && counted > 0;
+  const auto tracked = [&](std::uint64_t value) {
+    return total.allocations_tracked ? std::to_string(value) : std::string("null");
+  };
+  std::string out = fmt::format(
+      "{{\"trials_counted\": {}, \"trials_from_store\": {}, \"trials_without_counters\": {}, "
+      "\"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
+      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
+      "\"peak_bytes\": {}",
+      counted, from_store, results.size() - counted, total.kernel_evaluations,
+      total.kernel_derivative_evaluations, total.factorisations, tracked(total.allocations),
+      tracked(total.allocated_bytes), tracked(total.peak_bytes));
+  if (study.kind == StudyKind::adaptive)
+    out += fmt::format(", \"steps\": {}, \"rhs_evaluations\": {}", json_number(steps),
+                       json_number(rhs));
+  return out + "}";
+}
+
+}  // namespace
+
 std::string summary_json(const RunRecord& run) {
   const auto& study = run.study;
   const auto& build = build_info();
@@ -314,6 +398,7 @@ std::string summary_json(const RunRecord& run) {
   out += fmt::format("  \"counts\": {{\"trials\": {}, \"ok\": {}, \"failed\": {}}},\n",
                      run.trials.size(), run.trials.size() - failed, failed);
   out += fmt::format("  \"tier\": {},\n", run.tier.empty() ? "null" : json_string(run.tier));
+  out += fmt::format("  \"work\": {},\n", study_work_json(study, run.results));
 
   out += "  \"trials\": [\n";
   for (const auto& trial : run.trials) {
@@ -326,7 +411,8 @@ std::string summary_json(const RunRecord& run) {
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
         "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
-        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}}}{}\n",
+        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}, \"work\": {}, "
+        "\"work_missing\": {}}}{}\n",
         trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
         json_plugin(trial.centres), trial.n,
         result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
@@ -334,6 +420,7 @@ std::string summary_json(const RunRecord& run) {
         json_string(result.solve_method), fmt::join(flags, ", "),
         result.engine.empty() ? std::string() : " \"engine\": " + json_string(result.engine) + ",",
         json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
+        trial_work_json(study, result), missing_work_json(result),
         trial.index + 1 < run.trials.size() ? "," : "");
   }
   out += "  ],\n  \"rates\": [\n";

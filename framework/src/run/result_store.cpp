@@ -6,6 +6,7 @@
 #include <fmt/ranges.h>
 #include <sqlite3.h>
 
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -54,6 +55,63 @@ std::vector<double> split_reals(std::string_view text) {
 }
 
 // One line per field: strings have '\\' and line breaks escaped.
+// The fields of a `work` line, in the order written: name and member. The allocation fields
+// come all together, only when allocations were tracked.
+using WorkField = std::pair<std::string_view, std::uint64_t WorkCounts::*>;
+constexpr std::array<WorkField, 3> work_fields = {{
+    {"kernel_evaluations", &WorkCounts::kernel_evaluations},
+    {"kernel_derivative_evaluations", &WorkCounts::kernel_derivative_evaluations},
+    {"factorisations", &WorkCounts::factorisations},
+}};
+constexpr std::array<WorkField, 3> allocation_fields = {{
+    {"allocations", &WorkCounts::allocations},
+    {"allocated_bytes", &WorkCounts::allocated_bytes},
+    {"peak_bytes", &WorkCounts::peak_bytes},
+}};
+
+// "kernel_evaluations=12 kernel_derivative_evaluations=0 factorisations=1 [allocations=...]".
+std::string work_line(const WorkCounts& work) {
+  std::string out;
+  auto append = [&](const WorkField& field) {
+    out += fmt::format("{}{}={}", out.empty() ? "" : " ", field.first, work.*field.second);
+  };
+  for (const auto& field : work_fields) append(field);
+  if (work.allocations_tracked)
+    for (const auto& field : allocation_fields) append(field);
+  return out;
+}
+
+WorkCounts parse_work_line(std::string_view text) {
+  std::map<std::string, std::uint64_t, std::less<>> values;
+  std::istringstream in{std::string(text)};
+  for (std::string item; in >> item;) {
+    const auto equals = item.find('=');
+    std::uint64_t value = 0;
+    const char* first = item.data() + (equals == std::string::npos ? item.size() : equals + 1);
+    const char* last = item.data() + item.size();
+    const auto [end, error] = std::from_chars(first, last, value);
+    if (equals == std::string::npos || first == last || error != std::errc() || end != last)
+      throw std::invalid_argument("stored work counter '" + item + "' is not name=count");
+    if (!values.emplace(item.substr(0, equals), value).second)
+      throw std::invalid_argument("stored work counter '" + item.substr(0, equals) + "' twice");
+  }
+  WorkCounts work;
+  auto take = [&](const WorkField& field) {
+    const auto found = values.find(field.first);
+    if (found == values.end())
+      throw std::invalid_argument("stored work counters lack " + std::string(field.first));
+    work.*field.second = found->second;
+    values.erase(found);
+  };
+  for (const auto& field : work_fields) take(field);
+  work.allocations_tracked = values.contains(allocation_fields.front().first);
+  if (work.allocations_tracked)
+    for (const auto& field : allocation_fields) take(field);
+  if (!values.empty())
+    throw std::invalid_argument("unknown stored work counter '" + values.begin()->first + "'");
+  return work;
+}
+
 std::string escape(std::string_view text) {
   std::string out;
   for (char c : text) {
@@ -98,6 +156,7 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
       auto check = store->lookup(hashes[i], &study.all_metrics());
       if (check.result) {
         out.results[i] = std::move(*check.result);
+        out.results[i].reused = true;
         ++out.reused;
         continue;
       }
@@ -148,6 +207,7 @@ std::string serialize_result(const TrialResult& r) {
   out += "seconds " + format_real(r.seconds) + "\n";
   out += "data " + escape(r.data_provenance) + "\n";
   out += "metrics " + join_reals(r.metrics) + "\n";
+  if (r.work) out += "work " + work_line(*r.work) + "\n";
   std::vector<double> samples;
   for (const auto& s : r.samples) samples.insert(samples.end(), {s.t, s.state_error, s.lyapunov});
   out += "samples " + join_reals(samples) + "\n";
@@ -187,6 +247,7 @@ TrialResult deserialize_result(std::string_view text) {
     } else if (field == "seconds") r.seconds = parse_real(value);
     else if (field == "data") r.data_provenance = unescape(value);
     else if (field == "metrics") r.metrics = split_reals(value);
+    else if (field == "work") r.work = parse_work_line(value);
     else if (field == "samples") {
       const auto v = split_reals(value);
       if (v.size() % 3) throw std::invalid_argument("stored samples are not triples");

@@ -61,6 +61,10 @@ bool metric_may_be_nan(StudyKind kind, std::size_t position) {
 
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
                       const std::function<bool()>& stop_requested, LapMapCache* lap_maps) {
+  // Everything the trial computes on this thread counts here, its own result's storage too; a
+  // part of it run on another thread installs the same counters there.
+  WorkCounters counters;
+  const WorkCounterScope counting(&counters);
   TrialResult result;
   result.metrics.assign(study.all_metrics().size(),
                         std::numeric_limits<double>::quiet_NaN());
@@ -177,6 +181,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (result.skipped) return result;
+  result.work = snapshot(counters);
   if (result.ok && study.limits.trial_seconds > 0 && result.seconds > study.limits.trial_seconds) {
     result.ok = false;
     result.reason = time_limit_reason(result.seconds);

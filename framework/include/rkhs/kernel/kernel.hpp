@@ -143,7 +143,10 @@ class KernelBasis {
 };
 
 /// A kernel instance behind a virtual interface: the registry boundary. Each method runs a
-/// whole loop on the concrete kernel type.
+/// whole loop on the concrete kernel type. KernelModel (kernel_algorithms.hpp), which every
+/// registered kernel is wrapped in, counts the values its matrix methods and bases compute into
+/// the trial's work counters (core/work_counters.hpp), so kernel plugins count without code of
+/// their own.
 ///
 /// The boundary owns nothing across it (plugin/module.hpp): a kernel may live in a plugin
 /// module built by another compiler invocation, whose Eigen may allocate differently (alignment,

@@ -7,6 +7,12 @@
 // Derivatives of the sections, d/ds k(c, s), come from the kernel's closed form
 // (DifferentiableKernel, DifferentiableFeatureMapKernel) or, without one, from the difference
 // quotient of DerivativeStencil.
+//
+// Work counters (rkhs/core/work_counters.hpp): KernelModel's matrix methods and the bases count
+// the kernel values a trial asks for, one count per matrix or basis call (a Gram matrix its
+// n (n + 1) / 2 distinct entries, a cross matrix rows x cols, a diagonal its points, a basis
+// evaluation its size() sections, a basis derivative size() derivative values), whatever path
+// computes them. A call of one public method of a basis by another counts once.
 
 #include <Eigen/Sparse>
 #include <algorithm>
@@ -18,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rkhs/core/work_counters.hpp"
 #include "rkhs/kernel/kernel.hpp"
 
 namespace rkhs {
@@ -281,7 +288,8 @@ class DirectBasis final : public KernelBasis {
         dphi_(centres.size()) {}
   std::size_t size() const noexcept override { return centres_.size(); }
   void evaluate(double s, double* phi) const override {
-    for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
+    count_kernel_evaluations(centres_.size());
+    sections(s, phi);
   }
   void set_map(const Eigen::MatrixXd& map) override {
     // A multiple of the identity (the gradient law) is applied as a scalar: O(n), not O(n^2).
@@ -290,16 +298,38 @@ class DirectBasis final : public KernelBasis {
     map_ = scalar ? Eigen::MatrixXd() : map;
   }
   void evaluate_mapped(double s, double* out) const override {
+    count_kernel_evaluations(centres_.size());
     if (map_.size() == 0) {
-      evaluate(s, out);
+      sections(s, out);
       for (std::size_t i = 0; i < centres_.size(); ++i) out[i] *= scale_;
       return;
     }
-    evaluate(s, phi_.data());
+    sections(s, phi_.data());
     Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
         map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), static_cast<Eigen::Index>(phi_.size()));
   }
   void evaluate_derivative(double s, double* dphi) const override {
+    count_kernel_derivative_evaluations(centres_.size());
+    derivatives(s, dphi);
+  }
+  void evaluate_mapped_derivative(double s, double* out) const override {
+    count_kernel_derivative_evaluations(centres_.size());
+    if (map_.size() == 0) {
+      derivatives(s, out);
+      for (std::size_t i = 0; i < centres_.size(); ++i) out[i] *= scale_;
+      return;
+    }
+    derivatives(s, dphi_.data());
+    Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
+        map_ *
+        Eigen::Map<const Eigen::VectorXd>(dphi_.data(), static_cast<Eigen::Index>(dphi_.size()));
+  }
+
+ private:
+  void sections(double s, double* phi) const {
+    for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
+  }
+  void derivatives(double s, double* dphi) const {
     if constexpr (DifferentiableKernel<K>) {
       for (std::size_t i = 0; i < centres_.size(); ++i)
         dphi[i] = kernel_.derivative(centres_[i], s);
@@ -308,24 +338,11 @@ class DirectBasis final : public KernelBasis {
       const auto stencil = stencil_.at(s);
       std::fill(dphi, dphi + centres_.size(), 0.0);
       for (int j = 0; j < stencil.size; ++j) {
-        evaluate(stencil.point[j], phi_.data());
+        sections(stencil.point[j], phi_.data());
         for (std::size_t i = 0; i < centres_.size(); ++i) dphi[i] += stencil.weight[j] * phi_[i];
       }
     }
   }
-  void evaluate_mapped_derivative(double s, double* out) const override {
-    if (map_.size() == 0) {
-      evaluate_derivative(s, out);
-      for (std::size_t i = 0; i < centres_.size(); ++i) out[i] *= scale_;
-      return;
-    }
-    evaluate_derivative(s, dphi_.data());
-    Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
-        map_ *
-        Eigen::Map<const Eigen::VectorXd>(dphi_.data(), static_cast<Eigen::Index>(dphi_.size()));
-  }
-
- private:
   const K& kernel_;
   const DerivativeStencil& stencil_;
   std::vector<double> centres_;
@@ -355,7 +372,10 @@ class FeatureBasis final : public KernelBasis {
   std::size_t size() const noexcept override {
     return static_cast<std::size_t>(centre_features_.rows());
   }
-  void evaluate(double s, double* phi) const override { apply(centre_features_, s, phi); }
+  void evaluate(double s, double* phi) const override {
+    count_kernel_evaluations(size());
+    apply(centre_features_, s, phi);
+  }
   void set_map(const Eigen::MatrixXd& map) override {
     // c I (the gradient law) scales the features: O(n F), not the O(n^2 F) product (which
     // took 37 s at n = 4096, F = 10235).
@@ -366,19 +386,19 @@ class FeatureBasis final : public KernelBasis {
     if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) map_ = map;
     if (scratch_.size() < mapped_features_.rows()) scratch_.resize(mapped_features_.rows());
   }
-  void evaluate_mapped(double s, double* out) const override { apply(mapped_features_, s, out); }
+  void evaluate_mapped(double s, double* out) const override {
+    count_kernel_evaluations(size());
+    apply(mapped_features_, s, out);
+  }
   void evaluate_derivative(double s, double* dphi) const override {
-    if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) {
-      for (std::size_t i = 0; i < centres_.size(); ++i)
-        dphi[i] = kernel_.derivative(centres_[i], s);
-    } else {
-      apply_derivative(centre_features_, s, dphi);
-    }
+    count_kernel_derivative_evaluations(size());
+    derivatives(s, dphi);
   }
   void evaluate_mapped_derivative(double s, double* out) const override {
+    count_kernel_derivative_evaluations(size());
     if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) {
       const auto n = centre_features_.rows();
-      evaluate_derivative(s, scratch_.data());
+      derivatives(s, scratch_.data());
       Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() = map_ * scratch_.head(n);
     } else {
       apply_derivative(mapped_features_, s, out);
@@ -386,6 +406,14 @@ class FeatureBasis final : public KernelBasis {
   }
 
  private:
+  void derivatives(double s, double* dphi) const {
+    if constexpr (!DifferentiableFeatureMapKernel<K> && DifferentiableKernel<K>) {
+      for (std::size_t i = 0; i < centres_.size(); ++i)
+        dphi[i] = kernel_.derivative(centres_[i], s);
+    } else {
+      apply_derivative(centre_features_, s, dphi);
+    }
+  }
   void apply(const Eigen::MatrixXd& columns, double s, double* out) const {
     kernel_.features(s, active_);
     accumulate(columns, out);
@@ -443,6 +471,7 @@ class FeatureCoordinateBasis final : public KernelBasis {
   }
   std::size_t size() const noexcept override { return static_cast<std::size_t>(count_); }
   void evaluate(double s, double* phi) const override {
+    count_kernel_evaluations(size());
     kernel_.features(s, active_);
     scatter(1.0, phi);
   }
@@ -452,10 +481,33 @@ class FeatureCoordinateBasis final : public KernelBasis {
     map_ = scalar ? Eigen::MatrixXd() : map;
   }
   void evaluate_mapped(double s, double* out) const override {
+    count_kernel_evaluations(size());
     kernel_.features(s, active_);
     mapped(out);
   }
   void evaluate_derivative(double s, double* dphi) const override {
+    count_kernel_derivative_evaluations(size());
+    derivatives(s, dphi);
+  }
+  void evaluate_mapped_derivative(double s, double* out) const override {
+    count_kernel_derivative_evaluations(size());
+    if constexpr (DifferentiableFeatureMapKernel<K>) {
+      kernel_.feature_derivatives(s, active_);
+      mapped(out);
+    } else {
+      derivatives(s, scratch_.data());
+      if (map_.size() == 0) {
+        for (Eigen::Index f = 0; f < count_; ++f)
+          out[f] = scale_ * scratch_[static_cast<std::size_t>(f)];
+        return;
+      }
+      Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
+          map_ * Eigen::Map<const Eigen::VectorXd>(scratch_.data(), count_);
+    }
+  }
+
+ private:
+  void derivatives(double s, double* dphi) const {
     if constexpr (DifferentiableFeatureMapKernel<K>) {
       kernel_.feature_derivatives(s, active_);
       scatter(1.0, dphi);
@@ -469,23 +521,6 @@ class FeatureCoordinateBasis final : public KernelBasis {
       }
     }
   }
-  void evaluate_mapped_derivative(double s, double* out) const override {
-    if constexpr (DifferentiableFeatureMapKernel<K>) {
-      kernel_.feature_derivatives(s, active_);
-      mapped(out);
-    } else {
-      evaluate_derivative(s, scratch_.data());
-      if (map_.size() == 0) {
-        for (Eigen::Index f = 0; f < count_; ++f)
-          out[f] = scale_ * scratch_[static_cast<std::size_t>(f)];
-        return;
-      }
-      Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
-          map_ * Eigen::Map<const Eigen::VectorXd>(scratch_.data(), count_);
-    }
-  }
-
- private:
   // out = scale * (the active values at their indices), zero elsewhere (F entries).
   void scatter(double scale, double* out) const {
     std::fill(out, out + count_, 0.0);
@@ -607,6 +642,7 @@ class KernelModel final : public AnyKernel {
     const std::size_t n = domain_.point_count(centres);
     require_flat(centres, "gram_into");
     require_size(out.rows(), out.cols(), n, n, "gram_into");
+    count_kernel_evaluations(std::uint64_t{n} * (n + 1) / 2);
     out = assemble_gram(kernel_, domain_, centres);
   }
   void cross_into(std::span<const double> points, std::span<const double> centres,
@@ -615,12 +651,15 @@ class KernelModel final : public AnyKernel {
     require_flat(centres, "cross_into");
     require_size(out.rows(), out.cols(), domain_.point_count(points),
                  domain_.point_count(centres), "cross_into");
+    count_kernel_evaluations(std::uint64_t{domain_.point_count(points)} *
+                             domain_.point_count(centres));
     out = assemble_cross(kernel_, domain_, points, centres);
   }
   void diagonal_into(std::span<const double> points, std::span<double> out) const override {
     require_flat(points, "diagonal_into");
     const std::size_t count = domain_.point_count(points);
     require_size(static_cast<Eigen::Index>(out.size()), 1, count, 1, "diagonal_into");
+    count_kernel_evaluations(count);
     if (domain_.dimension == 1) {
       for (std::size_t m = 0; m < count; ++m) out[m] = kernel_(points[m], points[m]);
       return;

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rkhs/core/work_counters.hpp"
 #include "rkhs/kernel/kernel.hpp"
 
 namespace rkhs {
@@ -18,7 +19,8 @@ namespace rkhs {
 ///
 /// Cost: n virtual calls per evaluate (AnyKernel::evaluate_point) and per gradient
 /// (AnyKernel::gradient_point: the kernel's closed form where has_exact_gradient(), central
-/// differences otherwise); nothing is allocated. A periodic domain is handled by the kernel
+/// differences otherwise); nothing is allocated. Work counters (core/work_counters.hpp): an
+/// evaluate counts n kernel evaluations, a gradient n x d derivative evaluations. A periodic domain is handled by the kernel
 /// (its sections are periodic), so y need not be wrapped.
 class PointSections {
  public:
@@ -40,6 +42,7 @@ class PointSections {
   void evaluate(const double* y, double* phi) const {
     const auto d = static_cast<std::size_t>(d_);
     const std::span<const double> at(y, d);
+    count_kernel_evaluations(static_cast<std::uint64_t>(n_));
     for (Eigen::Index i = 0; i < n_; ++i) phi[i] = kernel_.evaluate_point(centre(i), at);
   }
 
@@ -49,6 +52,7 @@ class PointSections {
     const auto d = static_cast<std::size_t>(d_);
     const std::span<const double> at(y, d);
     double g[Domain::max_dimension] = {0, 0, 0};
+    count_kernel_derivative_evaluations(static_cast<std::uint64_t>(n_) * d);
     for (Eigen::Index i = 0; i < n_; ++i) {
       kernel_.gradient_point(centre(i), at, std::span<double>(g, d));
       for (int a = 0; a < d_; ++a) dphi[i + a * n_] = g[a];

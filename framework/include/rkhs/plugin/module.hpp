@@ -74,7 +74,9 @@
 // 10: state-dependent plants (Plant::readout, readout_offset, known_dynamics, period,
 //     initial_state) and AdaptiveSystem's state read-out
 // 11: AnyKernel::gradient_point and has_exact_gradient
-#define RKHS_PLUGIN_ABI_VERSION 11
+// 12: KernelModel and its bases count their work (count_kernel_evaluations,
+//     count_kernel_derivative_evaluations: core/work_counters.hpp)
+#define RKHS_PLUGIN_ABI_VERSION 12
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

@@ -33,7 +33,9 @@ namespace rkhs {
 /// A TrialResult as text (round-trip exact: reals are written in their shortest exact form)
 /// and back. Throws std::invalid_argument for text that is not such a record (a field that is
 /// not one, a value that does not parse, a field other than `snapshot` given twice). This is also the
-/// payload MPI ranks send; the store wraps it in a verified record (store_record).
+/// payload MPI ranks send; the store wraps it in a verified record (store_record). The line
+/// `work name=count ...` (TrialResult::work) is written when the result has work counters and
+/// is optional on reading: a record stored without it reads back with no work counters.
 std::string serialize_result(const TrialResult& result);
 TrialResult deserialize_result(std::string_view text);
 

@@ -11,9 +11,11 @@
 // point (a dense eigendecomposition) is abandoned after RunOptions::abandon_after_seconds.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "rkhs/core/work_counters.hpp"
 #include "rkhs/run/trial_cost.hpp"
 #include "rkhs/adaptive/lap_map.hpp"
 #include "rkhs/study/study.hpp"
@@ -32,6 +34,10 @@ struct TrialResult {
   std::string data_provenance;    ///< the target's external data ("sha256:..."), empty if none
   bool skipped = false;           ///< not run: the run was interrupted before it ended
   bool stopped_while_running = false;  ///< skipped after it had started (else never started)
+  /// What the trial computed (rkhs/core/work_counters.hpp), counted while it ran; empty when it
+  /// did not run in this process and its record holds none (a record stored without them).
+  std::optional<WorkCounts> work;
+  bool reused = false;  ///< taken from the result store by this run, not run (run_with_store)
   // Adaptive trials only:
   std::vector<TimeSample> samples;  ///< |x - xhat| and V at the output samples
   std::vector<double> road;         ///< f on the snapshot grid
