@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/dense_kernels.hpp"
 #include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/cancellation.hpp"
@@ -185,4 +186,40 @@ TEST_CASE("parts of a trial run under the trial's cancellation scope", "[concurr
   CHECK(std::count(done.begin(), done.end(), 1) == 64);
   stop = true;
   CHECK_THROWS_AS(run_parts(8, [&](std::size_t) { check_cancelled(); }), TrialCancelled);
+}
+
+TEST_CASE("every dense-kernel variant this processor runs agrees with the baseline",
+          "[approximation][work][dense]") {
+  // An SPD matrix of condition about 1e6 (a Matern Gram matrix) and 300 right-hand sides.
+  const Domain circle{4.0, true};
+  const auto k = kernel("matern", {{"nu", 2.5}, {"length_scale", 0.4}}, circle);
+  const Eigen::MatrixXd gram = k->gram(uniform_centres(300, circle));
+  const Eigen::MatrixXd rhs = k->cross(uniform_centres(300, circle), circle.uniform_points(300));
+  const auto n = static_cast<dense::Index>(gram.rows());
+  auto run = [&](const dense::Kernels& variant) {
+    Eigen::MatrixXd factor = gram, x = rhs;
+    REQUIRE(variant.cholesky(factor.data(), n, n));
+    variant.solve_lower(factor.data(), n, n, x.data(), x.cols(), n);
+    variant.solve_lower_transposed(factor.data(), n, n, x.data(), x.cols(), n);
+    Eigen::MatrixXd product(n, x.cols());
+    variant.multiply(gram.data(), n, n, n, x.data(), x.cols(), n, product.data(), n);
+    return std::pair{Eigen::MatrixXd(factor.triangularView<Eigen::Lower>()), product};
+  };
+  const auto [baseline_factor, baseline_product] = run(dense::baseline_kernels);
+  // G (G^-1 K) = K: the solve and the product together, backward stable.
+  CHECK((baseline_product - rhs).norm() <= 1e-10 * rhs.norm());
+  int variants = 0;
+  for (const auto* variant : {&dense::avx2_kernels, &dense::avx512_kernels}) {
+    if (!dense::supported(*variant)) continue;
+    ++variants;
+    INFO(variant->instruction_set);
+    const auto [factor, product] = run(*variant);
+    // Backward stable like the baseline: L L^T = G to n eps |G| (the factors themselves differ
+    // by cond(G) eps, as rounding differs).
+    CHECK((factor * factor.transpose() - gram).norm() <= 300 * 1e-16 * gram.norm());
+    CHECK((factor - baseline_factor).norm() <= 1e-6 * baseline_factor.norm());
+    CHECK((product - rhs).norm() <= 1e-10 * rhs.norm());
+  }
+  CHECK(std::string(dense::kernels().instruction_set).size() > 0);
+  WARN(variants << " vector variants supported here; chosen: " << dense::kernels().instruction_set);
 }

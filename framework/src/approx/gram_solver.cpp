@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rkhs/approx/dense_kernels.hpp"
+#include "rkhs/core/work_counters.hpp"
 
 namespace rkhs {
 
@@ -79,7 +80,7 @@ GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options
             solve_lower_in_place(out);
             solve_lower_transposed_in_place(out);
           },
-          n_, 1e-8, 60);
+          n_, 1e-4, 40);  // only decides singularity, with a margin of 100
       const double lambda_min = 1.0 / inverse_max;  // >= the true lambda_min
       const double cutoff = static_cast<double>(n_) * eps * lambda_max;
       if (lambda_min > 100.0 * cutoff) {
@@ -97,6 +98,7 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
   // The eigenvalues alone (the same values as with the eigenvectors: the tridiagonal QR
   // iteration does not depend on whether they are accumulated); the vectors only when the
   // pseudo-inverse needs them.
+  count_factorisation();  // a symmetric eigenvalue solve
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram, Eigen::EigenvaluesOnly);
   if (eigen.info() != Eigen::Success)
     throw std::runtime_error("symmetric eigen-decomposition of the Gram matrix did not converge");
@@ -134,6 +136,7 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
       factorise_shifted(gram, options);
       return;
     case SingularPolicy::pseudo_inverse: {
+      count_factorisation();
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> pairs(gram);
       if (pairs.info() != Eigen::Success)
         throw std::runtime_error("symmetric eigen-decomposition of the Gram matrix did not converge");
@@ -163,6 +166,7 @@ void GramSolver::factorise_shifted(const Eigen::MatrixXd& gram, const SolverOpti
 }
 
 void GramSolver::factorise(const Eigen::MatrixXd& matrix) {
+  count_factorisation();
   factor_ = matrix;
   factored_ = dense::kernels().cholesky(factor_.data(), n_, factor_.outerStride());
 }

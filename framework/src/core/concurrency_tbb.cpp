@@ -5,6 +5,7 @@
 
 #include "rkhs/core/concurrency.hpp"
 #include "rkhs/core/cancellation.hpp"
+#include "rkhs/core/work_counters.hpp"
 
 namespace rkhs {
 
@@ -27,11 +28,13 @@ void run_parts(std::size_t count, const std::function<void(std::size_t)>& part) 
     return;
   }
   const CancellationScope* scope = current_cancellation_scope();
+  WorkCounters* counters = current_work_counters();
   tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(
         std::size_t{0}, count, std::size_t{1},
         [&](std::size_t i) {
           const SharedCancellationScope shared(scope);
+          const WorkCounterScope counting(counters);
           part(i);
         },
         tbb::simple_partitioner());

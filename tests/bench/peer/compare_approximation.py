@@ -50,7 +50,7 @@ def dense_speed(build):
     bench = build / "bench" / "bench_dense"
     if not bench.exists():
         return None
-    result = subprocess.run([str(bench), "--benchmark_filter=power_function_phase/64|dgemm",
+    result = subprocess.run([str(bench), "--benchmark_filter=power_function_phase/64",
                              "--benchmark_format=csv"], capture_output=True, text=True, check=True)
     rows = list(csv.DictReader(line for line in result.stdout.splitlines() if "," in line))
     return rows

@@ -28,7 +28,7 @@ void run_concurrently(std::size_t count, int threads, const std::function<void(s
 /// the other cores; no thread is added, so nothing is oversubscribed), isolated so that a
 /// waiting thread takes no unrelated task; with the std::thread backend they run one after
 /// the other on the calling thread. Each part runs with the caller's cancellation scope
-/// (check_cancelled() stops the trial). Parts must write disjoint results: their order is
+/// (check_cancelled() stops the trial) and work counters (core/work_counters.hpp). Parts must write disjoint results: their order is
 /// unspecified. The first exception is rethrown once the running parts have returned.
 void run_parts(std::size_t count, const std::function<void(std::size_t)>& part);
 

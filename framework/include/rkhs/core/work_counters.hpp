@@ -23,7 +23,7 @@
 //   - kernel_derivative_evaluations: derivatives of sections asked for the same way: a
 //     KernelBasis derivative (plain or mapped) counts size(), a PointSections gradient n x d;
 //   - factorisations: factorisations of Gram matrices (count_factorisation, called by the Gram
-//     solver);
+//     solver for each Cholesky factorisation and each symmetric eigenvalue solve);
 //   - allocations, allocated_bytes, peak_bytes: heap blocks allocated by the trial's threads
 //     while its counters are current, their bytes, and the peak over the trial of the bytes they
 //     allocated minus the bytes they freed (starting from 0 when the scope opens). Counted only
