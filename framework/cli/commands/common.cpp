@@ -40,17 +40,10 @@ std::string computed_metrics_text(const StudyDefinition& study) {
   for (const auto& metric : computed)
     if (std::find(study.metrics.begin(), study.metrics.end(), metric) == study.metrics.end())
       extra.push_back(metric);
-  std::string why;
-  if (!extra.empty()) {
-    std::vector<std::string> reasons;
-    if (study.abscissa == Abscissa::fill_distance) reasons.emplace_back("abscissa = \"h\"");
-    for (const auto& e : study.expectations)
-      if (e.kind == ExpectationKind::theory) {
-        reasons.emplace_back("theory expectations (quasi-uniformity)");
-        break;
-      }
-    why = fmt::format("; {} for {}", fmt::join(extra, ", "), fmt::join(reasons, " and "));
-  }
+  const std::string why =
+      extra.empty() ? std::string()
+                    : fmt::format("; {} for {}", fmt::join(extra, ", "),
+                                  fmt::join(study.computed_metric_reasons(), " and "));
   return fmt::format("metrics computed: {} ({} of {}{})", fmt::join(computed, ", "),
                      computed.size(), total, why);
 }

@@ -204,6 +204,8 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
                                              std::size_t evaluation_points,
                                              const Eigen::MatrixXd& gram, const GramSolver& solver,
                                              unsigned work, Eigen::MatrixXd* cross_out) {
+  // ||I - Pi_n||_{H -> C} of interpolation is the power function (below).
+  if (work & work_projection_residual) work |= work_power;
   const Domain& domain = kernel.domain();
   const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
   const auto points = domain.uniform_points(evaluation_points);
@@ -276,7 +278,7 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
   if (work & work_projection_residual) {
     const double norm = metrics[M::power_function_sup];
     metrics[M::projection_norm_H_to_C] = norm;
-    if (norm <= std::sqrt(static_cast<double>(n) * eps * kernel.diagonal(points).maxCoeff()))
+    if (norm <= projection_norm_floor(kernel, static_cast<std::size_t>(n), points))
       out.flags.push_back("projection_norm_at_floor");
   }
   return out;
@@ -295,10 +297,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                std::size_t evaluation_points,
                                                const SolverOptions& solver_options,
                                                const MetricSelection& selection) {
-  unsigned work = work_needed<ApproximationMetric>(selection);
-  // The interpolation projection's own norms: the power function, and ||Pi|| of the operator
-  // built from the same solver.
-  if (work & work_projection_residual) work |= work_power;
+  const unsigned work = work_needed<ApproximationMetric>(selection);
   const Eigen::MatrixXd gram = kernel.gram(centres);
   check_cancelled();
   const GramSolver solver(gram, solver_options,
@@ -307,6 +306,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   check_cancelled();
   auto out = measure_interpolant(kernel, target, centres, evaluation_points, gram, solver, work,
                                  nullptr);
+  // ||Pi||_{H -> H} of the operator built from the same solver.
   if (work & work_operator_norm) {
     ProjectionOperator op;
     interpolation_operator(kernel, centres, gram, solver, op);

@@ -152,10 +152,15 @@ Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const Project
   return out;
 }
 
+double projection_norm_floor(const AnyKernel& kernel, std::size_t sample_count,
+                             std::span<const double> points) {
+  return std::sqrt(static_cast<double>(sample_count) * std::numeric_limits<double>::epsilon() *
+                   kernel.diagonal(points).maxCoeff());
+}
+
 double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& op,
                              std::span<const double> points) {
-  return std::sqrt(static_cast<double>(op.sample_count()) *
-                   std::numeric_limits<double>::epsilon() * kernel.diagonal(points).maxCoeff());
+  return projection_norm_floor(kernel, op.sample_count(), points);
 }
 
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op) {

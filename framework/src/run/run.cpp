@@ -68,6 +68,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   TrialResult result;
   result.metrics.assign(study.all_metrics().size(),
                         std::numeric_limits<double>::quiet_NaN());
+  const MetricSelection computed = study.computed_metrics();
   double reference_seconds = 0;  // the reference integration's share (adaptive, with one)
   const auto start = std::chrono::steady_clock::now();
   std::optional<std::chrono::steady_clock::time_point> deadline;
@@ -139,7 +140,6 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     } else {
       const std::string_view projection =
           trial.projection.name.empty() ? default_projection : trial.projection.name;
-      const auto computed = study.computed_metrics();
       ApproximationMeasurement measured;
       if (projection == default_projection) {
         // Interpolation at the centres: one Gram factorisation serves the interpolant, the
@@ -161,7 +161,6 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     // Metrics that are undefined by design in some trials (MetricRow::may_be_nan: a single
     // centre has no separation; coefficient and Lyapunov metrics need a road in H_n).
     const auto& names = study.all_metrics();
-    const auto computed = study.computed_metrics();
     for (std::size_t i = 0; i < names.size(); ++i)
       if (computed[i] && std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));

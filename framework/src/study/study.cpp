@@ -58,22 +58,42 @@ std::size_t StudyDefinition::metric_index(std::string_view metric) const {
   return static_cast<std::size_t>(it - names.begin());
 }
 
+namespace {
+// The rules of computed_metrics(), once: calls need(metric, reason) for every metric an
+// approximation study's trials compute, reason "" for those of study.metrics.
+template <class Need>
+void for_each_needed_metric(const StudyDefinition& study, Need&& need) {
+  for (const auto& metric : study.metrics) need(metric, "");
+  if (study.abscissa == Abscissa::fill_distance) need("fill_distance", "abscissa = \"h\"");
+  for (const auto& expectation : study.expectations)
+    if (expectation.kind == ExpectationKind::theory) {
+      need("fill_distance", "theory expectations (quasi-uniformity)");
+      need("separation_distance", "theory expectations (quasi-uniformity)");
+    }
+}
+}  // namespace
+
 MetricSelection StudyDefinition::computed_metrics() const {
   const auto& names = all_metrics();
   if (kind == StudyKind::adaptive) return MetricSelection(names.size(), true);
   MetricSelection computed(names.size(), false);
-  auto compute = [&](std::string_view metric) {
+  for_each_needed_metric(*this, [&](std::string_view metric, std::string_view) {
     const auto it = std::find(names.begin(), names.end(), metric);
     if (it != names.end()) computed[static_cast<std::size_t>(it - names.begin())] = true;
-  };
-  for (const auto& metric : metrics) compute(metric);
-  if (abscissa == Abscissa::fill_distance) compute("fill_distance");
-  for (const auto& expectation : expectations)
-    if (expectation.kind == ExpectationKind::theory) {
-      compute("fill_distance");
-      compute("separation_distance");
-    }
+  });
   return computed;
+}
+
+std::vector<std::string> StudyDefinition::computed_metric_reasons() const {
+  std::vector<std::string> reasons;
+  if (kind == StudyKind::adaptive) return reasons;
+  for_each_needed_metric(*this, [&](std::string_view metric, std::string_view reason) {
+    const bool asked = std::find(metrics.begin(), metrics.end(), metric) != metrics.end();
+    if (!asked && !reason.empty() &&
+        std::find(reasons.begin(), reasons.end(), reason) == reasons.end())
+      reasons.emplace_back(reason);
+  });
+  return reasons;
 }
 
 std::vector<std::string> StudyDefinition::computed_metric_names() const {

@@ -185,6 +185,10 @@ Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const Project
 /// (the flag projection_norm_at_floor).
 double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& op,
                              std::span<const double> points);
+/// The same for a projection with `sample_count` sample points (n for interpolation at n
+/// centres), without an operator.
+double projection_norm_floor(const AnyKernel& kernel, std::size_t sample_count,
+                             std::span<const double> points);
 /// ||Pi||_{H -> H} = sqrt(lambda_max(R^T W K_SS W^T R)) with G_B = R R^T: the largest
 /// ||Pi f||_H over ||f||_H = 1 (f ranges over H, seen by Pi through f(S)).
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op);

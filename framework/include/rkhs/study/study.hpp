@@ -151,6 +151,9 @@ struct StudyDefinition {
   MetricSelection computed_metrics() const;
   /// The names of computed_metrics(), in output order.
   std::vector<std::string> computed_metric_names() const;
+  /// Why each metric computed beyond `metrics` is computed ("abscissa = \"h\"", "theory
+  /// expectations (quasi-uniformity)"), each reason once, in the order of the rules above.
+  std::vector<std::string> computed_metric_reasons() const;
 };
 
 /// A lap count as the laps column, the keys and messages print it: "limit" for +infinity, a
