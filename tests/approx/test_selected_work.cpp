@@ -1,8 +1,8 @@
 // An approximation trial computes what its metrics need and nothing else, from one Gram
 // factorisation: each shortcut is checked against the computation it replaces.
 #include <catch2/catch.hpp>
-
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "rkhs/approx/approximation.hpp"
@@ -33,7 +33,8 @@ std::unique_ptr<TargetFunction> sine(const Domain& domain) {
 
 std::vector<double> uniform_centres(std::size_t n, const Domain& domain) {
   std::vector<double> c;
-  for (std::size_t i = 0; i < n; ++i) c.push_back(domain.length * (static_cast<double>(i) + 0.5) / static_cast<double>(n));
+  for (std::size_t i = 0; i < n; ++i)
+    c.push_back(domain.length * (static_cast<double>(i) + 0.5) / static_cast<double>(n));
   return c;
 }
 
@@ -75,24 +76,24 @@ TEST_CASE("selected metrics equal the full measurement's and the rest are not co
   for (std::size_t i = 0; i < MetricValues<M>::count; ++i) CHECK(std::isfinite(full.metrics[i]));
 
   SECTION("errors and the power function without the spectrum, the geometry or the operator") {
-    const auto some = measure_approximation(*k, *f, centres, 1000, {},
-                                            only({M::power_function_sup, M::l2_error, M::sup_error}));
+    const auto some = measure_approximation(
+        *k, *f, centres, 1000, {}, only({M::power_function_sup, M::l2_error, M::sup_error}));
     // The same factorisation and the same blocked pass: the same bits.
     CHECK(some.metrics[M::power_function_sup] == full.metrics[M::power_function_sup]);
     CHECK(some.metrics[M::l2_error] == full.metrics[M::l2_error]);
     CHECK(some.metrics[M::sup_error] == full.metrics[M::sup_error]);
-    for (const auto m : {M::fill_distance, M::separation_distance, M::gram_condition_number,
-                         M::gram_min_eigenvalue, M::gram_max_eigenvalue, M::power_function_floor,
-                         M::error_floor, M::interpolant_native_norm, M::projection_norm_H_to_C,
-                         M::projection_operator_norm})
+    for (const auto m :
+         {M::fill_distance, M::separation_distance, M::gram_condition_number,
+          M::gram_min_eigenvalue, M::gram_max_eigenvalue, M::power_function_floor, M::error_floor,
+          M::interpolant_native_norm, M::projection_norm_H_to_C, M::projection_operator_norm})
       CHECK(std::isnan(some.metrics[m]));
     CHECK(some.solve_method == full.solve_method);
     for (const auto& flag : {"power_function_at_floor", "l2_error_at_floor", "sup_error_at_floor"})
       CHECK(has_flag(some, flag) == has_flag(full, flag));
   }
   SECTION("the spectrum alone") {
-    const auto some = measure_approximation(*k, *f, centres, 1000, {},
-                                            only({M::gram_condition_number}));
+    const auto some =
+        measure_approximation(*k, *f, centres, 1000, {}, only({M::gram_condition_number}));
     CHECK(some.metrics[M::gram_condition_number] == full.metrics[M::gram_condition_number]);
     CHECK(std::isnan(some.metrics[M::power_function_sup]));
   }
@@ -140,8 +141,7 @@ TEST_CASE("estimated spectrum: the same singularity decision as the exact one",
                       << exact.spectrum().lambda_min);
       CHECK(estimated.spectrum().singular == exact.spectrum().singular);
       CHECK(estimated.method() == exact.method());
-      CHECK(estimated.spectrum().lambda_max ==
-            Approx(exact.spectrum().lambda_max).epsilon(1e-11));
+      CHECK(estimated.spectrum().lambda_max == Approx(exact.spectrum().lambda_max).epsilon(1e-11));
       if (estimated.spectrum().estimated) {
         // Never below the true smallest eigenvalue (up to round-off), close to it.
         CHECK(estimated.spectrum().lambda_min >= exact.spectrum().lambda_min * (1 - 1e-8));
@@ -151,20 +151,20 @@ TEST_CASE("estimated spectrum: the same singularity decision as the exact one",
   }
 }
 
-TEST_CASE("the blocked power function equals one solve over every point",
-          "[approximation][work]") {
+TEST_CASE("the blocked power function equals one solve over every point", "[approximation][work]") {
   Domain square;
   square.dimension = 2;
   square.length = square.width = 1.0;
   square.periodic = false;
   const auto k = kernel("matern", {{"nu", 2.5}, {"length_scale", 0.3}}, square);
-  const auto centres = square.uniform_points(100);   // a 10 x 10 grid
-  const auto points = square.uniform_points(1600);   // 40 x 40: several blocks
+  const auto centres = square.uniform_points(100);  // a 10 x 10 grid
+  const auto points = square.uniform_points(1600);  // 40 x 40: several blocks
   const Eigen::MatrixXd gram = k->gram(centres);
   const GramSolver solver(gram, {});
   const Eigen::VectorXd blocked = power_function(*k, solver, centres, points);
   const Eigen::LLT<Eigen::MatrixXd> llt(gram);
-  const Eigen::MatrixXd half = llt.matrixL().solve(Eigen::MatrixXd(k->cross(points, centres).transpose()));
+  const Eigen::MatrixXd half =
+      llt.matrixL().solve(Eigen::MatrixXd(k->cross(points, centres).transpose()));
   const Eigen::VectorXd direct =
       (k->diagonal(points) - half.colwise().squaredNorm().transpose()).cwiseMax(0.0).cwiseSqrt();
   REQUIRE(blocked.size() == direct.size());
@@ -222,4 +222,90 @@ TEST_CASE("every dense-kernel variant this processor runs agrees with the baseli
   }
   CHECK(std::string(dense::kernels().instruction_set).size() > 0);
   WARN(variants << " vector variants supported here; chosen: " << dense::kernels().instruction_set);
+}
+
+TEST_CASE("the tiled Cholesky factorisation: Eigen's, and the same bits on one thread or two",
+          "[approximation][work][dense]") {
+  // A Matern Gram matrix of condition about 1e7 in 2-D, n = 1100 (the tiles do not divide n).
+  Domain square{1.0, false};
+  square.dimension = 2;
+  square.width = 1.0;
+  const auto k = kernel("matern", {{"nu", 2.5}, {"length_scale", 0.2}}, square);
+  std::vector<double> centres;
+  for (int i = 0; i < 1100; ++i) {
+    centres.push_back(std::fmod(0.6180339887 * i, 1.0));
+    centres.push_back(std::fmod(0.7548776662 * i + 0.5698402910 * (i % 7), 1.0));
+  }
+  const Eigen::MatrixXd gram = k->gram(centres);
+  const auto n = static_cast<dense::Index>(gram.rows());
+  REQUIRE(n == 1100);
+  const dense::Kernels& variant = dense::kernels();
+  auto factorise = [&](int threads) {
+    Eigen::MatrixXd factor = gram;
+    bool ok = false;
+    run_concurrently(1, threads, [&](std::size_t) {
+      ok = dense::parallel_cholesky(variant, factor.data(), n, n);
+    });
+    REQUIRE(ok);
+    return factor;
+  };
+  const Eigen::MatrixXd one = factorise(1), two = factorise(2);
+  // Every bit, the strict upper triangle (left as it was) included.
+  CHECK(std::memcmp(one.data(), two.data(), sizeof(double) * one.size()) == 0);
+  CHECK(one.triangularView<Eigen::StrictlyUpper>().toDenseMatrix() ==
+        gram.triangularView<Eigen::StrictlyUpper>().toDenseMatrix());
+  const Eigen::MatrixXd lower = one.triangularView<Eigen::Lower>();
+  // Backward stable: L L^T = G to a small multiple of n eps |G|.
+  CHECK((lower * lower.transpose() - gram).norm() <= 1100 * 1e-16 * gram.norm());
+  // Against the untiled factorisation: the same to cond(G) eps.
+  Eigen::MatrixXd reference = gram;
+  REQUIRE(variant.cholesky(reference.data(), n, n));
+  const Eigen::MatrixXd reference_lower = reference.triangularView<Eigen::Lower>();
+  CHECK((lower - reference_lower).norm() <= 1e-6 * reference_lower.norm());
+
+  // Not positive definite (a negative pivot in the last panel): refused, as the untiled one does.
+  Eigen::MatrixXd indefinite = gram;
+  indefinite(n - 3, n - 3) = -1.0;
+  CHECK_FALSE(dense::parallel_cholesky(variant, indefinite.data(), n, n));
+}
+
+TEST_CASE("the Gram matrix assembled in strips is the cross matrix's lower triangle, mirrored",
+          "[kernel][work]") {
+  // 1-D (a kernel without support or feature map) and 2-D (a point kernel), n large enough for
+  // strips, on one thread and on two: every entry is k(c_i, c_j) for i >= j, bit for bit.
+  Domain square{1.0, false};
+  square.dimension = 2;
+  square.width = 1.0;
+  const Domain circle{4.0, true};
+  struct Case {
+    const Domain* domain;
+    std::unique_ptr<AnyKernel> k;
+    std::vector<double> centres;
+  };
+  std::vector<Case> cases;
+  cases.push_back(
+      {&circle, kernel("gaussian", {{"sigma", 0.3}}, circle), uniform_centres(700, circle)});
+  std::vector<double> flat;
+  for (int i = 0; i < 700; ++i) {
+    flat.push_back(std::fmod(0.6180339887 * i, 1.0));
+    flat.push_back(std::fmod(0.7548776662 * i, 1.0));
+  }
+  cases.push_back({&square, kernel("matern", {{"nu", 1.5}, {"length_scale", 0.3}}, square), flat});
+  for (const auto& c : cases) {
+    const Eigen::MatrixXd cross = c.k->cross(c.centres, c.centres);
+    const Eigen::Index n = cross.rows();
+    for (int threads : {1, 2}) {
+      Eigen::MatrixXd gram;
+      run_concurrently(1, threads, [&](std::size_t) { gram = c.k->gram(c.centres); });
+      INFO("dimension " << c.domain->dimension << ", threads " << threads);
+      bool lower_equal = true, symmetric = true;
+      for (Eigen::Index j = 0; j < n; ++j)
+        for (Eigen::Index i = j; i < n; ++i) {
+          lower_equal = lower_equal && gram(i, j) == cross(i, j);
+          symmetric = symmetric && gram(j, i) == gram(i, j);
+        }
+      CHECK(lower_equal);
+      CHECK(symmetric);
+    }
+  }
 }

@@ -1,10 +1,14 @@
 // The choice among the variants of dense_kernels.hpp.
 #include "rkhs/approx/dense_kernels.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
+#include <vector>
+
+#include "rkhs/core/concurrency.hpp"
 
 namespace rkhs::dense {
 
@@ -46,6 +50,51 @@ const Kernels& choose() noexcept {
   return *widest;
 }
 }  // namespace
+
+bool parallel_cholesky(const Kernels& variant, double* a, Index n, Index lda) {
+  if (n < 512) return variant.cholesky(a, n, lda);
+  // Eigen's partition (LLT.h, llt_inplace::blocked): panels of `block` columns.
+  const Index block = std::min<Index>(std::max<Index>((n / 8 / 16) * 16, 8), 128);
+  // Tiles of the panel's triangular solve (rows) and of the trailing update (a column strip of
+  // `strip` columns, its diagonal square and its rows below in chunks of `chunk`).
+  constexpr Index rows_per_solve = 512, strip = 256, chunk = 1024;
+  auto at = [&](Index row, Index col) { return a + row + col * lda; };
+  struct Tile {
+    Index col0, cols, row0, rows;
+  };
+  std::vector<Tile> tiles;
+  for (Index k = 0; k < n; k += block) {
+    const Index bs = std::min(block, n - k), rs = n - k - bs;
+    if (!variant.cholesky_unblocked(at(k, k), bs, lda)) return false;
+    if (rs == 0) break;
+    const Index solves = (rs + rows_per_solve - 1) / rows_per_solve;
+    run_parts(static_cast<std::size_t>(solves), [&](std::size_t part) {
+      const Index row0 = static_cast<Index>(part) * rows_per_solve;
+      variant.solve_right_lower_transposed(at(k, k), bs, lda, at(k + bs + row0, k),
+                                           std::min(rows_per_solve, rs - row0), lda);
+    });
+    // A22 -= A21 A21^T on the lower triangle, A21 = a(k + bs.., k..k + bs).
+    tiles.clear();
+    for (Index col0 = 0; col0 < rs; col0 += strip) {
+      const Index cols = std::min(strip, rs - col0);
+      tiles.push_back({col0, cols, col0, cols});  // the diagonal square
+      for (Index row0 = col0 + cols; row0 < rs; row0 += chunk)
+        tiles.push_back({col0, cols, row0, std::min(chunk, rs - row0)});
+    }
+    const Index base = k + bs;
+    run_parts(tiles.size(), [&](std::size_t t) {
+      const Tile& tile = tiles[t];
+      if (tile.row0 == tile.col0)
+        variant.subtract_gram_lower(at(base + tile.col0, k), tile.cols, bs, lda,
+                                    at(base + tile.col0, base + tile.col0), lda);
+      else
+        variant.subtract_product_transposed(at(base + tile.row0, k), tile.rows, bs, lda,
+                                            at(base + tile.col0, k), tile.cols, lda,
+                                            at(base + tile.row0, base + tile.col0), lda);
+    });
+  }
+  return true;
+}
 
 const Kernels& kernels() noexcept {
   static const Kernels& chosen = choose();

@@ -26,14 +26,39 @@ bool cholesky(double* a, Index n, Index lda) {
   return Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(matrix) == -1;
 }
 
+bool cholesky_unblocked(double* a, Index n, Index lda) {
+  Strided matrix(a, n, n, Eigen::OuterStride<>(lda));
+  return Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(matrix) == -1;
+}
+
+void solve_right_lower_transposed(const double* l, Index n, Index ldl, double* b, Index rows,
+                                  Index ldb) {
+  const ConstStrided factor(l, n, n, Eigen::OuterStride<>(ldl));
+  Strided lhs(b, rows, n, Eigen::OuterStride<>(ldb));
+  factor.transpose().triangularView<Eigen::Upper>().solveInPlace<Eigen::OnTheRight>(lhs);
+}
+
+void subtract_product_transposed(const double* a, Index m, Index k, Index lda, const double* b,
+                                 Index n, Index ldb, double* c, Index ldc) {
+  const ConstStrided left(a, m, k, Eigen::OuterStride<>(lda));
+  const ConstStrided right(b, n, k, Eigen::OuterStride<>(ldb));
+  Strided out(c, m, n, Eigen::OuterStride<>(ldc));
+  out.noalias() -= left * right.transpose();
+}
+
+void subtract_gram_lower(const double* a, Index n, Index k, Index lda, double* c, Index ldc) {
+  const ConstStrided left(a, n, k, Eigen::OuterStride<>(lda));
+  Strided out(c, n, n, Eigen::OuterStride<>(ldc));
+  out.selfadjointView<Eigen::Lower>().rankUpdate(left, -1.0);
+}
+
 void solve_lower(const double* l, Index n, Index ldl, double* b, Index cols, Index ldb) {
   const ConstStrided factor(l, n, n, Eigen::OuterStride<>(ldl));
   Strided rhs(b, n, cols, Eigen::OuterStride<>(ldb));
   factor.triangularView<Eigen::Lower>().solveInPlace(rhs);
 }
 
-void solve_lower_transposed(const double* l, Index n, Index ldl, double* b, Index cols,
-                            Index ldb) {
+void solve_lower_transposed(const double* l, Index n, Index ldl, double* b, Index cols, Index ldb) {
   const ConstStrided factor(l, n, n, Eigen::OuterStride<>(ldl));
   Strided rhs(b, n, cols, Eigen::OuterStride<>(ldb));
   factor.transpose().triangularView<Eigen::Upper>().solveInPlace(rhs);
@@ -50,6 +75,13 @@ void multiply(const double* a, Index m, Index k, Index lda, const double* b, Ind
 }  // namespace
 
 namespace rkhs::dense {
-extern const Kernels RKHS_DENSE_VARIANT{RKHS_DENSE_ISA, cholesky, solve_lower,
-                                        solve_lower_transposed, multiply};
+extern const Kernels RKHS_DENSE_VARIANT{RKHS_DENSE_ISA,
+                                        cholesky,
+                                        cholesky_unblocked,
+                                        solve_right_lower_transposed,
+                                        subtract_product_transposed,
+                                        subtract_gram_lower,
+                                        solve_lower,
+                                        solve_lower_transposed,
+                                        multiply};
 }  // namespace rkhs::dense

@@ -2,11 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "rkhs/approx/dense_kernels.hpp"
+#include "rkhs/core/concurrency.hpp"
 #include "rkhs/core/work_counters.hpp"
 
 namespace rkhs {
@@ -33,6 +35,16 @@ Eigen::VectorXd lanczos_start(Eigen::Index n) {
 // of size n: the largest Ritz value of Lanczos with full reorthogonalisation, from
 // lanczos_start, stopped when it changes by less than `tolerance` relative in one step, at an
 // invariant subspace, or after `max_steps`. A Ritz value never exceeds the eigenvalue.
+// Strips of columns of an n x n matrix for run_parts: [strip_begin(p, n), strip_begin(p + 1, n)),
+// a fixed partition (so nothing computed in strips depends on the thread count).
+constexpr Eigen::Index strip_columns = 256;
+std::size_t strip_count(Eigen::Index n) {
+  return static_cast<std::size_t>((n + strip_columns - 1) / strip_columns);
+}
+Eigen::Index strip_begin(std::size_t p, Eigen::Index n) {
+  return std::min(n, static_cast<Eigen::Index>(p) * strip_columns);
+}
+
 template <class Apply>
 double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::Index max_steps) {
   const Eigen::Index steps = std::min(n, max_steps);
@@ -67,20 +79,38 @@ double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::I
 GramSolver::GramSolver(const Eigen::MatrixXd& gram, const SolverOptions& options,
                        GramSpectrumMode mode)
     : n_(gram.rows()) {
-  if (n_ == 0 || gram.cols() != n_) throw std::invalid_argument("Gram matrix must be square, n >= 1");
+  if (n_ == 0 || gram.cols() != n_)
+    throw std::invalid_argument("Gram matrix must be square, n >= 1");
   if (!gram.allFinite()) throw std::invalid_argument("Gram matrix has non-finite entries");
   if (mode == GramSpectrumMode::estimate) {
     factorise(gram);
     if (factored_) {
-      const double lambda_max = lanczos_largest(
-          [&](const auto& in, Eigen::VectorXd& out) { out.noalias() = gram * in; }, n_, 1e-13, 80);
-      const double inverse_max = lanczos_largest(
-          [&](const auto& in, Eigen::VectorXd& out) {
-            out = in;
-            solve_lower_in_place(out);
-            solve_lower_transposed_in_place(out);
-          },
-          n_, 1e-4, 40);  // only decides singularity, with a margin of 100
+      // The two iterations are independent: they run as two parts (the solves with the
+      // factor are memory-bound vector solves, G v goes by strips of columns of the symmetric
+      // G, (G v)_strip = G(:, strip)^T v).
+      double lambda_max = 0, inverse_max = 0;
+      run_parts(2, [&](std::size_t part) {
+        if (part == 0) {
+          lambda_max = lanczos_largest(
+              [&](const auto& in, Eigen::VectorXd& out) {
+                run_parts(strip_count(n_), [&](std::size_t p) {
+                  const Eigen::Index first = strip_begin(p, n_),
+                                     count = strip_begin(p + 1, n_) - first;
+                  out.segment(first, count).noalias() =
+                      gram.middleCols(first, count).transpose() * in;
+                });
+              },
+              n_, 1e-13, 80);
+        } else {
+          inverse_max = lanczos_largest(
+              [&](const auto& in, Eigen::VectorXd& out) {
+                out = in;
+                factor_.triangularView<Eigen::Lower>().solveInPlace(out);
+                factor_.transpose().triangularView<Eigen::Upper>().solveInPlace(out);
+              },
+              n_, 1e-4, 40);  // only decides singularity, with a margin of 100
+        }
+      });
       const double lambda_min = 1.0 / inverse_max;  // >= the true lambda_min
       const double cutoff = static_cast<double>(n_) * eps * lambda_max;
       if (lambda_min > 100.0 * cutoff) {
@@ -108,9 +138,8 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
   spectrum_.lambda_max = values(n_ - 1);
   const double cutoff = static_cast<double>(n_) * eps * spectrum_.lambda_max;
   spectrum_.singular = !(spectrum_.lambda_min > cutoff);
-  spectrum_.condition_number = spectrum_.singular
-                                   ? std::numeric_limits<double>::infinity()
-                                   : spectrum_.lambda_max / spectrum_.lambda_min;
+  spectrum_.condition_number = spectrum_.singular ? std::numeric_limits<double>::infinity()
+                                                  : spectrum_.lambda_max / spectrum_.lambda_min;
 
   if (!spectrum_.singular) {
     if (!factored_) factorise(gram);
@@ -139,7 +168,8 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
       count_factorisation();
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> pairs(gram);
       if (pairs.info() != Eigen::Success)
-        throw std::runtime_error("symmetric eigen-decomposition of the Gram matrix did not converge");
+        throw std::runtime_error(
+            "symmetric eigen-decomposition of the Gram matrix did not converge");
       const Eigen::VectorXd& pair_values = pairs.eigenvalues();
       Eigen::Index first = 0;
       while (first < n_ && !(pair_values(first) > cutoff)) ++first;
@@ -167,8 +197,13 @@ void GramSolver::factorise_shifted(const Eigen::MatrixXd& gram, const SolverOpti
 
 void GramSolver::factorise(const Eigen::MatrixXd& matrix) {
   count_factorisation();
-  factor_ = matrix;
-  factored_ = dense::kernels().cholesky(factor_.data(), n_, factor_.outerStride());
+  // Copied in strips: the first touch of a large new block's pages (page faults) in parallel.
+  factor_.resize(n_, n_);
+  run_parts(strip_count(n_), [&](std::size_t p) {
+    const Eigen::Index first = strip_begin(p, n_), count = strip_begin(p + 1, n_) - first;
+    factor_.middleCols(first, count) = matrix.middleCols(first, count);
+  });
+  factored_ = dense::parallel_cholesky(dense::kernels(), factor_.data(), n_, factor_.outerStride());
 }
 
 void GramSolver::solve_lower_in_place(Eigen::Ref<Eigen::MatrixXd> x) const {

@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rkhs/core/concurrency.hpp"
 #include "rkhs/core/work_counters.hpp"
 #include "rkhs/kernel/kernel.hpp"
 
@@ -52,8 +53,8 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> feature_matrix(const K& kernel,
     for (std::size_t f = 0; f < features.size(); ++f)
       triplets.emplace_back(static_cast<int>(m), features.index[f], features.value[f]);
   }
-  Eigen::SparseMatrix<double, Eigen::RowMajor> phi(static_cast<Eigen::Index>(points.size()),
-                                                   static_cast<Eigen::Index>(kernel.feature_count()));
+  Eigen::SparseMatrix<double, Eigen::RowMajor> phi(
+      static_cast<Eigen::Index>(points.size()), static_cast<Eigen::Index>(kernel.feature_count()));
   phi.setFromTriplets(triplets.begin(), triplets.end());
   return phi;
 }
@@ -240,9 +241,11 @@ Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(rows, cols);
     const double radius = kernel.properties().support_radius;
     if (radius > 0) {
-      detail::for_each_pair_within(domain, radius, points, centres, [&](std::size_t m, std::size_t i) {
-        out(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(i)) = kernel(points[m], centres[i]);
-      });
+      detail::for_each_pair_within(
+          domain, radius, points, centres, [&](std::size_t m, std::size_t i) {
+            out(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(i)) =
+                kernel(points[m], centres[i]);
+          });
     } else {
       for (Eigen::Index i = 0; i < cols; ++i)
         for (Eigen::Index m = 0; m < rows; ++m) out(m, i) = kernel(points[m], centres[i]);
@@ -251,26 +254,71 @@ Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
   }
 }
 
-/// G_ij = k(c_i, c_j), exactly symmetric.
+namespace detail {
+/// The lower triangle of the dense Gram matrix, G_ij = kernel(c_i, c_j) for i >= j (`at(i)`
+/// points to c_i), mirrored into the upper one: one evaluation per pair. The columns are split
+/// into strips of about equal area that run through run_parts (the idle threads of the
+/// caller's arena); every entry is computed by itself, so the matrix does not depend on the
+/// thread count.
+template <class Evaluate>
+void assemble_symmetric(Eigen::Ref<Eigen::MatrixXd> gram, Evaluate&& evaluate) {
+  const Eigen::Index n = gram.rows();
+  const auto strips = static_cast<std::size_t>(n >= 256 ? std::min<Eigen::Index>(64, n / 32) : 1);
+  // Strip p holds columns [first(p), first(p + 1)): equal shares of the n (n + 1) / 2 entries.
+  auto first = [&](std::size_t p) {
+    const double share = static_cast<double>(p) / static_cast<double>(strips);
+    return p >= strips ? n
+                       : static_cast<Eigen::Index>(
+                             std::floor(static_cast<double>(n) * (1.0 - std::sqrt(1.0 - share))));
+  };
+  run_parts(strips, [&](std::size_t p) {
+    for (Eigen::Index j = first(p); j < first(p + 1); ++j) {
+      for (Eigen::Index i = j; i < n; ++i) gram(i, j) = evaluate(i, j);
+      // Row j right of the diagonal: entries no other strip writes.
+      for (Eigen::Index i = j + 1; i < n; ++i) gram(j, i) = gram(i, j);
+    }
+  });
+}
+}  // namespace detail
+
+/// G_ij = k(c_i, c_j), exactly symmetric, into `gram` (n x n, sized by the caller): the dense
+/// kernels straight into it, in strips on the idle threads of the caller's arena.
 template <KernelFunction K>
-Eigen::MatrixXd assemble_gram(const K& kernel, const Domain& domain,
-                              std::span<const double> centres) {
+void assemble_gram_into(const K& kernel, const Domain& domain, std::span<const double> centres,
+                        Eigen::Ref<Eigen::MatrixXd> gram) {
   const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
-  Eigen::MatrixXd gram;
   if (domain.dimension > 1) {
+    if constexpr (PointKernel<K>) {
+      const auto d = static_cast<std::size_t>(domain.dimension);
+      detail::assemble_symmetric(gram, [&](Eigen::Index i, Eigen::Index j) {
+        return kernel(centres.data() + static_cast<std::size_t>(i) * d,
+                      centres.data() + static_cast<std::size_t>(j) * d);
+      });
+      return;
+    }
     gram = assemble_cross(kernel, domain, centres, centres);
   } else if constexpr (FeatureMapKernel<K>) {
     gram = assemble_cross(kernel, domain, centres, centres);
   } else if (kernel.properties().support_radius > 0) {
     gram = assemble_cross(kernel, domain, centres, centres);
   } else {
-    gram.resize(n, n);
-    for (Eigen::Index j = 0; j < n; ++j)
-      for (Eigen::Index i = j; i < n; ++i) gram(i, j) = kernel(centres[i], centres[j]);
+    detail::assemble_symmetric(gram, [&](Eigen::Index i, Eigen::Index j) {
+      return kernel(centres[static_cast<std::size_t>(i)], centres[static_cast<std::size_t>(j)]);
+    });
+    return;
   }
   // Symmetrise from the lower triangle: round-off in the two triangles may differ.
   for (Eigen::Index j = 0; j < n; ++j)
     for (Eigen::Index i = j + 1; i < n; ++i) gram(j, i) = gram(i, j);
+}
+
+/// G_ij = k(c_i, c_j), exactly symmetric.
+template <KernelFunction K>
+Eigen::MatrixXd assemble_gram(const K& kernel, const Domain& domain,
+                              std::span<const double> centres) {
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
+  Eigen::MatrixXd gram(n, n);
+  assemble_gram_into(kernel, domain, centres, gram);
   return gram;
 }
 
@@ -306,7 +354,8 @@ class DirectBasis final : public KernelBasis {
     }
     sections(s, phi_.data());
     Eigen::Map<Eigen::VectorXd>(out, map_.rows()).noalias() =
-        map_ * Eigen::Map<const Eigen::VectorXd>(phi_.data(), static_cast<Eigen::Index>(phi_.size()));
+        map_ *
+        Eigen::Map<const Eigen::VectorXd>(phi_.data(), static_cast<Eigen::Index>(phi_.size()));
   }
   void evaluate_derivative(double s, double* dphi) const override {
     count_kernel_derivative_evaluations(centres_.size());
@@ -582,8 +631,10 @@ class KernelModel final : public AnyKernel {
                                   std::to_string(x.size()) + " and " + std::to_string(y.size()) +
                                   " coordinates on a domain of dimension " + std::to_string(d));
     if (d == 1) return kernel_(x[0], y[0]);
-    if constexpr (PointKernel<K>) return kernel_(x.data(), y.data());
-    else throw std::logic_error("unreachable: a one-dimensional kernel on a domain of d > 1");
+    if constexpr (PointKernel<K>)
+      return kernel_(x.data(), y.data());
+    else
+      throw std::logic_error("unreachable: a one-dimensional kernel on a domain of d > 1");
   }
   double derivative(double x, double y) const override {
     require_one_dimensional("derivative");
@@ -643,14 +694,14 @@ class KernelModel final : public AnyKernel {
     require_flat(centres, "gram_into");
     require_size(out.rows(), out.cols(), n, n, "gram_into");
     count_kernel_evaluations(std::uint64_t{n} * (n + 1) / 2);
-    out = assemble_gram(kernel_, domain_, centres);
+    assemble_gram_into(kernel_, domain_, centres, out);
   }
   void cross_into(std::span<const double> points, std::span<const double> centres,
                   Eigen::Ref<Eigen::MatrixXd> out) const override {
     require_flat(points, "cross_into");
     require_flat(centres, "cross_into");
-    require_size(out.rows(), out.cols(), domain_.point_count(points),
-                 domain_.point_count(centres), "cross_into");
+    require_size(out.rows(), out.cols(), domain_.point_count(points), domain_.point_count(centres),
+                 "cross_into");
     count_kernel_evaluations(std::uint64_t{domain_.point_count(points)} *
                              domain_.point_count(centres));
     out = assemble_cross(kernel_, domain_, points, centres);
@@ -671,8 +722,10 @@ class KernelModel final : public AnyKernel {
     }
   }
   std::size_t feature_count() const noexcept override {
-    if constexpr (FeatureMapKernel<K>) return kernel_.feature_count();
-    else return 0;
+    if constexpr (FeatureMapKernel<K>)
+      return kernel_.feature_count();
+    else
+      return 0;
   }
   std::unique_ptr<KernelBasis> basis(std::span<const double> centres) const override {
     require_one_dimensional("basis");
@@ -711,7 +764,8 @@ class KernelModel final : public AnyKernel {
     if (domain.dimension > 1 && !PointKernel<K>)
       throw std::invalid_argument("kernel '" + K::info().name +
                                   "' is defined on one-dimensional domains only; this domain has "
-                                  "d = " + std::to_string(domain.dimension));
+                                  "d = " +
+                                  std::to_string(domain.dimension));
     return parameters;
   }
   void require_one_dimensional(const char* method) const {
@@ -722,10 +776,9 @@ class KernelModel final : public AnyKernel {
   }
   void require_flat(std::span<const double> points, const char* method) const {
     if (points.size() % static_cast<std::size_t>(domain_.dimension) != 0)
-      throw std::invalid_argument(std::string("AnyKernel::") + method + ": " +
-                                  std::to_string(points.size()) +
-                                  " coordinates are not whole points of dimension " +
-                                  std::to_string(domain_.dimension));
+      throw std::invalid_argument(
+          std::string("AnyKernel::") + method + ": " + std::to_string(points.size()) +
+          " coordinates are not whole points of dimension " + std::to_string(domain_.dimension));
   }
   static void require_size(Eigen::Index rows, Eigen::Index cols, std::size_t expected_rows,
                            std::size_t expected_cols, const char* method) {
