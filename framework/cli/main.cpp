@@ -58,7 +58,11 @@ int rkhs_study_main(int argc, char** argv) {
                   "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
   std::string merge_into;
   std::vector<std::string> merge_from;
-  auto* merge = app.add_subcommand("merge", "combine result stores (e.g. of shards) into one");
+  auto* merge = app.add_subcommand(
+      "merge",
+      "combine result stores (e.g. of shards) into one, all or nothing: every source record "
+      "verified, a trial stored with two different results refused unless --prefer says which "
+      "record wins");
   merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
   merge->add_option("from", merge_from, "stores to copy from")
       ->required()

@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
@@ -33,35 +34,63 @@ std::string bad_record_line(const std::string& file, const ResultStore::Entry& e
                      entry.hash.substr(0, 12), entry.check.problem);
 }
 
-int store_check(const std::string& file) {
-  const auto store = open_existing(file, StoreAccess::read_only);
+// What `store check` finds in a store.
+struct Findings {
+  std::vector<std::string> integrity;  // SQLite's integrity check (empty: ok)
+  std::vector<std::string> bad_lines;  // one per record that does not verify
+  std::size_t total = 0, bad = 0, old_format = 0, format_2 = 0;
+};
+
+Findings find_problems(const std::string& file, const ResultStore& store) {
+  Findings found;
   // SQLite's own check first: a damaged index finds rows it should not (or misses some), so
   // the records' checksums alone do not prove the file.
-  if (const auto problems = store.integrity_problems(); !problems.empty()) {
-    for (std::size_t i = 0; i < problems.size() && i < 20; ++i)
-      std::cout << fmt::format("{}: {}\n", file, problems[i]);
+  found.integrity = store.integrity_problems();
+  if (!found.integrity.empty()) return found;
+  store.for_each([&](const ResultStore::Entry& entry) {
+    ++found.total;
+    if (entry.check.sound()) {
+      found.format_2 += entry.check.key_and_study_proven() ? 0 : 1;
+      return;
+    }
+    if (entry.check.old_format) {
+      ++found.old_format;
+      return;
+    }
+    ++found.bad;
+    found.bad_lines.push_back(bad_record_line(file, entry));
+  });
+  return found;
+}
+
+// `read` of the store opened read-only; once more (through the WAL) when a run started writing
+// it while it was read as an immutable file.
+template <class Read>
+auto read_store(const std::string& file, Read read) {
+  for (int attempt = 0;; ++attempt) {
+    const auto store = open_existing(file, StoreAccess::read_only);
+    auto found = read(store);
+    if (attempt > 0 || !store.written_meanwhile()) return found;
+  }
+}
+
+int store_check(const std::string& file) {
+  const auto found =
+      read_store(file, [&](const ResultStore& store) { return find_problems(file, store); });
+  if (!found.integrity.empty()) {
+    for (std::size_t i = 0; i < found.integrity.size() && i < 20; ++i)
+      std::cout << fmt::format("{}: {}\n", file, found.integrity[i]);
     std::cout << fmt::format(
         "{}: SQLite's integrity check failed ({}): the database file is damaged and its "
         "records are not checked (a damaged index finds a stored trial under no hash, or two); "
         "restore the store from a copy, or, when only an index is damaged, rebuild it with "
         "`sqlite3 {} REINDEX` and check again\n",
-        file, counted(problems.size(), "problem", "problems"), file);
+        file, counted(found.integrity.size(), "problem", "problems"), file);
     return exit_failed_trials;
   }
-  std::size_t total = 0, bad = 0, old_format = 0, format_2 = 0;
-  store.for_each([&](const ResultStore::Entry& entry) {
-    ++total;
-    if (entry.check.sound()) {
-      format_2 += entry.check.key_and_study_proven() ? 0 : 1;
-      return;
-    }
-    if (entry.check.old_format) {
-      ++old_format;
-      return;
-    }
-    ++bad;
-    std::cout << bad_record_line(file, entry) << "\n";
-  });
+  for (const auto& line : found.bad_lines) std::cout << line << "\n";
+  const auto [total, bad, old_format, format_2] =
+      std::tuple(found.total, found.bad, found.old_format, found.format_2);
   std::cout << fmt::format("{}: {}, {} verified, {} bad, {} in the old record format (no checksum)",
                            file, counted(total, "record", "records"), total - bad - old_format, bad,
                            old_format);
@@ -204,9 +233,11 @@ std::string export_json(const std::vector<ResultStore::Entry>& entries) {
 }
 
 int store_export(const std::string& file, const std::string& format, const std::string& out) {
-  const auto store = open_existing(file, StoreAccess::read_only);
-  std::vector<ResultStore::Entry> entries;
-  store.for_each([&](const ResultStore::Entry& entry) { entries.push_back(entry); });
+  const auto entries = read_store(file, [](const ResultStore& store) {
+    std::vector<ResultStore::Entry> all;
+    store.for_each([&](const ResultStore::Entry& entry) { all.push_back(entry); });
+    return all;
+  });
   const auto text = format == "json" ? export_json(entries) : export_csv(entries);
   if (out.empty() || out == "-") {
     std::cout << text;

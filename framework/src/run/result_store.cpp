@@ -511,6 +511,7 @@ void ResultStore::open(bool immutable) {
       read_only ? file_uri(file_, immutable ? "?mode=ro&immutable=1" : "?mode=ro") : file_.string();
   const int flags = read_only ? SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX
                               : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX;
+  immutable_ = read_only && immutable;
   if (sqlite3_open_v2(name.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
     const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -587,6 +588,10 @@ void ResultStore::adopt_schema() {
 
 ResultStore::~ResultStore() {
   sqlite3_close(db_);
+}
+
+bool ResultStore::written_meanwhile() const {
+  return immutable_ && std::filesystem::exists(wal_of(file_));
 }
 
 void ResultStore::exec(const char* sql) const {

@@ -182,6 +182,10 @@ class ResultStore {
 
   const std::filesystem::path& file() const noexcept { return file_; }
   StoreAccess access() const noexcept { return access_; }
+  /// True when the store was opened read-only as an immutable file (no -wal file beside it)
+  /// and a -wal file has appeared since: a writer started while it was read, so what was read
+  /// may be inconsistent; a new ResultStore reads it through the WAL.
+  bool written_meanwhile() const;
 
  private:
   void open(bool immutable);
@@ -191,6 +195,7 @@ class ResultStore {
   [[noreturn]] void fail(const std::string& what) const;
   std::filesystem::path file_;
   StoreAccess access_ = StoreAccess::read_write;
+  bool immutable_ = false;
   sqlite3* db_ = nullptr;
 };
 
