@@ -1,10 +1,9 @@
 // The rkhs-study command: the command line parsed with CLI11, and one call into the command it
 // names (commands/<command>.cpp; commands/session.cpp sets up what every command shares).
 #include <fmt/format.h>
-
-#include <CLI/CLI.hpp>
 #include <malloc.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -39,7 +38,8 @@ int rkhs_study_main(int argc, char** argv) {
   run->add_option("study", run_arguments.study_file, "study definition (TOML)")
       ->required()
       ->check(CLI::ExistingFile);
-  run->add_option("--out", run_arguments.out_dir, "output directory (default: results/<study name>)");
+  run->add_option("--out", run_arguments.out_dir,
+                  "output directory (default: results/<study name>)");
   run->add_option("--threads", run_arguments.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   run->add_flag("--quiet,-q", run_arguments.quiet, "print only the final summary line");
@@ -58,11 +58,22 @@ int rkhs_study_main(int argc, char** argv) {
                   "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
   std::string merge_into;
   std::vector<std::string> merge_from;
-  auto* merge = app.add_subcommand("merge", "combine result stores (e.g. of shards) into one");
+  auto* merge = app.add_subcommand(
+      "merge",
+      "combine result stores (e.g. of shards) into one, all or nothing: every source record "
+      "verified, a trial stored with two different results refused unless --prefer says which "
+      "record wins");
   merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
   merge->add_option("from", merge_from, "stores to copy from")
       ->required()
       ->check(CLI::ExistingFile);
+  std::string merge_prefer;
+  merge
+      ->add_option("--prefer", merge_prefer,
+                   "when a trial is stored with two different results: destination keeps the "
+                   "record already there, source takes the one merged later (default: refuse "
+                   "the merge)")
+      ->check(CLI::IsMember({"source", "destination"}));
   StoreCommand store_arguments;
   auto* store = app.add_subcommand(
       "store",
@@ -194,7 +205,7 @@ int rkhs_study_main(int argc, char** argv) {
     if (*run) return command_run(run_arguments, executor);
     if (*check) return command_check(check_arguments, executor);
     if (*verify) return command_verify_plugin(plugin_to_verify);
-    if (*merge) return command_merge(merge_into, merge_from);
+    if (*merge) return command_merge(merge_into, merge_from, merge_prefer);
     if (*store) return command_store(store_arguments);
     if (*list) return command_list(kind);
     if (*report) return command_report(report_dir, report_format, report_store);

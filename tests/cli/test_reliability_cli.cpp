@@ -77,8 +77,9 @@ void edit_record(const fs::path& store, const std::string& hash, const std::stri
 
 // A record's body (before its checksum line) sealed again with a valid checksum: the edit of
 // someone who knows the format (docs/results.md), so that what is caught is the content.
-std::string resealed(const std::string& hash, const std::string& body) {
-  return body + "checksum " + rkhs::sha256_hex(hash + "\n" + body) + "\n";
+// Format 3: SHA-256 of the hash, the study and the key (one line each) and the body.
+std::string resealed(const std::string& hash, const std::string& key, const std::string& body) {
+  return body + "checksum " + rkhs::sha256_hex(hash + "\nreliable\n" + key + "\n" + body) + "\n";
 }
 std::string body_of(const std::string& record) {
   return record.substr(0, record.rfind("checksum "));
@@ -113,7 +114,7 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   // n = 200 first: its gram_condition_number (inf) would shift onto a finite value.
   const auto& too_many = rows[1];  // keys sort "n=16" < "n=200" < "n=32" < ...
   REQUIRE_THAT(too_many.key, Catch::EndsWith("n=200"));
-  edit_record(store, too_many.hash, resealed(too_many.hash, [&] {
+  edit_record(store, too_many.hash, resealed(too_many.hash, too_many.key, [&] {
                 auto body = body_of(too_many.record);
                 return body.replace(body.find("\nmetrics "), 9, "\nmetrics 0.0628 ");
               }()));
@@ -121,7 +122,7 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   flipped[flipped.rfind("checksum ") + 9] =
       flipped[flipped.rfind("checksum ") + 9] == '0' ? '1' : '0';
   edit_record(store, rows[2].hash, flipped);
-  edit_record(store, rows[3].hash, resealed(rows[3].hash, [&] {
+  edit_record(store, rows[3].hash, resealed(rows[3].hash, rows[3].key, [&] {
                 auto body = body_of(rows[3].record);
                 const auto at = body.find("\nmetrics ") + 9;
                 return body.replace(at, body.find(' ', at) - at, "x");
@@ -133,8 +134,8 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   // `store check` names every bad record by key and exits 1 (the edited record holds one value
   // more than an approximation trial has metrics).
   const auto metrics = rkhs::approximation_metric_names().size();
-  const auto one_too_many =
-      std::to_string(metrics + 1) + " metric values for " + std::to_string(metrics) + " metric names";
+  const auto one_too_many = std::to_string(metrics + 1) + " metric values for " +
+                            std::to_string(metrics) + " metric names";
   const auto check = rkhs_study("store check --store " + store.string());
   INFO(check.output);
   CHECK(check.exit_code == 1);
@@ -154,9 +155,8 @@ TEST_CASE("edited stored records are reported by store and trial and run again",
   const auto again = run("again");
   INFO(again.output);
   CHECK(again.exit_code == 0);
-  CHECK_THAT(again.output,
-             Catch::Contains("rkhs-study: warning: " + store.string() + ": trial " + too_many.key +
-                             ": " + one_too_many + "; run again"));
+  CHECK_THAT(again.output, Catch::Contains("rkhs-study: warning: " + store.string() + ": trial " +
+                                           too_many.key + ": " + one_too_many + "; run again"));
   CHECK_THAT(again.output, Catch::Contains(": trial " + rows[2].key + ": checksum mismatch"));
   CHECK_THAT(again.output,
              Catch::Contains(": trial " + rows[3].key + ": stored value 'x' is not a number"));
@@ -229,9 +229,9 @@ TEST_CASE("a study file that asks for too much is refused at once", "[cli][relia
     // other builds check the memory claim).
     const std::string cap =
         RKHS_DETAIL_SANITIZER == rkhs::SanitizerKind::address ? "" : "ulimit -v 1000000; ";
-    const auto huge = rkhs::test::run_command("bash -c '" + cap + "exec " +
-                                              std::string(RKHS_STUDY_EXECUTABLE) + " " + command +
-                                              " " + (dir / "huge.toml").string() + options + "'");
+    const auto huge =
+        rkhs::test::run_command("bash -c '" + cap + "exec " + std::string(RKHS_STUDY_EXECUTABLE) +
+                                " " + command + " " + (dir / "huge.toml").string() + options + "'");
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     INFO(command << ": " << huge.output);

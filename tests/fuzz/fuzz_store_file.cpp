@@ -74,7 +74,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // (A damaged file may count and list different rows without an error from SQLite: the
     // counts are not compared.)
     rkhs::ResultStore target(merged);
-    (void)target.merge_from(file);
+    (void)target.merge_from({file});
     (void)target.size();
   } catch (const std::runtime_error&) {
     // Not a store, or a damaged one: a correct refusal.

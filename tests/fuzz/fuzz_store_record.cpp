@@ -23,6 +23,8 @@
 namespace {
 
 const std::string hash = "fuzz";
+// The row's study and key (covered by the checksum of records of format 3).
+const std::string study = "fuzz", key = "n=1";
 
 // The record with `body` (its lines before the checksum line) sealed for `hash`.
 std::string sealed(std::string body) {
@@ -31,7 +33,7 @@ std::string sealed(std::string body) {
 }
 
 void check_record(std::string_view text) {
-  const auto check = rkhs::read_record(hash, text);
+  const auto check = rkhs::read_record(hash, study, key, text);
   if (!check.sound()) {
     if (check.problem.empty()) std::abort();
     return;
@@ -39,11 +41,12 @@ void check_record(std::string_view text) {
   if (!check.problem.empty() || check.old_format) std::abort();
   if (check.result->metrics.size() != check.metric_names.size()) std::abort();
   // Written again and read back: the same record, the same result.
-  const auto again = rkhs::store_record(hash, *check.result, check.metric_names);
-  const auto reread = rkhs::read_record(hash, again, &check.metric_names);
+  const auto again = rkhs::store_record(hash, study, key, *check.result, check.metric_names);
+  const auto reread = rkhs::read_record(hash, study, key, again, &check.metric_names);
   if (!reread.sound() || reread.metric_names != check.metric_names) std::abort();
   if (rkhs::serialize_result(*reread.result) != rkhs::serialize_result(*check.result)) std::abort();
-  if (rkhs::store_record(hash, *reread.result, reread.metric_names) != again) std::abort();
+  if (rkhs::store_record(hash, study, key, *reread.result, reread.metric_names) != again)
+    std::abort();
 }
 
 }  // namespace

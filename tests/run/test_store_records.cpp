@@ -2,9 +2,8 @@
 // names check out; anything else says what is wrong. SQLite errors are errors.
 #include <sqlite3.h>
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +18,7 @@ namespace {
 
 const std::vector<std::string> names{"a", "b", "c"};
 const std::string hash = "0123abcd";
+const std::string study = "records", key = "kernel=gaussian sigma=0.5 | n=8";
 
 TrialResult result() {
   TrialResult r;
@@ -29,12 +29,13 @@ TrialResult result() {
 }
 
 // The record's text before its checksum line, and the record sealed again for `for_hash` (as
-// docs/results.md describes the format: SHA-256 of the hash, a newline and the lines before).
+// docs/results.md describes format 3: SHA-256 of the hash, the study and the key, each followed
+// by a newline, and the lines before).
 std::string body_of(const std::string& record) {
   return record.substr(0, record.rfind("checksum "));
 }
 std::string sealed(const std::string& body, const std::string& for_hash = hash) {
-  return body + "checksum " + sha256_hex(for_hash + "\n" + body) + "\n";
+  return body + "checksum " + sha256_hex(for_hash + "\n" + study + "\n" + key + "\n" + body) + "\n";
 }
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
@@ -45,10 +46,10 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 }  // namespace
 
 TEST_CASE("a stored record verifies and reads back: its format is the documented one", "[store]") {
-  const auto record = store_record(hash, result(), names);
-  CHECK(record.rfind("rkhs-record 2\nmetric_names a b c\nrkhs-trial 1\n", 0) == 0);
+  const auto record = store_record(hash, study, key, result(), names);
+  CHECK(record.rfind("rkhs-record 3\nmetric_names a b c\nrkhs-trial 1\n", 0) == 0);
   CHECK(sealed(body_of(record)) == record);
-  const auto check = read_record(hash, record, &names);
+  const auto check = read_record(hash, study, key, record, &names);
   REQUIRE(check.sound());
   CHECK(check.problem.empty());
   CHECK(check.metric_names == names);
@@ -56,9 +57,9 @@ TEST_CASE("a stored record verifies and reads back: its format is the documented
 }
 
 TEST_CASE("a record that does not verify says what is wrong", "[store]") {
-  const auto record = store_record(hash, result(), names);
+  const auto record = store_record(hash, study, key, result(), names);
   auto problem = [&](const std::string& text, const std::vector<std::string>* expected = &names) {
-    const auto check = read_record(hash, text, expected);
+    const auto check = read_record(hash, study, key, text, expected);
     CHECK_FALSE(check.sound());
     return check.problem;
   };
@@ -68,14 +69,14 @@ TEST_CASE("a record that does not verify says what is wrong", "[store]") {
   // The metric names are not the study's.
   const std::vector<std::string> other{"a", "b", "d"};
   CHECK(problem(record, &other) == "it holds the metrics a, b, c, the study measures a, b, d");
-  CHECK(read_record(hash, record).sound());  // without expectations: sound in itself
+  CHECK(read_record(hash, study, key, record).sound());  // without expectations: sound in itself
   // A flipped digit of the checksum, an edited value, a record under another hash.
   auto flipped = record;
   flipped[flipped.rfind("checksum ") + 9] ^= 1;
   CHECK_THAT(problem(flipped), Catch::StartsWith("checksum mismatch (stored "));
   CHECK_THAT(problem(replaced(record, "metrics 0.5", "metrics 0.6")),
              Catch::StartsWith("checksum mismatch"));
-  CHECK_THAT(read_record("another", record, &names).problem,
+  CHECK_THAT(read_record("another", study, key, record, &names).problem,
              Catch::StartsWith("checksum mismatch"));
   // Garbage where a number belongs, resealed: the parser's reason.
   CHECK(problem(sealed(replaced(body_of(record), "metrics 0.5", "metrics x"))) ==
@@ -87,7 +88,8 @@ TEST_CASE("a record that does not verify says what is wrong", "[store]") {
         "field 'flags' twice in a stored trial");
   CHECK(problem(sealed(body_of(record) + "metrics 1 2 3\n")) ==
         "field 'metrics' twice in a stored trial");
-  CHECK(read_record(hash, sealed(body_of(record) + "snapshot 1 0.5\nsnapshot 2 0.25\n"), &names)
+  CHECK(read_record(hash, study, key, sealed(body_of(record) + "snapshot 1 0.5\nsnapshot 2 0.25\n"),
+                    &names)
             .result->snapshots.size() == 2);
   // Empty flags are none: "a;;" read as ["a", ""] was written back as "a;", which read as ["a"]
   // (found by fuzz_store_record: a result that did not read back as it was written).
@@ -97,8 +99,8 @@ TEST_CASE("a record that does not verify says what is wrong", "[store]") {
   CHECK(deserialize_result(serialize_result(flagged)).flags == flagged.flags);
   // No checksum, not a record, the old format.
   CHECK(problem(body_of(record)) == "no checksum line");
-  CHECK(problem("") == "not a stored record: first line '', expected 'rkhs-record 2'");
-  const auto old = read_record(hash, serialize_result(result()), &names);
+  CHECK(problem("") == "not a stored record: first line '', expected 'rkhs-record 3'");
+  const auto old = read_record(hash, study, key, serialize_result(result()), &names);
   CHECK_FALSE(old.sound());
   CHECK(old.old_format);
   CHECK(old.problem == "old record format (no checksum)");
@@ -145,7 +147,8 @@ sigma = 0.5
                                ": checksum mismatch"));
   CHECK_THAT(second.store_problems[0], Catch::EndsWith("; run again"));
   // Bit for bit, NaN (a metric the study does not compute) equal to NaN.
-  CHECK(std::equal(second.results[1].metrics.begin(), second.results[1].metrics.end(), first.results[1].metrics.begin(), first.results[1].metrics.end(),
+  CHECK(std::equal(second.results[1].metrics.begin(), second.results[1].metrics.end(),
+                   first.results[1].metrics.begin(), first.results[1].metrics.end(),
                    [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); }));
   CHECK(run_with_store(study, trials, options, &store, false).store_problems.empty());
 }

@@ -94,13 +94,15 @@ TEST_CASE("a stored record keeps the work counters, an old record has none", "[r
   CHECK_FALSE(deserialize_result(old).work);
   // A stored record round-trips them under its checksum.
   result.work = WorkCounts{1, 2, 3, true, 4, 5, 6};
-  const auto check = read_record("hash", store_record("hash", result, {"a", "b"}));
+  const auto check =
+      read_record("hash", "s", "k", store_record("hash", "s", "k", result, {"a", "b"}));
   REQUIRE(check.result);
   CHECK(check.result->work == result.work);
   // Malformed counters are a bad record, not zeros.
-  for (const char* line : {"work kernel_evaluations=1", "work kernel_evaluations=x "
-                                                        "kernel_derivative_evaluations=0 "
-                                                        "factorisations=0",
+  for (const char* line : {"work kernel_evaluations=1",
+                           "work kernel_evaluations=x "
+                           "kernel_derivative_evaluations=0 "
+                           "factorisations=0",
                            "work kernel_evaluations=1 kernel_derivative_evaluations=0 "
                            "factorisations=0 bogus=1"}) {
     INFO(line);

@@ -46,7 +46,8 @@ int command_report(const std::string& directory, const std::string& format,
 int command_validate(const std::string& study_file);
 /// `kind`: a plugin kind (singular or plural), "metric(s)", or "" for everything.
 int command_list(const std::string& kind);
-int command_merge(const std::string& into, const std::vector<std::string>& from);
+int command_merge(const std::string& into, const std::vector<std::string>& from,
+                  const std::string& prefer);
 int command_verify_plugin(const std::string& file);
 
 /// `store check|vacuum|export`: the records of a result store verified (exit 1 when some do

@@ -1,7 +1,12 @@
-// `rkhs-study merge INTO FROM...`: result stores (e.g. of shards) combined into one.
+// `rkhs-study merge INTO FROM... [--prefer source|destination]`: result stores (e.g. of shards)
+// combined into one, all or nothing: every source record verified, conflicts (a trial stored
+// with two different results) refused unless --prefer says which record wins, and everything
+// written in one transaction (ResultStore::merge_from).
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
@@ -9,13 +14,43 @@
 
 namespace rkhs::cli {
 
-int command_merge(const std::string& into_file, const std::vector<std::string>& from) {
-  ResultStore into(into_file);
-  for (const auto& file : from) {
-    const auto count = into.merge_from(file);
-    std::cout << fmt::format("merged {} from {}\n", counted(count, "trial", "trials"), file);
+int command_merge(const std::string& into_file, const std::vector<std::string>& from,
+                  const std::string& prefer) {
+  const auto preference = prefer == "source"        ? MergePreference::source
+                          : prefer == "destination" ? MergePreference::destination
+                                                    : MergePreference::refuse;
+  // A merge that fails leaves no store behind where there was none.
+  const bool existed = std::filesystem::exists(into_file);
+  std::vector<MergedSource> merged;
+  std::size_t held = 0;
+  try {
+    ResultStore into(into_file);
+    merged =
+        into.merge_from(std::vector<std::filesystem::path>(from.begin(), from.end()), preference);
+    into.checkpoint();
+    held = into.size();
+  } catch (...) {
+    if (!existed) {
+      std::error_code ignored;
+      for (const char* suffix : {"", "-wal", "-shm", "-journal"})
+        std::filesystem::remove(into_file + suffix, ignored);
+    }
+    throw;
   }
-  std::cout << fmt::format("{} holds {}\n", into_file, counted(into.size(), "trial", "trials"));
+  for (const auto& source : merged) {
+    std::cout << fmt::format("merged {} from {}: {} new, {} already held",
+                             counted(source.records, "trial", "trials"), source.file, source.added,
+                             source.same);
+    if (source.replaced)
+      std::cout << fmt::format(", {} replaced (--prefer source)", source.replaced);
+    if (source.kept)
+      std::cout << fmt::format(", {} different kept as they were (--prefer destination)",
+                               source.kept);
+    if (source.repaired)
+      std::cout << fmt::format(", {} in place of records that did not verify", source.repaired);
+    std::cout << "\n";
+  }
+  std::cout << fmt::format("{} holds {}\n", into_file, counted(held, "trial", "trials"));
   return exit_ok;
 }
 

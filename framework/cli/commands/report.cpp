@@ -23,7 +23,10 @@ int command_report(const std::string& directory, const std::string& format,
   pipeline::LocalExecutor executor;
   RunOptions options;
   stop_on_signals(options);
-  auto outcome = pipeline::run_study(executor, study, trials, options, store);
+  // Only reading when the store holds every trial: then it is opened read-only.
+  auto reading = store;
+  reading.read_only_when_complete = true;
+  auto outcome = pipeline::run_study(executor, study, trials, options, reading);
   print_store_problems(outcome);
   if (outcome.interrupted) return report_interruption(*outcome.interrupted, store);
   auto& run = *outcome.completed;

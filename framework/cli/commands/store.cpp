@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
@@ -20,11 +21,11 @@ namespace rkhs::cli {
 
 namespace {
 
-// An existing store: `store` commands never create one.
-ResultStore open_existing(const std::string& file) {
+// An existing store: `store` commands never create one; check and export open it read-only.
+ResultStore open_existing(const std::string& file, StoreAccess access) {
   if (!std::filesystem::is_regular_file(file))
     throw std::runtime_error(fmt::format("{}: no such result store", file));
-  return ResultStore(file);
+  return ResultStore(file, access);
 }
 
 // "STORE: trial KEY (study S, hash 1a2b3c4d5e6f): what is wrong".
@@ -33,22 +34,71 @@ std::string bad_record_line(const std::string& file, const ResultStore::Entry& e
                      entry.hash.substr(0, 12), entry.check.problem);
 }
 
-int store_check(const std::string& file) {
-  const auto store = open_existing(file);
-  std::size_t total = 0, bad = 0, old_format = 0;
+// What `store check` finds in a store.
+struct Findings {
+  std::vector<std::string> integrity;  // SQLite's integrity check (empty: ok)
+  std::vector<std::string> bad_lines;  // one per record that does not verify
+  std::size_t total = 0, bad = 0, old_format = 0, format_2 = 0;
+};
+
+Findings find_problems(const std::string& file, const ResultStore& store) {
+  Findings found;
+  // SQLite's own check first: a damaged index finds rows it should not (or misses some), so
+  // the records' checksums alone do not prove the file.
+  found.integrity = store.integrity_problems();
+  if (!found.integrity.empty()) return found;
   store.for_each([&](const ResultStore::Entry& entry) {
-    ++total;
-    if (entry.check.sound()) return;
-    if (entry.check.old_format) {
-      ++old_format;
+    ++found.total;
+    if (entry.check.sound()) {
+      found.format_2 += entry.check.key_and_study_proven() ? 0 : 1;
       return;
     }
-    ++bad;
-    std::cout << bad_record_line(file, entry) << "\n";
+    if (entry.check.old_format) {
+      ++found.old_format;
+      return;
+    }
+    ++found.bad;
+    found.bad_lines.push_back(bad_record_line(file, entry));
   });
+  return found;
+}
+
+// `read` of the store opened read-only; once more (through the WAL) when a run started writing
+// it while it was read as an immutable file.
+template <class Read>
+auto read_store(const std::string& file, Read read) {
+  for (int attempt = 0;; ++attempt) {
+    const auto store = open_existing(file, StoreAccess::read_only);
+    auto found = read(store);
+    if (attempt > 0 || !store.written_meanwhile()) return found;
+  }
+}
+
+int store_check(const std::string& file) {
+  const auto found =
+      read_store(file, [&](const ResultStore& store) { return find_problems(file, store); });
+  if (!found.integrity.empty()) {
+    for (std::size_t i = 0; i < found.integrity.size() && i < 20; ++i)
+      std::cout << fmt::format("{}: {}\n", file, found.integrity[i]);
+    std::cout << fmt::format(
+        "{}: SQLite's integrity check failed ({}): the database file is damaged and its "
+        "records are not checked (a damaged index finds a stored trial under no hash, or two); "
+        "restore the store from a copy, or, when only an index is damaged, rebuild it with "
+        "`sqlite3 {} REINDEX` and check again\n",
+        file, counted(found.integrity.size(), "problem", "problems"), file);
+    return exit_failed_trials;
+  }
+  for (const auto& line : found.bad_lines) std::cout << line << "\n";
+  const auto [total, bad, old_format, format_2] =
+      std::tuple(found.total, found.bad, found.old_format, found.format_2);
   std::cout << fmt::format("{}: {}, {} verified, {} bad, {} in the old record format (no checksum)",
                            file, counted(total, "record", "records"), total - bad - old_format, bad,
                            old_format);
+  if (format_2)
+    std::cout << fmt::format(
+        "; {} of the verified in record format 2 (its checksum does not cover the key and study "
+        "columns)",
+        format_2);
   std::cout << (bad + old_format ? "; `rkhs-study store vacuum` removes them (their trials run "
                                    "again when a study needs them)\n"
                                  : "\n");
@@ -56,7 +106,7 @@ int store_check(const std::string& file) {
 }
 
 int store_vacuum(const std::string& file) {
-  auto store = open_existing(file);
+  auto store = open_existing(file, StoreAccess::read_write);
   std::vector<std::string> doomed;
   std::size_t bad = 0, old_format = 0;
   store.for_each([&](const ResultStore::Entry& entry) {
@@ -86,6 +136,15 @@ std::vector<std::string> metric_columns(const std::vector<ResultStore::Entry>& e
   return columns;
 }
 
+// The `check` column of an export: "ok", what is wrong, or that a record of format 2 proves its
+// result but not its key and study columns.
+std::string check_text(const ResultStore::Entry& entry) {
+  if (!entry.check.sound()) return entry.check.problem;
+  return entry.check.key_and_study_proven()
+             ? "ok"
+             : "ok (record format 2: its checksum does not cover key and study)";
+}
+
 std::string flags_text(const TrialResult& result) {
   return fmt::format("{}", fmt::join(result.flags, ";"));
 }
@@ -103,7 +162,7 @@ std::string export_csv(const std::vector<ResultStore::Entry>& entries) {
   std::string out = row(header);
   for (const auto& entry : entries) {
     std::vector<std::string> fields{entry.hash, entry.study, entry.key, entry.stored,
-                                    entry.check.sound() ? "ok" : entry.check.problem};
+                                    check_text(entry)};
     if (const auto& r = entry.check.result) {
       fields.insert(fields.end(), {r->ok ? "ok" : "failed", r->reason, r->solve_method, r->engine,
                                    flags_text(*r), csv_number(r->seconds), r->data_provenance});
@@ -144,10 +203,10 @@ std::string work_json(const std::optional<WorkCounts>& work) {
 std::string export_json(const std::vector<ResultStore::Entry>& entries) {
   std::vector<std::string> records;
   for (const auto& entry : entries) {
-    std::string record = fmt::format(
-        "  {{\"hash\": {}, \"study\": {}, \"key\": {}, \"stored\": {}, \"check\": {}",
-        json_string(entry.hash), json_string(entry.study), json_string(entry.key),
-        json_string(entry.stored), json_string(entry.check.sound() ? "ok" : entry.check.problem));
+    std::string record =
+        fmt::format("  {{\"hash\": {}, \"study\": {}, \"key\": {}, \"stored\": {}, \"check\": {}",
+                    json_string(entry.hash), json_string(entry.study), json_string(entry.key),
+                    json_string(entry.stored), json_string(check_text(entry)));
     if (const auto& r = entry.check.result) {
       std::vector<std::string> metrics, samples, snapshots;
       for (std::size_t i = 0; i < r->metrics.size(); ++i)
@@ -174,9 +233,11 @@ std::string export_json(const std::vector<ResultStore::Entry>& entries) {
 }
 
 int store_export(const std::string& file, const std::string& format, const std::string& out) {
-  const auto store = open_existing(file);
-  std::vector<ResultStore::Entry> entries;
-  store.for_each([&](const ResultStore::Entry& entry) { entries.push_back(entry); });
+  const auto entries = read_store(file, [](const ResultStore& store) {
+    std::vector<ResultStore::Entry> all;
+    store.for_each([&](const ResultStore::Entry& entry) { all.push_back(entry); });
+    return all;
+  });
   const auto text = format == "json" ? export_json(entries) : export_csv(entries);
   if (out.empty() || out == "-") {
     std::cout << text;

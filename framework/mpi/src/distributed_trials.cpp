@@ -7,8 +7,8 @@
 #include <map>
 #include <string_view>
 
-#include "rkhs/distributed.hpp"
 #include "rkhs/core/sha256.hpp"
+#include "rkhs/distributed.hpp"
 #include "rkhs/run/trial_cost.hpp"
 
 namespace rkhs::distributed {
@@ -127,6 +127,8 @@ std::optional<StoredRun> run_with_store(const Session& session, const StudyDefin
                                        const std::vector<TrialSpec>& pending,
                                        const RunOptions& storing) {
     if (storing.on_start) storing.on_start(pending.size());
+    // Also true once a result could not be stored (a full disk): no trial is handed out then.
+    job.stop_requested = storing.stop_requested;
     std::vector<TrialResult> results(pending.size());
     std::map<std::uint64_t, std::size_t> slot;
     for (std::size_t k = 0; k < pending.size(); ++k) slot[pending[k].index] = k;
@@ -176,8 +178,8 @@ void MpiExecutor::agree_on(const StudyDefinition& study, const std::vector<Trial
 }
 
 std::optional<StoredRun> MpiExecutor::run(const StudyDefinition& study,
-                                          const std::vector<TrialSpec>& trials,
-                                          RunOptions options, ResultStore* store, bool fresh) {
+                                          const std::vector<TrialSpec>& trials, RunOptions options,
+                                          ResultStore* store, bool fresh) {
   if (!agreed_) agree_on(study, trials);
   // A rank's trials in flight finish: the coordinator reports them (no abandoning).
   options.abandon_after_seconds = -1;

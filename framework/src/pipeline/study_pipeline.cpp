@@ -1,7 +1,9 @@
 #include "rkhs/pipeline/study_pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 
 #include "rkhs/plugin/builtins.hpp"
 
@@ -23,14 +25,25 @@ PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
                           const StoreOptions& store_options, Rates fit) {
   std::optional<ResultStore> store;
   executor.on_every_process([&] {
-    if (!store_options.disabled && executor.is_root()) store.emplace(store_options.file);
+    if (store_options.disabled || !executor.is_root()) return;
+    if (store_options.read_only_when_complete && !store_options.fresh &&
+        std::filesystem::exists(store_options.file)) {
+      store.emplace(store_options.file, StoreAccess::read_only);
+      const auto hashes = trial_hashes(study, trials);
+      const bool complete = std::all_of(hashes.begin(), hashes.end(), [&](const auto& hash) {
+        return store->lookup(hash, &study.all_metrics()).sound();
+      });
+      if (complete) return;
+      store.reset();
+    }
+    store.emplace(store_options.file);
   });
   if (options.threads <= 0) options.threads = executor.default_threads();
   freeze_registries();
   const std::string started = utc_now();
   const auto start = std::chrono::steady_clock::now();
-  auto stored = executor.run(study, trials, options, store ? &*store : nullptr,
-                             store_options.fresh);
+  auto stored =
+      executor.run(study, trials, options, store ? &*store : nullptr, store_options.fresh);
   // The database file alone then holds every trial (a copy without its -wal file is whole).
   if (store) store->checkpoint();
   PipelineOutcome outcome;

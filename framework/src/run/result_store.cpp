@@ -1,25 +1,27 @@
 #include "rkhs/run/result_store.hpp"
 
-#include "rkhs/run/trial_identity.hpp"
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <sqlite3.h>
 
 #include <array>
+#include <atomic>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <ctime>
 #include <map>
+#include <mutex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
 
+#include "rkhs/approx/target.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/approx/target.hpp"
+#include "rkhs/run/trial_identity.hpp"
 
 namespace rkhs {
 
@@ -115,9 +117,12 @@ WorkCounts parse_work_line(std::string_view text) {
 std::string escape(std::string_view text) {
   std::string out;
   for (char c : text) {
-    if (c == '\\') out += "\\\\";
-    else if (c == '\n') out += "\\n";
-    else out += c;
+    if (c == '\\')
+      out += "\\\\";
+    else if (c == '\n')
+      out += "\\n";
+    else
+      out += c;
   }
   return out;
 }
@@ -177,12 +182,36 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
   std::map<std::size_t, std::size_t> slot;  // trial index -> position in `trials`
   for (std::size_t k = 0; k < pending.size(); ++k) slot[pending[k].index] = position[k];
   RunOptions storing = options;
+  // A trial that cannot be stored (a full disk, an I/O error) stops the run: the callback runs
+  // on a worker thread, where an exception would end the process (std::terminate), so the
+  // first error is kept, no new trial starts, and it is thrown here once the run has returned.
+  std::mutex store_error_mutex;
+  std::string store_error;
+  auto store_failed = std::make_shared<std::atomic<bool>>(false);
   storing.on_trial_finished = [&](const TrialSpec& trial, const TrialResult& result) {
-    if (store)
-      store->put(hashes[slot.at(trial.index)], study.name, trial.key, result, study.all_metrics());
+    if (store && !store_failed->load()) {
+      try {
+        store->put(hashes[slot.at(trial.index)], study.name, trial.key, result,
+                   study.all_metrics());
+      } catch (const std::exception& e) {
+        std::lock_guard lock(store_error_mutex);
+        if (store_error.empty()) store_error = e.what();
+        store_failed->store(true);
+      }
+    }
     if (options.on_trial_finished) options.on_trial_finished(trial, result);
   };
+  // Copied by value: abandoned trials may still ask after this function has returned.
+  storing.stop_requested = [failed = store_failed, asked = options.stop_requested] {
+    return failed->load() || (asked && asked());
+  };
   auto ran = execute(study, pending, storing);
+  if (store_failed->load()) {
+    std::lock_guard lock(store_error_mutex);
+    throw std::runtime_error(store_error +
+                             " (the trials stored before it are kept: run the same command again "
+                             "to resume once the store can be written)");
+  }
   for (std::size_t k = 0; k < pending.size(); ++k) {
     if (ran[k].skipped) {
       ++out.skipped;
@@ -230,10 +259,14 @@ TrialResult deserialize_result(std::string_view text) {
     const std::string value = space == std::string::npos ? "" : line.substr(space + 1);
     if (field != "snapshot" && !seen.insert(field).second)
       throw std::invalid_argument("field '" + field + "' twice in a stored trial");
-    if (field == "ok") r.ok = value == "1";
-    else if (field == "reason") r.reason = unescape(value);
-    else if (field == "solve") r.solve_method = unescape(value);
-    else if (field == "engine") r.engine = unescape(value);
+    if (field == "ok")
+      r.ok = value == "1";
+    else if (field == "reason")
+      r.reason = unescape(value);
+    else if (field == "solve")
+      r.solve_method = unescape(value);
+    else if (field == "engine")
+      r.engine = unescape(value);
     else if (field == "flags") {
       // Names separated by ';'; an empty one ("a;;b") is no flag (kept, "a;;" read as ["a", ""]
       // and was written back as "a;", which reads as ["a"]).
@@ -244,20 +277,26 @@ TrialResult deserialize_result(std::string_view text) {
         if (stop > start) r.flags.push_back(flags.substr(start, stop - start));
         start = stop + 1;
       }
-    } else if (field == "seconds") r.seconds = parse_real(value);
-    else if (field == "data") r.data_provenance = unescape(value);
-    else if (field == "metrics") r.metrics = split_reals(value);
-    else if (field == "work") r.work = parse_work_line(value);
+    } else if (field == "seconds")
+      r.seconds = parse_real(value);
+    else if (field == "data")
+      r.data_provenance = unescape(value);
+    else if (field == "metrics")
+      r.metrics = split_reals(value);
+    else if (field == "work")
+      r.work = parse_work_line(value);
     else if (field == "samples") {
       const auto v = split_reals(value);
       if (v.size() % 3) throw std::invalid_argument("stored samples are not triples");
       for (std::size_t i = 0; i < v.size(); i += 3) r.samples.push_back({v[i], v[i + 1], v[i + 2]});
-    } else if (field == "road") r.road = split_reals(value);
+    } else if (field == "road")
+      r.road = split_reals(value);
     else if (field == "snapshot") {
       auto v = split_reals(value);
       if (v.empty()) throw std::invalid_argument("empty stored snapshot");
       r.snapshots.push_back({v.front(), std::vector<double>(v.begin() + 1, v.end())});
-    } else throw std::invalid_argument("unknown field '" + field + "' in a stored trial");
+    } else
+      throw std::invalid_argument("unknown field '" + field + "' in a stored trial");
   }
   return r;
 }
@@ -269,43 +308,56 @@ std::string quoted_excerpt(std::string_view text) {
   return text.size() <= 60 ? fmt::format("'{}'", text) : fmt::format("'{}...'", text.substr(0, 57));
 }
 
-constexpr std::string_view record_header = "rkhs-record 2\n";
+constexpr std::string_view record_header = "rkhs-record 3\n";
+constexpr std::string_view record_header_2 = "rkhs-record 2\n";
 constexpr std::string_view names_field = "metric_names";
 constexpr std::string_view checksum_field = "\nchecksum ";
 
-std::string record_checksum(const std::string& hash, std::string_view body) {
+// Format 3: the hash, the study and the key (escaped: one line each) and the body. Format 2
+// (before the key and study were covered): the hash and the body.
+std::string record_checksum(int format, const std::string& hash, const std::string& study,
+                            const std::string& key, std::string_view body) {
   Sha256 sum;
   sum.update(hash);
   sum.update("\n");
+  if (format >= 3) {
+    sum.update(escape(study));
+    sum.update("\n");
+    sum.update(escape(key));
+    sum.update("\n");
+  }
   sum.update(body);
   return sum.hex_digest();
 }
 
 }  // namespace
 
-std::string store_record(const std::string& hash, const TrialResult& result,
-                         const std::vector<std::string>& metric_names) {
+std::string store_record(const std::string& hash, const std::string& study, const std::string& key,
+                         const TrialResult& result, const std::vector<std::string>& metric_names) {
   std::string body(record_header);
   body += names_field;
   for (const auto& name : metric_names) body += " " + name;
   body += "\n" + serialize_result(result);
-  return body + "checksum " + record_checksum(hash, body) + "\n";
+  return body + "checksum " + record_checksum(record_format, hash, study, key, body) + "\n";
 }
 
-RecordCheck read_record(const std::string& hash, std::string_view text,
-                        const std::vector<std::string>* expected_metrics) {
+RecordCheck read_record(const std::string& hash, const std::string& study, const std::string& key,
+                        std::string_view text, const std::vector<std::string>* expected_metrics) {
   RecordCheck check;
   const auto first_line = text.substr(0, text.find('\n'));
   if (first_line == "rkhs-trial 1") {
     check.old_format = true;
+    check.format = 1;
     check.problem = "old record format (no checksum)";
     return check;
   }
-  if (!text.starts_with(record_header)) {
+  const bool format_2 = text.starts_with(record_header_2);
+  if (!text.starts_with(record_header) && !format_2) {
     check.problem = fmt::format("not a stored record: first line {}, expected 'rkhs-record {}'",
                                 quoted_excerpt(first_line), record_format);
     return check;
   }
+  check.format = format_2 ? 2 : 3;
   const auto at_checksum = text.rfind(checksum_field);
   if (at_checksum == std::string_view::npos) {
     check.problem = "no checksum line";
@@ -314,7 +366,8 @@ RecordCheck read_record(const std::string& hash, std::string_view text,
   const auto body = text.substr(0, at_checksum + 1);
   auto stored = text.substr(at_checksum + checksum_field.size());
   if (stored.ends_with('\n')) stored.remove_suffix(1);
-  if (const auto computed = record_checksum(hash, body); stored != computed) {
+  if (const auto computed = record_checksum(check.format, hash, study, key, body);
+      stored != computed) {
     // Their first 16 digits: enough to tell them apart, short enough to read.
     check.problem = fmt::format("checksum mismatch (stored {}..., computed {}...)",
                                 stored.substr(0, 16), computed.substr(0, 16));
@@ -363,7 +416,8 @@ constexpr int busy_timeout_ms = 10000;
 
 template <class Attempt>
 int retry_while_busy(Attempt attempt) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
   int status = attempt();
   while ((status & 0xff) == SQLITE_BUSY && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -383,21 +437,67 @@ int step(sqlite3_stmt* statement) {
 
 }  // namespace
 
-ResultStore::ResultStore(const std::filesystem::path& file) : file_(file) {
-  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
-  if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
-                      nullptr) != SQLITE_OK) {
-    const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
-    sqlite3_close(db_);
-    db_ = nullptr;
-    throw std::runtime_error(fmt::format("{}: cannot open the result store: {}", file.string(), why));
+namespace {
+
+struct Statement {
+  sqlite3_stmt* handle = nullptr;
+  Statement(sqlite3* db, const char* sql, const std::filesystem::path& file) {
+    if (sqlite3_prepare_v2(db, sql, -1, &handle, nullptr) != SQLITE_OK)
+      throw std::runtime_error(
+          fmt::format("{}: result store: {}", file.string(), sqlite3_errmsg(db)));
   }
-  sqlite3_busy_timeout(db_, busy_timeout_ms);
+  ~Statement() { sqlite3_finalize(handle); }
+};
+
+// The store's marks in the database header: PRAGMA application_id ("rkhs") and PRAGMA
+// user_version, the store's schema (1: a store from before the marks, 2: records of format 3).
+constexpr int store_application_id = 0x726b6873;
+constexpr int store_schema = 2;
+
+// `file` as an SQLite URI (sqlite.org/uri.html): every byte but the unreserved ones and '/'
+// percent-encoded.
+std::string file_uri(const std::filesystem::path& file, const char* parameters) {
+  std::string out = "file:";
+  for (unsigned char c : std::filesystem::absolute(file).string()) {
+    if (std::isalnum(c) || c == '/' || c == '-' || c == '.' || c == '_' || c == '~')
+      out += static_cast<char>(c);
+    else
+      out += fmt::format("%{:02X}", c);
+  }
+  return out + parameters;
+}
+
+std::filesystem::path wal_of(const std::filesystem::path& file) {
+  return file.string() + "-wal";
+}
+
+// One integer of a PRAGMA (application_id, user_version), or nothing on an error.
+std::optional<int> pragma_int(sqlite3* db, const char* sql) {
+  sqlite3_stmt* statement = nullptr;
+  if (sqlite3_prepare_v2(db, sql, -1, &statement, nullptr) != SQLITE_OK) return std::nullopt;
+  std::optional<int> value;
+  if (step(statement) == SQLITE_ROW) value = sqlite3_column_int(statement, 0);
+  sqlite3_finalize(statement);
+  return value;
+}
+
+}  // namespace
+
+ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
+    : file_(file), access_(access) {
+  if (access == StoreAccess::read_only) {
+    if (!std::filesystem::is_regular_file(file))
+      throw std::runtime_error(fmt::format("{}: no such result store", file.string()));
+    // Without a -wal file the database file holds every committed trial: it is read as an
+    // immutable file, so that SQLite creates no -wal and -shm files beside it (which it does
+    // for a read-only connection to a WAL database, and cannot on a read-only mount).
+    open(!std::filesystem::exists(wal_of(file)));
+  } else {
+    if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+    open(false);
+  }
   try {
-    exec("PRAGMA journal_mode=WAL");
-    exec("PRAGMA synchronous=NORMAL");
-    exec("CREATE TABLE IF NOT EXISTS trials (hash TEXT PRIMARY KEY, study TEXT NOT NULL, "
-         "key TEXT NOT NULL, result TEXT NOT NULL, stored TEXT NOT NULL)");
+    adopt_schema();
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -405,8 +505,94 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file) {
   }
 }
 
-ResultStore::~ResultStore() { sqlite3_close(db_); }
+void ResultStore::open(bool immutable) {
+  const bool read_only = access_ == StoreAccess::read_only;
+  const auto name =
+      read_only ? file_uri(file_, immutable ? "?mode=ro&immutable=1" : "?mode=ro") : file_.string();
+  const int flags = read_only ? SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX
+                              : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX;
+  immutable_ = read_only && immutable;
+  if (sqlite3_open_v2(name.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
+    const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw std::runtime_error(
+        fmt::format("{}: cannot open the result store: {}", file_.string(), why));
+  }
+  sqlite3_busy_timeout(db_, busy_timeout_ms);
+}
 
+// Everything is read before anything is written: a database that is not a store is left as it
+// was (no WAL switch, no table).
+void ResultStore::adopt_schema() {
+  auto not_a_store = [&](const std::string& why) {
+    throw std::runtime_error(
+        fmt::format("{}: not an rkhs-study result store: {}", file_.string(), why));
+  };
+  const auto application_id = pragma_int(db_, "PRAGMA application_id");
+  const auto schema = pragma_int(db_, "PRAGMA user_version");
+  if (!application_id || !schema) not_a_store(sqlite3_errmsg(db_));
+  // The tables and their columns.
+  std::vector<std::string> objects, columns;
+  auto names = [&](const char* sql, std::vector<std::string>& out) {
+    sqlite3_stmt* statement = nullptr;
+    if (sqlite3_prepare_v2(db_, sql, -1, &statement, nullptr) != SQLITE_OK)
+      not_a_store(sqlite3_errmsg(db_));
+    int status = step(statement);
+    for (; status == SQLITE_ROW; status = sqlite3_step(statement)) {
+      const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement, 0));
+      out.emplace_back(text ? text : "");
+    }
+    sqlite3_finalize(statement);
+    if (status != SQLITE_DONE) not_a_store(sqlite3_errmsg(db_));
+  };
+  names("SELECT name FROM sqlite_master WHERE type = 'table'", objects);
+  const bool has_trials = std::find(objects.begin(), objects.end(), "trials") != objects.end();
+  if (has_trials) names("SELECT name FROM pragma_table_info('trials') ORDER BY cid", columns);
+  const std::vector<std::string> store_columns{"hash", "study", "key", "result", "stored"};
+  const bool empty = objects.empty() && *application_id == 0 && *schema == 0;
+  if (*application_id != 0 && *application_id != store_application_id)
+    not_a_store(fmt::format("its application id is {:#x}, a store's {:#x}", *application_id,
+                            store_application_id));
+  if (*schema > store_schema)
+    not_a_store(
+        fmt::format("its schema is {}, newer than this rkhs-study's {} (a newer "
+                    "rkhs-study wrote it)",
+                    *schema, store_schema));
+  if (empty && access_ == StoreAccess::read_only) not_a_store("an empty database");
+  if (!empty && !has_trials)
+    not_a_store(objects.empty() ? std::string("it has no trials table")
+                                : fmt::format("it has no trials table (its tables: {})",
+                                              fmt::join(objects, ", ")));
+  if (has_trials && columns != store_columns)
+    not_a_store(fmt::format("its trials table has the columns {}, a store's {}",
+                            fmt::join(columns, ", "), fmt::join(store_columns, ", ")));
+  if (access_ == StoreAccess::read_only) return;
+  exec("PRAGMA journal_mode=WAL");
+  exec("PRAGMA synchronous=NORMAL");
+  if (*application_id == store_application_id && *schema == store_schema) return;
+  // A new store, or one from before the marks: created and marked in one transaction.
+  exec("BEGIN IMMEDIATE");
+  try {
+    exec(
+        "CREATE TABLE IF NOT EXISTS trials (hash TEXT PRIMARY KEY, study TEXT NOT NULL, "
+        "key TEXT NOT NULL, result TEXT NOT NULL, stored TEXT NOT NULL)");
+    exec(fmt::format("PRAGMA application_id = {}", store_application_id).c_str());
+    exec(fmt::format("PRAGMA user_version = {}", store_schema).c_str());
+    exec("COMMIT");
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+ResultStore::~ResultStore() {
+  sqlite3_close(db_);
+}
+
+bool ResultStore::written_meanwhile() const {
+  return immutable_ && std::filesystem::exists(wal_of(file_));
+}
 
 void ResultStore::exec(const char* sql) const {
   char* message = nullptr;
@@ -422,17 +608,6 @@ void ResultStore::exec(const char* sql) const {
   }
 }
 
-namespace {
-struct Statement {
-  sqlite3_stmt* handle = nullptr;
-  Statement(sqlite3* db, const char* sql, const std::filesystem::path& file) {
-    if (sqlite3_prepare_v2(db, sql, -1, &handle, nullptr) != SQLITE_OK)
-      throw std::runtime_error(fmt::format("{}: result store: {}", file.string(), sqlite3_errmsg(db)));
-  }
-  ~Statement() { sqlite3_finalize(handle); }
-};
-}  // namespace
-
 [[noreturn]] void ResultStore::fail(const std::string& what) const {
   throw std::runtime_error(
       fmt::format("{}: result store: {}: {}", file_.string(), what, sqlite3_errmsg(db_)));
@@ -440,13 +615,16 @@ struct Statement {
 
 RecordCheck ResultStore::lookup(const std::string& hash,
                                 const std::vector<std::string>* metric_names) const {
-  Statement statement(db_, "SELECT result FROM trials WHERE hash = ?1", file_);
+  Statement statement(db_, "SELECT study, key, result FROM trials WHERE hash = ?1", file_);
   sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
   const int status = step(statement.handle);
   if (status == SQLITE_DONE) return {};
   if (status != SQLITE_ROW) fail("cannot read the trial " + hash);
-  const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, 0));
-  return read_record(hash, text ? text : "", metric_names);
+  auto column = [&](int i) {
+    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, i));
+    return std::string(text ? text : "");
+  };
+  return read_record(hash, column(0), column(1), column(2), metric_names);
 }
 
 std::optional<TrialResult> ResultStore::find(const std::string& hash) const {
@@ -455,11 +633,13 @@ std::optional<TrialResult> ResultStore::find(const std::string& hash) const {
 
 void ResultStore::put(const std::string& hash, const std::string& study, const std::string& key,
                       const TrialResult& result, const std::vector<std::string>& metric_names) {
+  if (access_ == StoreAccess::read_only)
+    throw std::logic_error(file_.string() + ": result store opened read-only");
   Statement statement(db_,
                       "INSERT OR REPLACE INTO trials (hash, study, key, result, stored) "
                       "VALUES (?1, ?2, ?3, ?4, datetime('now'))",
                       file_);
-  const auto record = store_record(hash, result, metric_names);
+  const auto record = store_record(hash, study, key, result, metric_names);
   sqlite3_bind_text(statement.handle, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 2, study.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 3, key.c_str(), -1, SQLITE_TRANSIENT);
@@ -480,10 +660,24 @@ void ResultStore::for_each(const std::function<void(const Entry&)>& visit) const
     const int status = first ? step(statement.handle) : sqlite3_step(statement.handle);
     if (status == SQLITE_DONE) return;
     if (status != SQLITE_ROW) fail("cannot read the stored trials");
-    Entry entry{column(0), column(1), column(2), column(4), {}};
-    entry.check = read_record(entry.hash, column(3));
+    Entry entry{column(0), column(1), column(2), column(4), {}, column(3)};
+    entry.check = read_record(entry.hash, entry.study, entry.key, entry.record);
     visit(entry);
   }
+}
+
+std::vector<std::string> ResultStore::integrity_problems() const {
+  Statement statement(db_, "PRAGMA integrity_check", file_);
+  std::vector<std::string> problems;
+  int status = step(statement.handle);
+  for (; status == SQLITE_ROW; status = sqlite3_step(statement.handle)) {
+    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, 0));
+    const std::string line = text ? text : "";
+    if (line != "ok") problems.push_back(line);
+  }
+  // A database too damaged to be checked at all: that is what is wrong with it.
+  if (status != SQLITE_DONE) problems.push_back(sqlite3_errmsg(db_));
+  return problems;
 }
 
 std::size_t ResultStore::remove(const std::vector<std::string>& hashes) {
@@ -498,7 +692,7 @@ std::size_t ResultStore::remove(const std::vector<std::string>& hashes) {
       removed += static_cast<std::size_t>(sqlite3_changes(db_));
     }
   } catch (...) {
-    exec("ROLLBACK");
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
   exec("COMMIT");
@@ -510,6 +704,7 @@ void ResultStore::vacuum() {
 }
 
 bool ResultStore::checkpoint() {
+  if (access_ == StoreAccess::read_only) return true;  // nothing written
   const int status =
       sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_TRUNCATE, nullptr, nullptr);
   if (status == SQLITE_BUSY) return false;
@@ -517,23 +712,130 @@ bool ResultStore::checkpoint() {
   return true;
 }
 
-std::size_t ResultStore::merge_from(const std::filesystem::path& other) {
-  if (!std::filesystem::exists(other))
-    throw std::runtime_error(fmt::format("{}: no such result store", other.string()));
-  const std::size_t count = ResultStore(other).size();  // also checks that it is a store
-  Statement attach(db_, "ATTACH DATABASE ?1 AS other", file_);
-  sqlite3_bind_text(attach.handle, 1, other.c_str(), -1, SQLITE_TRANSIENT);
-  if (step(attach.handle) != SQLITE_DONE)
-    throw std::runtime_error(fmt::format("{}: cannot attach {}: {}", file_.string(), other.string(),
-                                         sqlite3_errmsg(db_)));
+namespace {
+
+// Two verified records hold the same result when they differ at most in the trial's wall time
+// (which a trial run twice never repeats) and in the study that stored it (studies share
+// trials).
+bool same_result(const RecordCheck& a, const RecordCheck& b) {
+  if (a.metric_names != b.metric_names) return false;
+  auto timeless = [](TrialResult result) {
+    result.seconds = 0;
+    return serialize_result(result);
+  };
+  return timeless(*a.result) == timeless(*b.result);
+}
+
+std::string entry_line(const std::string& file, const ResultStore::Entry& entry) {
+  return fmt::format("{}: trial {} (study {}, hash {})", file, entry.key, entry.study,
+                     entry.hash.substr(0, 12));
+}
+
+// At most 10 of `lines`, and how many more there are.
+std::string listed(const std::vector<std::string>& lines) {
+  std::string out;
+  for (std::size_t i = 0; i < lines.size() && i < 10; ++i) out += "\n  " + lines[i];
+  if (lines.size() > 10) out += fmt::format("\n  ... and {} more", lines.size() - 10);
+  return out;
+}
+
+}  // namespace
+
+std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesystem::path>& sources,
+                                                  MergePreference prefer) {
+  if (access_ == StoreAccess::read_only)
+    throw std::logic_error(file_.string() + ": result store opened read-only");
+  // Every source read and verified first: nothing is written unless all of them are sound.
+  std::vector<MergedSource> merged;
+  std::vector<std::vector<Entry>> entries(sources.size());
+  std::vector<std::string> bad;
+  for (std::size_t s = 0; s < sources.size(); ++s) {
+    const auto& file = sources[s];
+    merged.push_back({file.string()});
+    const ResultStore source(file, StoreAccess::read_only);
+    if (const auto problems = source.integrity_problems(); !problems.empty())
+      throw std::runtime_error(fmt::format("{}: SQLite's integrity check failed, nothing merged:{}",
+                                           file.string(), listed(problems)));
+    source.for_each([&](const Entry& entry) {
+      if (!entry.check.sound())
+        bad.push_back(entry_line(file.string(), entry) + ": " + entry.check.problem);
+      entries[s].push_back(entry);
+    });
+    merged[s].records = entries[s].size();
+  }
+  if (!bad.empty())
+    throw std::runtime_error(fmt::format(
+        "{} not verify, nothing merged (`rkhs-study store vacuum --store SOURCE` removes "
+        "them):{}",
+        bad.size() == 1 ? "1 stored trial does" : fmt::format("{} stored trials do", bad.size()),
+        listed(bad)));
+
+  // What the destination holds, then each source's trials resolved against it in turn, all in
+  // one write transaction.
+  struct Candidate {
+    Entry entry;
+    std::size_t source;  // index into `sources`; sources.size(): the destination's own
+  };
+  exec("BEGIN IMMEDIATE");
   try {
-    exec("INSERT OR REPLACE INTO trials SELECT hash, study, key, result, stored FROM other.trials");
+    std::map<std::string, Candidate> held;
+    std::set<std::string> changed;
+    for_each([&](const Entry& entry) { held.insert({entry.hash, {entry, sources.size()}}); });
+    std::vector<std::string> conflicts;
+    for (std::size_t s = 0; s < sources.size(); ++s) {
+      for (auto& entry : entries[s]) {
+        const auto [at, added] = held.try_emplace(entry.hash, Candidate{entry, s});
+        if (added) {
+          ++merged[s].added;
+          changed.insert(entry.hash);
+          continue;
+        }
+        auto& there = at->second;
+        if (!there.entry.check.sound()) {  // the destination's own record does not verify
+          there = {entry, s};
+          ++merged[s].repaired;
+          changed.insert(entry.hash);
+        } else if (same_result(there.entry.check, entry.check)) {
+          ++merged[s].same;
+        } else if (prefer == MergePreference::source) {
+          there = {entry, s};
+          ++merged[s].replaced;
+          changed.insert(entry.hash);
+        } else if (prefer == MergePreference::destination) {
+          ++merged[s].kept;
+        } else {
+          conflicts.push_back(fmt::format(
+              "{} holds another result than {}", entry_line(sources[s].string(), entry),
+              there.source == sources.size() ? file_.string() : sources[there.source].string()));
+        }
+      }
+    }
+    if (!conflicts.empty())
+      throw std::runtime_error(fmt::format(
+          "{} stored with different results, nothing merged (--prefer destination keeps the "
+          "record already there, --prefer source takes the one merged later):{}",
+          conflicts.size() == 1 ? "1 trial" : fmt::format("{} trials", conflicts.size()),
+          listed(conflicts)));
+    Statement insert(db_,
+                     "INSERT OR REPLACE INTO trials (hash, study, key, result, stored) "
+                     "VALUES (?1, ?2, ?3, ?4, ?5)",
+                     file_);
+    for (const auto& hash : changed) {
+      const auto& entry = held.at(hash).entry;
+      sqlite3_reset(insert.handle);
+      sqlite3_bind_text(insert.handle, 1, entry.hash.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(insert.handle, 2, entry.study.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(insert.handle, 3, entry.key.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(insert.handle, 4, entry.record.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(insert.handle, 5, entry.stored.c_str(), -1, SQLITE_TRANSIENT);
+      if (step(insert.handle) != SQLITE_DONE) fail("cannot store the trial " + entry.key);
+    }
+    exec("COMMIT");
   } catch (...) {
-    exec("DETACH DATABASE other");
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
-  exec("DETACH DATABASE other");
-  return count;
+  return merged;
 }
 
 std::size_t ResultStore::size() const {

@@ -22,6 +22,9 @@ struct StoreOptions {
   std::string file = "results/rkhs-study.sqlite";
   bool fresh = false;     ///< run every trial again (results are still stored)
   bool disabled = false;  ///< no store at all
+  /// Open the store read-only (StoreAccess::read_only) when it holds a verified record of
+  /// every trial, read-write only when some trial has to run (and be stored): `report`.
+  bool read_only_when_complete = false;
 };
 
 /// The study `load` returns, loaded on every process (each must succeed; see
@@ -33,13 +36,13 @@ StudyDefinition load_everywhere(const Executor& executor,
 struct CompletedRun {
   const StudyDefinition& study;
   const std::vector<TrialSpec>& trials;
-  StoredRun stored;                  ///< results in trial order; reused / ran counts
-  std::vector<MetricSeries> rates;   ///< compute_rates of the results (empty: Rates::not_fitted)
-  std::size_t failed = 0;            ///< trials whose status is failed
-  int threads = 1;                   ///< worker threads of the root process
-  double seconds = 0;                ///< wall time of the run
-  std::string started;               ///< ISO 8601 UTC time the run started
-  std::vector<RankRecord> ranks;     ///< MPI ranks (empty: one process)
+  StoredRun stored;                 ///< results in trial order; reused / ran counts
+  std::vector<MetricSeries> rates;  ///< compute_rates of the results (empty: Rates::not_fitted)
+  std::size_t failed = 0;           ///< trials whose status is failed
+  int threads = 1;                  ///< worker threads of the root process
+  double seconds = 0;               ///< wall time of the run
+  std::string started;              ///< ISO 8601 UTC time the run started
+  std::vector<RankRecord> ranks;    ///< MPI ranks (empty: one process)
 
   /// The record the output writers take (it refers to this object: keep it alive).
   RunRecord record() const;

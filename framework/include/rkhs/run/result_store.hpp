@@ -10,10 +10,12 @@
 // alone holds every trial (run_study calls it at the end of a run).
 //
 // Trust: a record is reused only when it verifies (read_record): its format version, the
-// checksum over its trial hash and text, one value per metric name it holds, and those names
-// equal to the study's. Anything else is reported (store, trial key, what is wrong) and the
-// trial runs again; records of format 1 (no checksum) are "old format", re-run the same way.
-// SQLite errors are errors (std::runtime_error naming the store), never "not stored".
+// checksum over its trial hash, key, study and text, one value per metric name it holds, and
+// those names equal to the study's. Anything else is reported (store, trial key, what is wrong) and
+// the trial runs again; records of format 1 (no checksum) are "old format", re-run the same way.
+// SQLite errors are errors (std::runtime_error naming the store), never "not stored"; a write
+// that fails (a full disk) ends the run with that error after the trials in flight, the trials
+// committed before it kept.
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -32,35 +34,43 @@ namespace rkhs {
 
 /// A TrialResult as text (round-trip exact: reals are written in their shortest exact form)
 /// and back. Throws std::invalid_argument for text that is not such a record (a field that is
-/// not one, a value that does not parse, a field other than `snapshot` given twice). This is also the
-/// payload MPI ranks send; the store wraps it in a verified record (store_record). The line
+/// not one, a value that does not parse, a field other than `snapshot` given twice). This is also
+/// the payload MPI ranks send; the store wraps it in a verified record (store_record). The line
 /// `work name=count ...` (TrialResult::work) is written when the result has work counters and
 /// is optional on reading: a record stored without it reads back with no work counters.
 std::string serialize_result(const TrialResult& result);
 TrialResult deserialize_result(std::string_view text);
 
 /// The version of the records store_record writes.
-inline constexpr int record_format = 2;
+inline constexpr int record_format = 3;
 
-/// A stored record of format 2: the line "rkhs-record 2", the line "metric_names" followed by
+/// A stored record of format 3: the line "rkhs-record 3", the line "metric_names" followed by
 /// `metric_names` (the names of result.metrics, in order), serialize_result(result), and the
-/// line "checksum " + SHA-256 (hex) of `hash`, a newline, and every line before this one.
-std::string store_record(const std::string& hash, const TrialResult& result,
-                         const std::vector<std::string>& metric_names);
+/// line "checksum " + SHA-256 (hex) of `hash`, `study` and `key` (each followed by a newline,
+/// line breaks and backslashes in them escaped as in a record) and every line before this one:
+/// the record proves the row's key and study columns as well as its result.
+std::string store_record(const std::string& hash, const std::string& study, const std::string& key,
+                         const TrialResult& result, const std::vector<std::string>& metric_names);
 
 /// What read_record found in one stored record.
 struct RecordCheck {
   std::optional<TrialResult> result;      ///< the result, when the record verifies
   std::string problem;                    ///< why it does not ("" when it does)
   bool old_format = false;                ///< a record of format 1 (no checksum, never reused)
-  std::vector<std::string> metric_names;  ///< the metric names it holds (format 2)
+  int format = 0;                         ///< its format (1, 2, 3; 0 when not a record)
+  std::vector<std::string> metric_names;  ///< the metric names it holds (formats 2 and 3)
   bool sound() const { return result.has_value(); }
+  /// A record of format 2 verifies by the rule of its time: its checksum covers the hash and
+  /// the result, not the key and study columns (docs/results.md).
+  bool key_and_study_proven() const { return sound() && format >= 3; }
 };
 
-/// Verifies a stored record of the trial `hash`: format 2, checksum, that it parses, one value
-/// per metric name, and, when `expected_metrics` is given, those names equal to it. Never
-/// throws for bad text: what is wrong is RecordCheck::problem.
-RecordCheck read_record(const std::string& hash, std::string_view text,
+/// Verifies a stored record of the trial `hash` in a row of `study` and `key`: format 3 (or 2,
+/// by its own rule), checksum, that it parses, one value per metric name, and, when
+/// `expected_metrics` is given, those names equal to it. Never throws for bad text: what is
+/// wrong is RecordCheck::problem.
+RecordCheck read_record(const std::string& hash, const std::string& study, const std::string& key,
+                        std::string_view text,
                         const std::vector<std::string>* expected_metrics = nullptr);
 
 class ResultStore;
@@ -91,11 +101,39 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
                          const TrialExecutor& execute = run_trials,
                          const std::vector<std::string>& known_hashes = {});
 
+/// How a ResultStore opens its database.
+enum class StoreAccess {
+  read_write,  ///< opened or created; WAL mode
+  read_only,   ///< an existing store, SQLITE_OPEN_READONLY: nothing written, no -wal created
+};
+
+/// Which record a merge keeps when two records of one trial differ (in more than their wall
+/// time): none (the merge is refused), the one already there (the destination's, or that of
+/// the earlier source), or the one of the source merged later.
+enum class MergePreference { refuse, destination, source };
+
+/// What merge_from did with the trials of one source.
+struct MergedSource {
+  std::string file;
+  std::size_t records = 0;   ///< trials it holds (every one verified)
+  std::size_t added = 0;     ///< not held before
+  std::size_t same = 0;      ///< held already with the same result (only the wall time differs)
+  std::size_t replaced = 0;  ///< a different record replaced (--prefer source)
+  std::size_t kept = 0;      ///< a different record kept (--prefer destination)
+  std::size_t repaired = 0;  ///< replaced a record of the destination that did not verify
+};
+
 class ResultStore {
  public:
-  /// Opens or creates the store at `file` (parent directories created). Throws
-  /// std::runtime_error naming the file when it cannot be opened or is not a store.
-  explicit ResultStore(const std::filesystem::path& file);
+  /// Opens the store at `file`. read_write: creates it when the file does not exist or is an
+  /// empty database (parent directories created). read_only: the file must exist; the database
+  /// is opened with SQLITE_OPEN_READONLY (immutable when no -wal file is beside it, so that
+  /// nothing is created beside it either). Either way a database that is not an rkhs-study
+  /// store (no `trials` table of the store's columns, another application id, a newer schema)
+  /// is refused before anything is written: std::runtime_error "FILE: not an rkhs-study result
+  /// store: why".
+  explicit ResultStore(const std::filesystem::path& file,
+                       StoreAccess access = StoreAccess::read_write);
   ~ResultStore();
   ResultStore(const ResultStore&) = delete;
   ResultStore& operator=(const ResultStore&) = delete;
@@ -111,10 +149,17 @@ class ResultStore {
   /// before returning. `metric_names`: the names of result.metrics.
   void put(const std::string& hash, const std::string& study, const std::string& key,
            const TrialResult& result, const std::vector<std::string>& metric_names);
-  /// Copies every trial of the store at `other` into this one (a later copy of the same hash
-  /// replaces an earlier one: results of the same hash are identical). Returns how many trials
-  /// `other` holds. Throws std::runtime_error naming a file that is not a store.
-  std::size_t merge_from(const std::filesystem::path& other);
+  /// Copies every trial of the stores `sources` into this one, all or nothing: every source
+  /// opened read-only and checked by SQLite (PRAGMA integrity_check), every record verified
+  /// (read_record), a trial held with a different record resolved by `prefer`, and everything
+  /// written in one transaction. A source that is not a store or is damaged, a record that does
+  /// not verify (old format included) or a conflict under MergePreference::refuse throws
+  /// std::runtime_error naming the source and the trials, and nothing is written.
+  std::vector<MergedSource> merge_from(const std::vector<std::filesystem::path>& sources,
+                                       MergePreference prefer = MergePreference::refuse);
+  /// What SQLite's PRAGMA integrity_check finds wrong with the database file (its index and
+  /// table b-trees, their pages and their agreement): empty when nothing.
+  std::vector<std::string> integrity_problems() const;
   /// Number of stored trials (of all studies).
   std::size_t size() const;
 
@@ -122,6 +167,7 @@ class ResultStore {
   struct Entry {
     std::string hash, study, key, stored;  ///< stored: the UTC time it was committed
     RecordCheck check;
+    std::string record;  ///< the stored text of the record
   };
   /// Calls `visit` for every stored row, in the order of their keys.
   void for_each(const std::function<void(const Entry&)>& visit) const;
@@ -135,12 +181,21 @@ class ResultStore {
   bool checkpoint();
 
   const std::filesystem::path& file() const noexcept { return file_; }
+  StoreAccess access() const noexcept { return access_; }
+  /// True when the store was opened read-only as an immutable file (no -wal file beside it)
+  /// and a -wal file has appeared since: a writer started while it was read, so what was read
+  /// may be inconsistent; a new ResultStore reads it through the WAL.
+  bool written_meanwhile() const;
 
  private:
+  void open(bool immutable);
+  void adopt_schema();
   void exec(const char* sql) const;
   /// Throws std::runtime_error "STORE: result store: WHAT: SQLite's message".
   [[noreturn]] void fail(const std::string& what) const;
   std::filesystem::path file_;
+  StoreAccess access_ = StoreAccess::read_write;
+  bool immutable_ = false;
   sqlite3* db_ = nullptr;
 };
 

@@ -1,0 +1,381 @@
+// The store proves what it holds (issue 36): `store check` runs SQLite's integrity check, the
+// record checksum covers the key and study columns, `merge` verifies what it copies, refuses
+// conflicts unless told which record wins and is all-or-nothing, the commands that only read
+// open the database read-only and refuse a database that is not a store, and a full disk ends a
+// run with exit 2 and a message (the trials committed before it kept), never with SIGABRT.
+#include <sqlite3.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <fstream>
+
+#include "cli_support.hpp"
+#include "rkhs/core/sha256.hpp"
+
+namespace fs = std::filesystem;
+using rkhs::test::read_text;
+using rkhs::test::rkhs_study;
+
+namespace {
+
+const char* const proof_study = R"([study]
+name = "proof"
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [8, 16, 32, 64, 128]
+[[kernel]]
+name = "gaussian"
+sigma = [0.5, 1.0]
+)";
+
+// A store of the ten trials of `proof_study` (the study file is dir/study.toml, the run's
+// outputs dir/out).
+fs::path make_store(const fs::path& dir, const std::string& name = "store.sqlite") {
+  if (!fs::exists(dir / "study.toml")) std::ofstream(dir / "study.toml") << proof_study;
+  const auto store = dir / name;
+  const auto run =
+      rkhs_study("run " + (dir / "study.toml").string() + " --quiet --no-plots --store " +
+                 store.string() + " --out " + (dir / "out").string());
+  INFO(run.output);
+  REQUIRE(run.exit_code == 0);
+  return store;
+}
+
+std::string bytes_of(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Runs `sql` on the database `file` (a connection of its own, as another program would).
+void execute(const fs::path& file, const std::string& sql) {
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open(file.c_str(), &db) == SQLITE_OK);
+  char* message = nullptr;
+  const int status = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+  INFO((message ? message : ""));
+  sqlite3_free(message);
+  sqlite3_close(db);
+  REQUIRE(status == SQLITE_OK);
+}
+
+// The rows of `SELECT ...` on `file`, each a vector of its columns as text.
+std::vector<std::vector<std::string>> rows(const fs::path& file, const std::string& sql) {
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open_v2(file.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  REQUIRE(sqlite3_prepare_v2(db, sql.c_str(), -1, &statement, nullptr) == SQLITE_OK);
+  std::vector<std::vector<std::string>> out;
+  while (sqlite3_step(statement) == SQLITE_ROW) {
+    std::vector<std::string> row;
+    for (int i = 0; i < sqlite3_column_count(statement); ++i) {
+      const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement, i));
+      row.emplace_back(text ? text : "");
+    }
+    out.push_back(std::move(row));
+  }
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+  return out;
+}
+
+// A record of format 3 sealed again after an edit of its body, as docs/results.md describes the
+// checksum: SHA-256 of the hash, the study, the key (each on a line of its own) and the body.
+std::string resealed(const std::string& hash, const std::string& study, const std::string& key,
+                     const std::string& body) {
+  return body + "checksum " + rkhs::sha256_hex(hash + "\n" + study + "\n" + key + "\n" + body) +
+         "\n";
+}
+
+bool has_side_files(const fs::path& file) {
+  return fs::exists(file.string() + "-wal") || fs::exists(file.string() + "-shm") ||
+         fs::exists(file.string() + "-journal");
+}
+
+// `rkhs-study ARGS` as a user who cannot write `dir` or the files in it when the tests run as
+// root (where file modes do not keep a process from writing): as nobody, through setpriv.
+rkhs::test::CommandOutcome as_reader(const std::string& arguments) {
+  if (geteuid() != 0 || !fs::exists("/usr/bin/setpriv")) return rkhs_study(arguments);
+  return rkhs_study(arguments, "/usr/bin/setpriv --reuid=65534 --regid=65534 --clear-groups");
+}
+
+}  // namespace
+
+TEST_CASE("store check runs SQLite's integrity check: a flipped byte of the index fails it",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_integrity");
+  const auto store = make_store(dir);
+  // The page of the primary key's index (SQLite's dbstat), and a stored hash in it.
+  const auto pages = rows(store,
+                          "SELECT pageno FROM dbstat WHERE name = 'sqlite_autoindex_trials_1' "
+                          "AND pagetype = 'leaf' ORDER BY pageno LIMIT 1");
+  REQUIRE(pages.size() == 1);
+  const auto page_size = std::stoul(rows(store, "PRAGMA page_size")[0][0]);
+  const auto hash = rows(store, "SELECT hash FROM trials ORDER BY hash LIMIT 1 OFFSET 4")[0][0];
+  auto bytes = bytes_of(store);
+  const auto page_start = (std::stoul(pages[0][0]) - 1) * page_size;
+  const auto at = bytes.find(hash, page_start);
+  REQUIRE(at != std::string::npos);
+  REQUIRE(at < page_start + page_size);
+  bytes[at + 20] = bytes[at + 20] == 'a' ? 'b' : 'a';  // still a hex digit
+  std::ofstream(store, std::ios::binary | std::ios::trunc) << bytes;
+
+  const auto check = rkhs_study("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 1);
+  CHECK_THAT(check.output, Catch::Contains(store.string() + ": SQLite's integrity check failed"));
+  CHECK_THAT(check.output, !Catch::Contains("10 verified"));
+}
+
+TEST_CASE("the store's record checksum covers the key and study columns", "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_key_study");
+  const auto store = make_store(dir);
+  const auto hashes = rows(store, "SELECT hash, key FROM trials ORDER BY key");
+  REQUIRE(hashes.size() == 10);
+  execute(store, "UPDATE trials SET key = 'kernel=gaussian sigma=9 | n=8' WHERE hash = '" +
+                     hashes[0][0] + "'");
+  execute(store, "UPDATE trials SET study = 'another' WHERE hash = '" + hashes[1][0] + "'");
+  const auto check = rkhs_study("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 1);
+  CHECK_THAT(check.output, Catch::Contains("trial kernel=gaussian sigma=9 | n=8 (study proof"));
+  CHECK_THAT(check.output, Catch::Contains("(study another, hash " + hashes[1][0].substr(0, 12) +
+                                           "): checksum mismatch"));
+  CHECK_THAT(check.output, Catch::Contains("10 records, 8 verified, 2 bad"));
+}
+
+TEST_CASE("store merge verifies what it copies and leaves the destination as it was on failure",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_merge_verify");
+  const auto good = make_store(dir, "good.sqlite");
+  fs::copy_file(good, dir / "bad.sqlite");
+  const auto bad = dir / "bad.sqlite";
+  const auto hash = rows(bad, "SELECT hash FROM trials ORDER BY key LIMIT 1")[0][0];
+  execute(bad,
+          "UPDATE trials SET result = replace(result, 'metrics ', 'metrics 1') WHERE hash = '" +
+              hash + "'");
+  const auto before = bytes_of(good);
+
+  // A bad record is refused, by source and trial: nothing is copied.
+  const auto merged = rkhs_study("merge " + good.string() + " " + bad.string());
+  INFO(merged.output);
+  CHECK(merged.exit_code == 2);
+  CHECK_THAT(merged.output, Catch::Contains(bad.string() + ": trial "));
+  CHECK_THAT(merged.output, Catch::Contains("checksum mismatch"));
+  CHECK(bytes_of(good) == before);
+  CHECK(rkhs_study("store check --store " + good.string()).exit_code == 0);
+
+  // All or nothing: a good source before a failing one leaves the destination unchanged, and
+  // one that did not exist is not created.
+  const auto fresh = dir / "fresh.sqlite";
+  const auto partial =
+      rkhs_study("merge " + fresh.string() + " " + good.string() + " " + bad.string());
+  INFO(partial.output);
+  CHECK(partial.exit_code == 2);
+  CHECK_FALSE(fs::exists(fresh));
+  fs::copy_file(good, dir / "half.sqlite");
+  execute(dir / "half.sqlite", "DELETE FROM trials WHERE rowid % 2 = 0");
+  const auto half_before = bytes_of(dir / "half.sqlite");
+  const auto not_store = dir / "study.toml";
+  CHECK(rkhs_study("merge " + (dir / "half.sqlite").string() + " " + good.string() + " " +
+                   not_store.string())
+            .exit_code == 2);
+  CHECK(bytes_of(dir / "half.sqlite") == half_before);
+  // Without the failing source it merges.
+  const auto whole = rkhs_study("merge " + (dir / "half.sqlite").string() + " " + good.string());
+  INFO(whole.output);
+  CHECK(whole.exit_code == 0);
+  CHECK_THAT(whole.output, Catch::Contains("holds 10 trials"));
+}
+
+TEST_CASE("store merge refuses two different records of one trial unless told which wins",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_merge_conflict");
+  const auto into = make_store(dir, "into.sqlite");
+  fs::copy_file(into, dir / "other.sqlite");
+  const auto other = dir / "other.sqlite";
+  const auto row = rows(other, "SELECT hash, study, key, result FROM trials ORDER BY key")[0];
+  // A record that verifies but holds another result (resealed with the documented checksum).
+  auto body = row[3].substr(0, row[3].rfind("checksum "));
+  body.replace(body.find("\nmetrics ") + 9, 0, "0.125 ");
+  body.replace(body.find("metric_names "), 13, "metric_names extra ");
+  const auto conflicting = resealed(row[0], row[1], row[2], body);
+  execute(other, "UPDATE trials SET result = '" + conflicting + "' WHERE hash = '" + row[0] + "'");
+  REQUIRE(rkhs_study("store check --store " + other.string()).exit_code == 0);
+  const auto before = bytes_of(into);
+  const auto record_in_into = [&] {
+    return rows(into, "SELECT result FROM trials WHERE hash = '" + row[0] + "'")[0][0];
+  };
+  const auto original = record_in_into();
+
+  const auto refused = rkhs_study("merge " + into.string() + " " + other.string());
+  INFO(refused.output);
+  CHECK(refused.exit_code == 2);
+  CHECK_THAT(refused.output, Catch::Contains("trial " + row[2]));
+  CHECK_THAT(refused.output, Catch::Contains("--prefer"));
+  CHECK(bytes_of(into) == before);
+
+  const auto kept =
+      rkhs_study("merge --prefer destination " + into.string() + " " + other.string());
+  INFO(kept.output);
+  CHECK(kept.exit_code == 0);
+  CHECK(record_in_into() == original);
+
+  const auto replaced = rkhs_study("merge --prefer source " + into.string() + " " + other.string());
+  INFO(replaced.output);
+  CHECK(replaced.exit_code == 0);
+  CHECK(record_in_into() == conflicting);
+  CHECK(rkhs_study("store check --store " + into.string()).exit_code == 0);
+}
+
+TEST_CASE("read-only store commands open the store read-only and leave it as it was",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_read_only");
+  const auto source = make_store(dir);
+  const auto shelf = dir / "shelf";
+  fs::create_directories(shelf);
+  const auto store = shelf / "store.sqlite";
+  fs::copy_file(source, store);
+  const auto before = bytes_of(store);
+  fs::permissions(store, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  // The folder read-only too: nothing can be created beside the store (a read-only mount).
+  fs::permissions(shelf, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                             fs::perms::group_exec | fs::perms::others_read |
+                             fs::perms::others_exec);
+  const auto check = as_reader("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 0);
+  CHECK_THAT(check.output, Catch::Contains("10 records, 10 verified"));
+  const auto csv = as_reader("store export --store " + store.string());
+  INFO(csv.output);
+  CHECK(csv.exit_code == 0);
+  CHECK_THAT(csv.output, Catch::StartsWith("hash,study,key,"));
+  const auto report =
+      as_reader("report " + (dir / "out").string() + " --format md --store " + store.string());
+  INFO(report.output);
+  CHECK(report.exit_code == 0);
+  CHECK_THAT(report.output, Catch::Contains("gaussian"));
+  CHECK(bytes_of(store) == before);
+  CHECK_FALSE(has_side_files(store));
+  // Writable by root: still read-only, and no -wal or -shm file appears.
+  fs::permissions(shelf, fs::perms::owner_all, fs::perm_options::add);
+  CHECK(rkhs_study("store check --store " + store.string()).exit_code == 0);
+  CHECK(rkhs_study("store export --format json --store " + store.string()).exit_code == 0);
+  CHECK(bytes_of(store) == before);
+  CHECK_FALSE(has_side_files(store));
+}
+
+TEST_CASE("a database that is not a result store is refused by name and left byte-identical",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_foreign");
+  std::ofstream(dir / "study.toml") << proof_study;
+  const auto foreign = dir / "notes.db";
+  execute(foreign,
+          "CREATE TABLE notes (id INTEGER PRIMARY KEY, text TEXT); "
+          "INSERT INTO notes (text) VALUES ('keep me')");
+  const auto before = bytes_of(foreign);
+  const auto good = make_store(dir, "good.sqlite");
+  for (const auto& command :
+       {"store check --store " + foreign.string(), "store export --store " + foreign.string(),
+        "store vacuum --store " + foreign.string(),
+        "run " + (dir / "study.toml").string() + " --quiet --no-plots --store " + foreign.string() +
+            " --out " + (dir / "run").string(),
+        "merge " + foreign.string() + " " + good.string(),
+        "merge " + good.string() + " " + foreign.string()}) {
+    const auto outcome = rkhs_study(command);
+    INFO(command << "\n" << outcome.output);
+    CHECK(outcome.exit_code == 2);
+    CHECK_THAT(outcome.output,
+               Catch::Contains(foreign.string() + ": not an rkhs-study result store"));
+    CHECK(bytes_of(foreign) == before);
+    CHECK_FALSE(has_side_files(foreign));
+  }
+  CHECK(rows(foreign, "SELECT name FROM sqlite_master WHERE name = 'trials'").empty());
+}
+
+TEST_CASE("a full disk under the store ends the run with exit 2, and what was stored is kept",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_full_disk");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "full_disk"
+evaluation_points = 64
+[domain]
+radius = 4
+[grid]
+n = { from = 4, to = 60, step = 1 }
+[[kernel]]
+name = "gaussian"
+sigma = [0.5, 1.0]
+)";
+  const auto store = dir / "store.sqlite";
+  // Files of at most 160 KiB (ulimit -f counts 512-byte blocks in sh): enough for the
+  // store's -shm file (32 KiB), too little for the WAL of 114 trials, one commit each. SIGXFSZ
+  // ignored: a write past the limit fails with EFBIG, as one on a full disk with ENOSPC.
+  const auto outcome = rkhs::test::run_command(
+      "trap '' XFSZ; ulimit -f 320; exec " + std::string(RKHS_STUDY_EXECUTABLE) + " run " +
+      (dir / "study.toml").string() + " --threads 1 --quiet --no-plots --store " + store.string() +
+      " --out " + (dir / "out").string());
+  INFO(outcome.output);
+  CHECK(outcome.exit_code == 2);
+  CHECK_THAT(outcome.output, Catch::Contains(store.string()));
+  CHECK_THAT(outcome.output, Catch::Contains("cannot store the trial"));
+  CHECK_THAT(outcome.output, !Catch::Contains("terminate called"));
+  // What was committed is kept and verifies; a run without the limit completes it.
+  const auto check = rkhs_study("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 0);
+  const auto stored = rows(store, "SELECT COUNT(*) FROM trials")[0][0];
+  CHECK(std::stoul(stored) > 0);
+  CHECK(std::stoul(stored) < 114);
+  const auto resumed =
+      rkhs_study("run " + (dir / "study.toml").string() + " --quiet --no-plots --store " +
+                 store.string() + " --out " + (dir / "out").string());
+  INFO(resumed.output);
+  CHECK(resumed.exit_code == 0);
+  CHECK(rows(store, "SELECT COUNT(*) FROM trials")[0][0] == "114");
+}
+
+TEST_CASE("a store from before the schema marks and its records of format 2 still verify",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_old_store");
+  const auto store = make_store(dir);
+  // As rkhs-study wrote it before: no marks, and records of format 2 (their checksum over the
+  // hash and the record, not the key and study).
+  const auto all = rows(store, "SELECT hash, result FROM trials ORDER BY key");
+  REQUIRE(all.size() == 10);
+  auto format_2 = [&](const std::string& hash, std::string record) {
+    auto body = record.substr(0, record.rfind("checksum "));
+    body.replace(0, std::string("rkhs-record 3").size(), "rkhs-record 2");
+    return body + "checksum " + rkhs::sha256_hex(hash + "\n" + body) + "\n";
+  };
+  std::string sql = "PRAGMA application_id = 0; PRAGMA user_version = 0; ";
+  for (std::size_t i = 0; i < 3; ++i)
+    sql += "UPDATE trials SET result = '" + format_2(all[i][0], all[i][1]) + "' WHERE hash = '" +
+           all[i][0] + "'; ";
+  execute(store, sql);
+  const auto check = rkhs_study("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 0);
+  CHECK_THAT(check.output, Catch::Contains("10 records, 10 verified, 0 bad"));
+  CHECK_THAT(check.output, Catch::Contains("3 of the verified in record format 2"));
+  CHECK(rows(store, "PRAGMA application_id")[0][0] == "0");  // read-only: not marked
+  const auto again = rkhs_study("run " + (dir / "study.toml").string() + " --no-plots --store " +
+                                store.string() + " --out " + (dir / "again").string());
+  INFO(again.output);
+  CHECK(again.exit_code == 0);
+  CHECK_THAT(again.output, Catch::Contains("10 trials reused"));
+  CHECK(rows(store, "PRAGMA application_id")[0][0] == std::to_string(0x726b6873));
+  CHECK(rows(store, "PRAGMA user_version")[0][0] == "2");
+  // A record of format 2 edited is not accepted; one moved to another key is not either (its
+  // checksum covers the hash).
+  execute(store,
+          "UPDATE trials SET result = replace(result, 'metrics ', 'metrics 1') WHERE "
+          "hash = '" +
+              all[0][0] + "'");
+  const auto edited = rkhs_study("store check --store " + store.string());
+  INFO(edited.output);
+  CHECK(edited.exit_code == 1);
+  CHECK_THAT(edited.output, Catch::Contains("10 records, 9 verified, 1 bad"));
+}
