@@ -47,6 +47,13 @@ std::string printable(std::string_view text, bool keep_line_breaks) {
       continue;
     }
     const std::size_t length = utf8_sequence_length(text.substr(i));
+    // C1 controls (U+0080 to U+009F: U+009B is a terminal's CSI) are escaped too.
+    const bool c1 = length == 2 && c == 0xc2 && static_cast<unsigned char>(text[i + 1]) < 0xa0;
+    if (c1) {
+      out += fmt::format("\\x{:02x}\\x{:02x}", c, static_cast<unsigned char>(text[i + 1]));
+      i += 2;
+      continue;
+    }
     if (length == 0) {
       out += fmt::format("\\x{:02x}", c);
       ++i;

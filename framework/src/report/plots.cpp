@@ -56,9 +56,10 @@ std::string gp_text(std::string_view text) {
       continue;
     }
     const std::size_t length = utf8_sequence_length(text.substr(i));
-    if (length == 0) {
+    if (length == 0 || (length == 2 && c == 0xc2 &&
+                        static_cast<unsigned char>(text[i + 1]) < 0xa0)) {  // or a C1 control
       out += '?';
-      ++i;
+      i += length == 0 ? 1 : 2;
       continue;
     }
     out += text.substr(i, length);

@@ -13,8 +13,9 @@ namespace rkhs {
 /// surrogates or code points beyond U+10FFFF), 0 when it does not start with one.
 std::size_t utf8_sequence_length(std::string_view text) noexcept;
 
-/// `text` with every byte below 0x20, 0x7f and every byte outside a well-formed UTF-8 sequence
-/// written as \xNN (lower-case hex); everything else as it is. With `keep_line_breaks`, '\n' and
+/// `text` with every byte below 0x20, 0x7f, the C1 controls U+0080 to U+009F (both bytes) and
+/// every byte outside a well-formed UTF-8 sequence written as \xNN (lower-case hex); everything
+/// else as it is. With `keep_line_breaks`, '\n' and
 /// '\t' stay as they are (a whole message of several lines).
 std::string printable(std::string_view text, bool keep_line_breaks = false);
 
