@@ -1,7 +1,10 @@
 // The `csv` target: a measured road profile (arc length, elevation) read from a CSV file below
-// the data root (docs/roads.md; docs/model.md section 6). The file is read whole, then its text
-// is parsed (csv_road_from_text, rkhs/targets/csv_road.hpp): lines and fields are split here, so
-// that every error can name the file's own line and column.
+// the data root (docs/roads.md; docs/model.md section 6). The file is read a block at a time
+// (csv_text::Lines, the line limit applied as it is read) and parsed as it is read; a text is
+// parsed the same way (csv_road_from_text, rkhs/targets/csv_road.hpp): lines and fields are
+// split here, so that every error can name the file's own line and column.
+#include "rkhs/targets/csv_road.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -16,8 +19,8 @@
 #include <string_view>
 
 #include "rkhs/core/data_root.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/targets/csv_road.hpp"
 #include "rkhs/targets/csv_text.hpp"
 
 namespace rkhs {
@@ -27,7 +30,6 @@ using csv_text::blank_or_comment;
 using csv_text::Field;
 using csv_text::Lines;
 using csv_text::split;
-
 
 // A column chosen by header name or by 1-based number.
 struct ColumnChoice {
@@ -143,18 +145,26 @@ class CsvRoad final : public TargetFunction {
     const auto elevation = column_choice(p, "elevation_column", "elevation", header);
     const std::string& delimiter_name = p.choice("delimiter");
     const char delimiter = delimiter_name == "tab" ? '\t' : delimiter_name[0];
-    std::string contents;
+    const auto read_lines = [&](Lines& lines) {
+      read(lines, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
+           unit_scale(p.choice("elevation_units")),
+           p.given("arc_length_column") && p.given("elevation_column"));
+    };
+    std::string digest;
     if (text) {
       file_ = file_name;
+      Lines lines(*text, file_);
+      read_lines(lines);
+      digest = sha256_hex(*text);
     } else {
       const auto path = resolve_data_file(p.text("file"));
-      file_ = path.string();
-      contents = csv_text::read_whole_file(path, file_);
-      text = contents;
+      file_ = printable(path.string());
+      auto in = csv_text::open_file(path, file_);
+      Sha256 hash;
+      Lines lines(in, file_, &hash);
+      read_lines(lines);
+      digest = hash.hex_digest();
     }
-    read(*text, arc, elevation, header, delimiter, unit_scale(p.choice("arc_length_units")),
-         unit_scale(p.choice("elevation_units")),
-         p.given("arc_length_column") && p.given("elevation_column"));
     if (cubic_) second_ = natural_spline(u_, z_);
 
     // The section of the profile on the track: [origin, origin + L].
@@ -196,7 +206,7 @@ class CsvRoad final : public TargetFunction {
     if (p.boolean("restart_at_samples") && !cubic_)
       for (double u : u_)
         if (const double s = u - origin_; s > 0 && s < length_) kinks_.push_back(s);
-    provenance_ = "sha256:" + sha256_hex(*text);
+    provenance_ = "sha256:" + digest;
   }
 
   void evaluate(std::span<const double> points, std::span<double> out) const override {
@@ -237,10 +247,8 @@ class CsvRoad final : public TargetFunction {
   // more is refused (a decimal comma, "0,5", splits a number in two). A file with more columns
   // than the two it reads is refused unless `columns_given` (the study names both columns);
   // then the columns left out are noted once.
-  void read(std::string_view contents, const ColumnChoice& arc, const ColumnChoice& elevation,
-            bool header, char delimiter, double arc_scale, double elevation_scale,
-            bool columns_given) {
-    Lines reader(contents, file_);
+  void read(Lines& reader, const ColumnChoice& arc, const ColumnChoice& elevation, bool header,
+            char delimiter, double arc_scale, double elevation_scale, bool columns_given) {
     std::size_t arc_index = arc.number ? *arc.number - 1 : 0;
     std::size_t elevation_index = elevation.number ? *elevation.number - 1 : 0;
     bool need_header = header;
@@ -255,7 +263,7 @@ class CsvRoad final : public TargetFunction {
       for (std::size_t k = 0; k < width; ++k)
         if (k != arc_index && k != elevation_index)
           unread.push_back(names.empty() ? fmt::format("{}", k + 1)
-                                         : fmt::format("{} ({})", k + 1, names[k]));
+                                         : fmt::format("{} ({})", k + 1, printable(names[k])));
       if (!columns_given)
         throw std::invalid_argument(fmt::format(
             "{}:{}:1: the {} has {} fields and the study reads two (arc length from column {}, "
@@ -289,11 +297,11 @@ class CsvRoad final : public TargetFunction {
           const auto it = std::find(names.begin(), names.end(), choice.given);
           if (it == names.end()) {
             std::string known;
-            for (const auto& name : names) known += (known.empty() ? "" : ", ") + name;
-            const auto guess = closest_name(choice.given, names);
+            for (const auto& name : names) known += (known.empty() ? "" : ", ") + printable(name);
+            const auto guess = printable(closest_name(choice.given, names));
             throw std::invalid_argument(
                 fmt::format("{}:{}:1: no column '{}' ({}) in the header (columns: {}{})", file_,
-                            line_number, choice.given, choice.role, known,
+                            line_number, printable(choice.given), choice.role, known,
                             guess.empty() ? "" : fmt::format("; did you mean '{}'?", guess)));
           }
           index = static_cast<std::size_t>(it - names.begin());
@@ -309,7 +317,9 @@ class CsvRoad final : public TargetFunction {
             "{}:{}:{}: {} fields where line {} has {}{}: a decimal comma (0,5 for 0.5) or a "
             "delimiter inside a number?",
             file_, line_number, fields[width].column, fields.size(), width_line, width,
-            names.empty() ? "" : fmt::format(" ({})", fmt::join(names, ", "))));
+            names.empty()
+                ? ""
+                : fmt::format(" ({})", printable(fmt::format("{}", fmt::join(names, ", "))))));
       auto number = [&](std::size_t index, const ColumnChoice& choice) {
         if (index >= fields.size())
           throw std::invalid_argument(
@@ -324,7 +334,8 @@ class CsvRoad final : public TargetFunction {
         if (field.text.empty())
           throw fail(fmt::format("{}: empty field, expected a number", choice.role));
         const auto parsed = csv_text::parse_number(field.text);
-        if (!parsed) throw fail(fmt::format("{}: '{}' is not a number", choice.role, field.text));
+        if (!parsed)
+          throw fail(fmt::format("{}: '{}' is not a number", choice.role, printable(field.text)));
         const double value = *parsed;
         if (std::isnan(value))
           throw fail(fmt::format("{} is NaN (every sample needs a value)", choice.role));

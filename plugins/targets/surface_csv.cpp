@@ -17,6 +17,7 @@
 
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/data_root.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
 #include "rkhs/targets/csv_text.hpp"
 
@@ -59,10 +60,12 @@ class SurfaceCsv final : public TargetFunction {
                            "parameter 'file' is required: the grid CSV, e.g. file = "
                            "\"belgian_block/surface_2cm.csv\"");
     const auto path = resolve_data_file(p.text("file"));
-    file_ = path.string();
-    const std::string text = csv_text::read_whole_file(path, file_);
-    read(text);
-    provenance_ = "sha256:" + sha256_hex(text);
+    file_ = printable(path.string());
+    auto in = csv_text::open_file(path, file_);
+    Sha256 digest;
+    csv_text::Lines lines(in, file_, &digest);
+    read(lines);
+    provenance_ = "sha256:" + digest.hex_digest();
 
     u0_ = p.given("u_start") ? p.real("u_start") : u_first_;
     v0_ = p.given("v_start") ? p.real("v_start") : v_first_;
@@ -132,13 +135,13 @@ class SurfaceCsv final : public TargetFunction {
     const auto parsed = csv_text::parse_number(field.text);
     if (!parsed)
       throw std::invalid_argument(fmt::format("{}:{}:{}: {}: '{}' is not a number", file_, line,
-                                              field.column, describe(), field.text));
+                                              field.column, describe(), printable(field.text)));
     const double value = *parsed;
     if (!std::isfinite(value))
       throw std::invalid_argument(fmt::format(
           "{}:{}:{}: {} is {} (every sample needs a finite value; tools/crg_to_surface_csv.py "
           "fills missing samples)",
-          file_, line, field.column, describe(), field.text));
+          file_, line, field.column, describe(), printable(field.text)));
     return value;
   }
 
@@ -161,8 +164,7 @@ class SurfaceCsv final : public TargetFunction {
     return (values.back() - values.front()) / static_cast<double>(values.size() - 1);
   }
 
-  void read(std::string_view text) {
-    csv_text::Lines lines(text, file_);
+  void read(csv_text::Lines& lines) {
     std::vector<double> v, u;
     std::vector<unsigned> v_lines, u_lines;
     std::vector<std::size_t> v_columns, u_columns;

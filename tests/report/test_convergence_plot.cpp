@@ -88,7 +88,7 @@ std::vector<std::vector<double>> block(const std::string& script, const std::str
 // The key titles of the data points' lines, by curve number.
 std::map<int, std::string> curve_titles(const std::string& script) {
   std::map<int, std::string> out;
-  const std::regex entry(R"re(\$c(\d+) using 1:2 with linespoints lt \d+ title "([^"]*)")re");
+  const std::regex entry(R"re(\$c(\d+) using 1:2 with linespoints lt \d+ title '([^']*)')re");
   for (auto it = std::sregex_iterator(script.begin(), script.end(), entry);
        it != std::sregex_iterator(); ++it)
     out[std::stoi((*it)[1])] = (*it)[2];
@@ -121,8 +121,8 @@ TEST_CASE("convergence plot: more than 8 groups make panels, legends name what d
   // 12 groups: two panels (by degree; r follows it), 6 curves each, side by side.
   CHECK_THAT(*script, Catch::Contains("set multiplot layout 1,2 rowsfirst title"));
   CHECK(count_of(*script, "\nplot ") == 2);
-  CHECK_THAT(*script, Catch::Contains("set title \"degree=1, r=1\" noenhanced"));
-  CHECK_THAT(*script, Catch::Contains("set title \"degree=2, r=2\" noenhanced"));
+  CHECK_THAT(*script, Catch::Contains("set title 'degree=1, r=1' noenhanced"));
+  CHECK_THAT(*script, Catch::Contains("set title 'degree=2, r=2' noenhanced"));
   CHECK_THAT(*script, Catch::Contains("unset multiplot"));
   // Each curve's key names its amplitude and frequency, nothing else, then its rate.
   const auto titles = curve_titles(*script);
@@ -441,15 +441,15 @@ amplitude = [1.0, 2.0]
   const auto& script = plan.scripts.front().second;
   // 12 groups: one panel per kernel (degree or nu alone would not say which kernel).
   CHECK_THAT(script, Catch::Contains("set multiplot layout 1,2"));
-  CHECK_THAT(script, Catch::Contains("set title \"kernel=bspline\" noenhanced"));
-  CHECK_THAT(script, Catch::Contains("set title \"kernel=matern\" noenhanced"));
+  CHECK_THAT(script, Catch::Contains("set title 'kernel=bspline' noenhanced"));
+  CHECK_THAT(script, Catch::Contains("set title 'kernel=matern' noenhanced"));
   const auto titles = curve_titles(script);
   REQUIRE(titles.size() == 12);
   for (const auto& [curve, title] : titles) {
     INFO(title);
-    CHECK(std::regex_match(title,
-                           std::regex(curve < 6 ? R"(degree=([123]) r=\1, amplitude=[12]: rate -[0-9.]+)"
-                                                : R"(nu=[0-9.]+, amplitude=[12]: rate -[0-9.]+)")));
+    CHECK(std::regex_match(
+        title, std::regex(curve < 6 ? R"(degree=([123]) r=\1, amplitude=[12]: rate -[0-9.]+)"
+                                    : R"(nu=[0-9.]+, amplitude=[12]: rate -[0-9.]+)")));
   }
   // Each kernel's constant parameters once, in the title.
   CHECK_THAT(script,

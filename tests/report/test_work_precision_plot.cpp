@@ -3,7 +3,6 @@
 // line per integrator with its points ordered by rtol. The results are made up, so no trial
 // runs here; gnuplot renders them when it is installed (ci/setup installs it).
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -45,7 +44,7 @@ rtol = [1e-3, 1e-4]
 speed = 0.5
 laps = 1
 )") + (with_reference ? "reference = { integrator = \"radau5\", rtol = 1e-11, atol = 1e-10 }\n"
-                                         : ""),
+                      : ""),
                      "wp.toml");
 }
 
@@ -79,9 +78,10 @@ const std::string* script_of(const PlotPlan& plan, const std::string& stem) {
 
 }  // namespace
 
-TEST_CASE("work-precision plots: one panel per group without the integrator, a line per "
-          "integrator ordered by rtol",
-          "[report][plots][work_precision]") {
+TEST_CASE(
+    "work-precision plots: one panel per group without the integrator, a line per "
+    "integrator ordered by rtol",
+    "[report][plots][work_precision]") {
   const auto study = work_precision_study(true);
   const auto trials = study.trials();
   REQUIRE(trials.size() == 10);  // (3 + 2 integrators) x 2 n
@@ -112,8 +112,8 @@ TEST_CASE("work-precision plots: one panel per group without the integrator, a l
   CHECK_THAT(*time1, Catch::Contains("n = 4"));
   CHECK_THAT(*time1, Catch::Contains("reference radau5 rtol=1e-11 atol=1e-10"));
   CHECK_THAT(*time1, Catch::Contains("set logscale x") && Catch::Contains("set logscale y"));
-  CHECK_THAT(*time1, Catch::Contains("$line0 using 1:3 with linespoints pt 7 lc 1 title \"radau5\""));
-  CHECK_THAT(*time1, Catch::Contains("$line1 using 1:3 with linespoints pt 7 lc 2 title \"rodas4\""));
+  CHECK_THAT(*time1, Catch::Contains("$line0 using 1:3 with linespoints pt 7 lc 1 title 'radau5'"));
+  CHECK_THAT(*time1, Catch::Contains("$line1 using 1:3 with linespoints pt 7 lc 2 title 'rodas4'"));
   CHECK_THAT(*time1, Catch::Contains("not deterministic"));
   CHECK_THAT(*steps1, Catch::Contains("$line0 using 2:3 with linespoints"));
   CHECK_THAT(*steps1, Catch::Contains("accepted steps"));
@@ -128,7 +128,8 @@ TEST_CASE("work-precision plots: one panel per group without the integrator, a l
   const auto plain = work_precision_study(false);
   const auto plain_trials = plain.trials();
   const auto plain_results = made_up_results(plain, plain_trials);
-  const RunRecord plain_run{plain, plain_trials, plain_results, rates, 2, 0.0, "2026-01-01T00:00:00Z"};
+  const RunRecord plain_run{plain, plain_trials, plain_results,         rates,
+                            2,     0.0,          "2026-01-01T00:00:00Z"};
   for (const auto& [stem, script] : plot_scripts(plain_run).scripts)
     CHECK_FALSE(stem.starts_with("work_precision_"));
 

@@ -126,6 +126,11 @@ class Check {
 
   pipeline::PipelineOutcome run_one(const CheckedStudy& checked) {
     executor_.agree_on(checked.study, checked.trials);
+    // Before any trial: an output folder that cannot be written is exit 2, naming it.
+    if (executor_.is_root() && !arguments_.out_dir.empty()) {
+      prepare_output_directory(output_directory(checked));
+      if (arguments_.plots) prepare_output_directory(output_directory(checked) / "plots");
+    }
     const int threads = arguments_.threads > 0 ? arguments_.threads : executor_.default_threads();
     if (!quiet())
       std::cerr << fmt::format("rkhs-study check: {}{}: {}, {}\n", checked.study.name, tier_text_,
@@ -169,20 +174,34 @@ class Check {
 
   // What `run --out` writes, with the verdicts in summary.json and report.html: into --out,
   // or --out/<study name> when several studies are checked.
-  void write_outputs_of(const CheckedStudy& checked, const pipeline::CompletedRun& run) const {
-    const auto directory = studies_.size() > 1
-                               ? std::filesystem::path(arguments_.out_dir) / checked.study.name
+  std::filesystem::path output_directory(const CheckedStudy& checked) const {
+    return studies_.size() > 1 ? std::filesystem::path(arguments_.out_dir) / checked.study.name
                                : std::filesystem::path(arguments_.out_dir);
+  }
+
+  void write_outputs_of(const CheckedStudy& checked, const pipeline::CompletedRun& run) const {
+    const auto directory = output_directory(checked);
     auto record = run.record();
     record.tier = arguments_.tier;
     record.verdicts = &checked.outcomes;
     record.deselected = checked.deselected;
-    write_outputs(record, directory);
-    const std::size_t plots = arguments_.plots ? render_plots(record, directory, quiet()) : 0;
-    write_file_atomically(
-        directory / "report.html",
-        html_report(record, arguments_.plots ? directory / "plots" : std::filesystem::path(),
-                    &checked.outcomes));
+    // INCOMPLETE first, removed after the last file: a write that fails part-way leaves it.
+    mark_outputs_incomplete(record, directory, output_file_names(record, true, arguments_.plots));
+    std::size_t plots = 0;
+    try {
+      write_outputs(record, directory);
+      plots = arguments_.plots ? render_plots(record, directory, quiet()) : 0;
+      write_file_atomically(
+          directory / "report.html",
+          html_report(record, arguments_.plots ? directory / "plots" : std::filesystem::path(),
+                      &checked.outcomes));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(fmt::format(
+          "{}; the outputs in {} may now be partly this run's and partly an earlier run's: {} "
+          "says so and lists them",
+          e.what(), directory.string(), (directory / incomplete_marker).string()));
+    }
+    mark_outputs_complete(directory);
     if (!quiet())
       std::cerr << fmt::format("  wrote {}/trials.csv, rates.csv, summary.json, report.html{}\n",
                                directory.string(),

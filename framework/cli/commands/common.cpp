@@ -4,12 +4,12 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
-
 #include <atomic>
 #include <csignal>
 #include <iostream>
 
 #include "commands/commands.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/report/plots.hpp"
 
 namespace rkhs::cli {
@@ -35,21 +35,22 @@ std::string computed_metrics_text(const StudyDefinition& study) {
   const auto computed = study.computed_metric_names();
   const auto total = study.all_metrics().size();
   if (computed.size() == total)
-    return fmt::format("metrics computed: all {} of an {} trial", total, study_kind_name(study.kind));
+    return fmt::format("metrics computed: all {} of an {} trial", total,
+                       study_kind_name(study.kind));
   std::vector<std::string> extra;
   for (const auto& metric : computed)
     if (std::find(study.metrics.begin(), study.metrics.end(), metric) == study.metrics.end())
       extra.push_back(metric);
-  const std::string why =
-      extra.empty() ? std::string()
-                    : fmt::format("; {} for {}", fmt::join(extra, ", "),
-                                  fmt::join(study.computed_metric_reasons(), " and "));
+  const std::string why = extra.empty()
+                              ? std::string()
+                              : fmt::format("; {} for {}", fmt::join(extra, ", "),
+                                            fmt::join(study.computed_metric_reasons(), " and "));
   return fmt::format("metrics computed: {} ({} of {}{})", fmt::join(computed, ", "),
                      computed.size(), total, why);
 }
 
 void print_warnings(const StudyDefinition& study) {
-  for (const auto& warning : study.warnings) std::cerr << warning << "\n";
+  for (const auto& warning : study.warnings) std::cerr << printable(warning, true) << "\n";
 }
 
 void stop_on_signals(RunOptions& options) {
@@ -95,9 +96,9 @@ void print_run_sources(const pipeline::PipelineOutcome& outcome,
   if (!ranks.empty()) {
     std::string per_rank;
     for (std::size_t r = 0; r < ranks.size(); ++r)
-      per_rank += fmt::format("{}rank {} ({}, {} thread{}): {}{}", r ? "; " : "", r,
-                              ranks[r].host, ranks[r].threads, ranks[r].threads == 1 ? "" : "s",
-                              ranks[r].trials, ranks[r].lost ? " (lost)" : "");
+      per_rank += fmt::format("{}rank {} ({}, {} thread{}): {}{}", r ? "; " : "", r, ranks[r].host,
+                              ranks[r].threads, ranks[r].threads == 1 ? "" : "s", ranks[r].trials,
+                              ranks[r].lost ? " (lost)" : "");
     std::cerr << fmt::format("  trials run per MPI rank: {}\n", per_rank);
   }
   if (outcome.completed && !outcome.store_file.empty())
@@ -115,10 +116,10 @@ std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bo
       for (const auto& note : outcome.notes) std::cerr << "  note: " << note << "\n";
     }
     for (const auto& failure : outcome.failures)
-      std::cerr << "rkhs-study: warning: plot not rendered: " << failure << "\n";
+      std::cerr << "rkhs-study: warning: plot not rendered: " << printable(failure, true) << "\n";
     return outcome.rendered.size();
   } catch (const std::exception& e) {
-    std::cerr << "rkhs-study: warning: no plots: " << e.what() << "\n";
+    std::cerr << "rkhs-study: warning: no plots: " << printable(e.what(), true) << "\n";
     return 0;
   }
 }

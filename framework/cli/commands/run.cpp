@@ -12,6 +12,7 @@
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
 #include "progress.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/pipeline/journal.hpp"
 #include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
@@ -81,14 +82,15 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
 
   std::optional<pipeline::Journal> journal;
   if (root) {
-    std::filesystem::create_directories(out_dir);
+    // Before any trial: an output folder that cannot be written is exit 2, naming it.
+    prepare_output_directory(out_dir);
+    if (arguments.plots) prepare_output_directory(std::filesystem::path(out_dir) / "plots");
     journal.emplace(std::filesystem::path(out_dir) / "journal.csv", study);
   }
   if (!quiet)
     std::cerr << fmt::format("rkhs-study: {} ({}, {}{}) -> {}\n", study.name,
                              counted(trials.size(), "trial", "trials"),
-                             counted(thread_count, "thread", "threads"), executor.where(),
-                             out_dir)
+                             counted(thread_count, "thread", "threads"), executor.where(), out_dir)
               << "  " << computed_metrics_text(study) << "\n";
   std::optional<Progress> progress;
   if (!quiet) progress.emplace(std::cerr, isatty(STDERR_FILENO) != 0);
@@ -105,7 +107,8 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
     if (journal) journal->record(trial, result);
     if (!progress) return;
     if (!result.ok)
-      progress->message(fmt::format("  trial failed: {}: {}", trial.key, result.reason));
+      progress->message(
+          fmt::format("  trial failed: {}: {}", printable(trial.key), printable(result.reason)));
     progress->trial_finished(trial.index, result.ok);
   };
   const auto outcome = pipeline::run_study(executor, study, trials, options, arguments.store);
@@ -121,23 +124,33 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   const auto verdicts = verify_expectations(study, trials, run.stored.results, run.rates);
   auto record = run.record();
   record.verdicts = &verdicts;
-  write_outputs(record, out_dir);
-  journal->remove();
-  const std::size_t plot_count = arguments.plots ? render_plots(record, out_dir, quiet) : 0;
-  // Without plots this run, the page embeds none (not those an earlier run left in plots/).
-  write_file_atomically(std::filesystem::path(out_dir) / "report.html",
-                        html_report(record,
-                                    arguments.plots ? std::filesystem::path(out_dir) / "plots"
-                                                    : std::filesystem::path(),
-                                    &verdicts));
+  // INCOMPLETE first, removed after the last file: a write that fails part-way leaves it.
+  mark_outputs_incomplete(record, out_dir, output_file_names(record, true, arguments.plots));
+  std::size_t plot_count = 0;
+  try {
+    write_outputs(record, out_dir);
+    journal->remove();
+    plot_count = arguments.plots ? render_plots(record, out_dir, quiet) : 0;
+    // Without plots this run, the page embeds none (not those an earlier run left in plots/).
+    write_file_atomically(std::filesystem::path(out_dir) / "report.html",
+                          html_report(record,
+                                      arguments.plots ? std::filesystem::path(out_dir) / "plots"
+                                                      : std::filesystem::path(),
+                                      &verdicts));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format(
+        "{}; the outputs in {} may now be partly this run's and partly an earlier run's: {} "
+        "says so and lists them",
+        e.what(), out_dir, (std::filesystem::path(out_dir) / incomplete_marker).string()));
+  }
+  mark_outputs_complete(out_dir);
 
   if (!quiet) std::cout << console_tables(record);
   std::cout << fmt::format(
       "{}: {}, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, rates.csv, summary.json, "
       "rates.md, rates.tex, report.html{}\n",
-      study.name, counted(trials.size(), "trial", "trials"), trials.size() - run.failed,
-      run.failed, run.seconds, out_dir,
-      plot_count ? fmt::format(", plots/ ({} plots)", plot_count) : "");
+      study.name, counted(trials.size(), "trial", "trials"), trials.size() - run.failed, run.failed,
+      run.seconds, out_dir, plot_count ? fmt::format(", plots/ ({} plots)", plot_count) : "");
   return run.failed ? exit_failed_trials : exit_ok;
 }
 

@@ -7,6 +7,7 @@
 
 #include "commands/commands.hpp"
 #include "rkhs/core/data_root.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/distributed.hpp"
 #include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
@@ -20,7 +21,8 @@ namespace {
 // broken, nothing can be trusted.
 bool registries_sound() {
   if (const auto errors = registration_errors(); !errors.empty()) {
-    for (const auto& e : errors) std::cerr << "rkhs-study: plugin registration error: " << e << "\n";
+    for (const auto& e : errors)
+      std::cerr << "rkhs-study: plugin registration error: " << e << "\n";
     return false;
   }
   if (const auto missing = missing_builtin_plugins(); !missing.empty()) {
@@ -73,10 +75,10 @@ int run_command(const SessionOptions& options, int& argc, char**& argv,
   } catch (const distributed::QuietExit& e) {
     return e.code;
   } catch (const StudyError& e) {
-    std::cerr << e.what() << "\n";
+    std::cerr << printable(e.what(), true) << "\n";
     return exit_bad_input;
   } catch (const std::exception& e) {
-    std::cerr << "rkhs-study: " << e.what() << "\n";
+    std::cerr << "rkhs-study: " << printable(e.what(), true) << "\n";
     return exit_bad_input;
   }
 }

@@ -6,6 +6,8 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "rkhs/core/printable.hpp"
+
 namespace rkhs {
 namespace {
 
@@ -41,14 +43,30 @@ DataRoot data_root() {
   return {std::filesystem::absolute("studies/data").lexically_normal(), "default"};
 }
 
+bool leaves_data_root(std::string_view name) {
+  const std::filesystem::path given{std::string(name)};
+  if (given.is_absolute()) return false;
+  const auto normal = given.lexically_normal();
+  return !normal.empty() && *normal.begin() == "..";
+}
+
+std::string data_root_escape_message(std::string_view name) {
+  return fmt::format(
+      "data file '{}' leaves the data root through '..': a relative data path names a file "
+      "below the data root (--data-dir DIR, RKHS_STUDY_DATA or studies/data/); give a file "
+      "outside it by its absolute path",
+      printable(name));
+}
+
 std::filesystem::path resolve_data_file(const std::string& name) {
   if (name.empty()) throw std::invalid_argument("no data file given (file = \"...\")");
+  if (leaves_data_root(name)) throw std::invalid_argument(data_root_escape_message(name));
   const std::filesystem::path given(name);
   std::error_code error;
   if (given.is_absolute()) {
     if (std::filesystem::is_regular_file(given, error)) return given;
-    throw std::invalid_argument(
-        fmt::format("data file '{}' not found (looked at {})", name, given.string()));
+    throw std::invalid_argument(fmt::format("data file '{}' not found (looked at {})",
+                                            printable(name), printable(given.string())));
   }
   const auto root = data_root();
   const auto path = (root.directory / given).lexically_normal();
@@ -59,7 +77,7 @@ std::filesystem::path resolve_data_file(const std::string& name) {
   throw std::invalid_argument(fmt::format(
       "data file '{}' not found (looked at {}, in {}{}; set the data root with --data-dir DIR or "
       "RKHS_STUDY_DATA)",
-      name, path.string(), origin,
+      printable(name), printable(path.string()), origin,
       std::filesystem::is_directory(root.directory, error) ? "" : ", which does not exist"));
 }
 

@@ -18,6 +18,7 @@
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/core/printable.hpp"
 
 namespace rkhs {
 
@@ -237,8 +238,8 @@ std::string rates_csv(const RunRecord& run) {
       auto row = row_start("corrected_fit", RateModel::power_law, n_of(fit.used.front()),
                            n_of(fit.used.back()));
       row.push_back(std::to_string(fit.points));
-      for (double v : {fit.rate, fit.std_error, fit.ci_low, fit.ci_high, fit.r_squared,
-                       corrected->advantage})
+      for (double v :
+           {fit.rate, fit.std_error, fit.ci_low, fit.ci_high, fit.r_squared, corrected->advantage})
         row.push_back(csv_number(v));
       row.push_back(fmt::format(
           "C x^p (1 + D t^-q) with q = {:.3g}, D = {:.3g} at n = {}; {}", corrected->order,
@@ -559,6 +560,63 @@ void write_file_atomically(const std::filesystem::path& file, const std::string&
   if (::close(fd) != 0) fail("close", errno, false);
   if (::rename(temporary.c_str(), file.c_str()) != 0) fail("rename", errno, false);
   sync_directory(file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
+}
+
+void prepare_output_directory(const std::filesystem::path& directory) {
+  const auto fail = [&](const std::string& why) {
+    throw std::runtime_error(
+        fmt::format("cannot write the output folder {}: {} (choose another with --out DIR)",
+                    printable(directory.string()), why));
+  };
+  std::error_code error;
+  std::filesystem::create_directories(directory, error);
+  if (error) fail("cannot create it: " + error.message());
+  if (!std::filesystem::is_directory(directory, error)) fail("it is not a folder");
+  // Writable: a probe file created, written and removed (permissions alone do not say: a
+  // read-only file system, an ACL, root on a file system that maps it to nobody).
+  const auto probe = directory / fmt::format(".rkhs-study-probe.{}", static_cast<long>(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) fail(fmt::format("cannot create a file in it: {}", std::strerror(errno)));
+  const bool written = ::write(fd, "x", 1) == 1;
+  const int saved = errno;
+  ::close(fd);
+  ::unlink(probe.c_str());
+  if (!written) fail(fmt::format("cannot write a file in it: {}", std::strerror(saved)));
+}
+
+std::vector<std::string> output_file_names(const RunRecord& run, bool with_report,
+                                           bool with_plots) {
+  std::vector<std::string> names{"trials.csv", "rates.csv", "summary.json", "rates.md",
+                                 "rates.tex"};
+  if (run.study.kind == StudyKind::adaptive) {
+    names.push_back("estimates.csv");
+    names.push_back("timeseries.csv");
+  }
+  if (with_plots) names.push_back("plots/");
+  if (with_report) names.push_back("report.html");
+  return names;
+}
+
+void mark_outputs_incomplete(const RunRecord& run, const std::filesystem::path& directory,
+                             const std::vector<std::string>& files) {
+  std::string text = fmt::format(
+      "INCOMPLETE: the outputs in this folder are not those of one run.\n"
+      "The run of study '{}' started {} was writing them and stopped before it had written all\n"
+      "(a failed write: a full disk, a quota, an I/O error; or the process was killed). Of the\n"
+      "files below, some may be this run's and some an earlier run's. Run the study again into\n"
+      "this folder (stored trials are reused): the run that writes them all removes this file.\n"
+      "\nfiles that may be stale:\n",
+      printable(run.study.name), run.started);
+  for (const auto& file : files) text += "  " + file + "\n";
+  write_file_atomically(directory / incomplete_marker, text);
+}
+
+void mark_outputs_complete(const std::filesystem::path& directory) {
+  std::error_code error;
+  std::filesystem::remove(directory / incomplete_marker, error);
+  if (error)
+    throw std::runtime_error(fmt::format(
+        "cannot remove {}: {}", (directory / incomplete_marker).string(), error.message()));
 }
 
 void write_outputs(const RunRecord& run, const std::filesystem::path& directory) {

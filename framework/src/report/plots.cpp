@@ -1,16 +1,22 @@
 #include "rkhs/report/plots.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <variant>
 
+#include "rkhs/core/printable.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/rates/theory.hpp"
 
@@ -18,19 +24,48 @@ namespace rkhs {
 
 namespace {
 
-// A gnuplot string literal of `text`, shown as written: every text command and key using it
-// says `noenhanced`, so '_' and '^' are not sub- and superscripts.
+// A gnuplot string expression showing `text` as written: every text command and key using it
+// says `noenhanced`, so '_' and '^' are not sub- and superscripts. Text from a study file is
+// never given to gnuplot as it stands: gnuplot runs `backquoted` commands and expands @macros in
+// double-quoted strings (and in the bare command line), so the text goes into single-quoted
+// strings, where gnuplot substitutes and escapes nothing and a quote is written twice. Line
+// breaks join the lines' strings with "\n" ('a'."\n".'b'); other control characters and bytes
+// that are not UTF-8 become '?' (a terminal or SVG would otherwise receive them).
 std::string gp_text(std::string_view text) {
-  std::string out = "\"";
-  for (char c : text) {
+  std::string out = "'";
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
     if (c == '\n') {
-      out += "\\n";
+      out += "'.\"\\n\".'";
+      ++i;
       continue;
     }
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+    if (c == '\t') {
+      out += ' ';
+      ++i;
+      continue;
+    }
+    if (c < 0x20 || c == 0x7f) {
+      out += '?';
+      ++i;
+      continue;
+    }
+    if (c < 0x80) {
+      out += c == '\'' ? std::string("''") : std::string(1, static_cast<char>(c));
+      ++i;
+      continue;
+    }
+    const std::size_t length = utf8_sequence_length(text.substr(i));
+    if (length == 0 || (length == 2 && c == 0xc2 &&
+                        static_cast<unsigned char>(text[i + 1]) < 0xa0)) {  // or a C1 control
+      out += '?';
+      i += length == 0 ? 1 : 2;
+      continue;
+    }
+    out += text.substr(i, length);
+    i += length;
   }
-  return out + "\"";
+  return out + "'";
 }
 
 // `items` joined by `separator`, broken into lines of about `width` characters (gnuplot does
@@ -999,30 +1034,95 @@ std::string gnuplot_message(const std::filesystem::path& log) {
   return message.empty() ? "gnuplot exited with an error and said nothing" : message;
 }
 
-// A path as a single-quoted shell word.
-std::string shell_word(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
+// The file gnuplot is run from: the first executable `gnuplot` on PATH, or nothing.
+std::optional<std::filesystem::path> find_gnuplot() {
+  const char* path = std::getenv("PATH");
+  std::string_view rest = path && *path ? path : "/usr/local/bin:/usr/bin:/bin";
+  while (true) {
+    const auto colon = rest.find(':');
+    const std::string directory(rest.substr(0, colon));
+    const auto candidate = std::filesystem::path(directory.empty() ? "." : directory) / "gnuplot";
+    if (::access(candidate.c_str(), X_OK) == 0 && !std::filesystem::is_directory(candidate))
+      return candidate;
+    if (colon == std::string_view::npos) return std::nullopt;
+    rest.remove_prefix(colon + 1);
+  }
+}
+
+// Runs `gnuplot <script>` in `folder` with its standard error to `log` (standard input and
+// output /dev/null), directly (fork and exec: no shell sees a name); true when it exits with 0.
+bool run_gnuplot(const std::filesystem::path& gnuplot, const std::filesystem::path& folder,
+                 const std::string& script, const std::string& log) {
+  const std::string program = gnuplot.string();
+  const pid_t child = ::fork();
+  if (child < 0) return false;
+  if (child == 0) {
+    // Only async-signal-safe calls from here on.
+    if (::chdir(folder.c_str()) != 0) ::_exit(127);
+    const int null = ::open("/dev/null", O_RDWR);
+    const int err = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (null < 0 || err < 0) ::_exit(127);
+    ::dup2(null, STDIN_FILENO);
+    ::dup2(null, STDOUT_FILENO);
+    ::dup2(err, STDERR_FILENO);
+    char* const argv[] = {const_cast<char*>("gnuplot"), const_cast<char*>(script.c_str()), nullptr};
+    ::execv(program.c_str(), argv);
+    ::_exit(127);
+  }
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0)
+    if (errno != EINTR) return false;
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
 constexpr const char* plot_extensions[] = {".svg", ".png", ".pdf"};
+constexpr const char* manifest_name = ".rkhs-study-manifest";
+constexpr std::string_view manifest_heading =
+    "# rkhs-study: the files a run wrote in this folder; the next run removes these (and only "
+    "these) before it writes its own\n";
+
+// The names the manifest in `folder` lists: plain file names in the folder, no paths (a line
+// that is not one is ignored).
+std::vector<std::string> manifest_entries(const std::filesystem::path& folder) {
+  std::ifstream in(folder / manifest_name);
+  std::vector<std::string> names;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line.front() == '#' || line == "." || line == ".." ||
+        line.find('/') != std::string::npos || line.find('\0') != std::string::npos ||
+        line == manifest_name)
+      continue;
+    names.push_back(line);
+  }
+  return names;
+}
 }  // namespace
 
 PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory) {
   const auto folder = directory / "plots";
   std::filesystem::create_directories(folder);
   // The folder shows this run only: plots of an earlier run into the same directory (a metric
-  // no longer plotted, a plot that fails now) must not be taken for this one's.
-  for (const auto& entry : std::filesystem::directory_iterator(folder))
-    for (const char* extension : {".gp", ".svg", ".png", ".pdf", ".log"})
-      if (entry.is_regular_file() && entry.path().extension() == extension)
-        std::filesystem::remove(entry.path());
+  // no longer plotted, a plot that fails now) must not be taken for this one's. Only the files
+  // an earlier run listed in the manifest are removed: a file of the user's own stays.
+  for (const auto& name : manifest_entries(folder)) {
+    std::error_code error;
+    const auto file = folder / name;
+    if (std::filesystem::is_regular_file(std::filesystem::symlink_status(file, error)))
+      std::filesystem::remove(file, error);
+  }
   auto plan = plot_scripts(run);
   PlotOutcome outcome;
   outcome.notes = std::move(plan.notes);
+  // Every file this run may write, listed before it writes any (a run that stops part-way
+  // leaves a manifest that still names them).
+  std::string manifest(manifest_heading);
+  for (const auto& [stem, script] : plan.scripts)
+    for (const char* extension : {".gp", ".svg", ".png", ".pdf", ".log"})
+      manifest += stem + extension + "\n";
+  write_file_atomically(folder / manifest_name, manifest);
   if (plan.scripts.empty()) return outcome;
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+  const auto gnuplot = find_gnuplot();
+  if (!gnuplot) {
     outcome.failures.push_back(
         "gnuplot is not installed (not found on PATH): no plot was rendered (Debian: apt-get "
         "install gnuplot-nox; or run with --no-plots)");
@@ -1039,9 +1139,7 @@ PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& direc
     }
     // In the plots folder: the script names its outputs without a path, so it is the same
     // wherever the run wrote it.
-    const auto command = fmt::format("cd {} && gnuplot {} 2> {}", shell_word(folder.string()),
-                                     shell_word(stem + ".gp"), shell_word(stem + ".log"));
-    if (std::system(command.c_str()) != 0) {
+    if (!run_gnuplot(*gnuplot, folder, stem + ".gp", stem + ".log")) {
       outcome.failures.push_back(fmt::format("{}: {}", gp.string(), gnuplot_message(log)));
       for (const char* extension : plot_extensions)  // half-written images are not plots
         std::filesystem::remove(folder / (stem + extension));

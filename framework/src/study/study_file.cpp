@@ -1,9 +1,8 @@
 // Study files read into a StudyDefinition (docs/study-files.md): every section, its keys and
 // values checked, plugin names and parameters resolved against the registries.
-#include "rkhs/study/study.hpp"
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,19 +13,20 @@
 #include <numbers>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
-#include "rkhs/approx/approximation.hpp"
-#include "rkhs/approx/centres.hpp"
-#include "rkhs/approx/projection.hpp"
-#include "rkhs/kernel/kernel.hpp"
+#include "expectation_parser.hpp"
 #include "rkhs/adaptive/lyapunov.hpp"
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/adaptive/state_dependent.hpp"
-#include "rkhs/plugin/plugin_loader.hpp"
-#include "rkhs/core/random.hpp"
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
-#include "expectation_parser.hpp"
+#include "rkhs/core/data_root.hpp"
+#include "rkhs/core/random.hpp"
+#include "rkhs/kernel/kernel.hpp"
+#include "rkhs/plugin/plugin_loader.hpp"
+#include "rkhs/study/study.hpp"
 #include "toml_reader.hpp"
 
 namespace rkhs {
@@ -66,8 +66,7 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
     };
     const auto from = integer("from"), to = integer("to"), step = integer("step"),
                factor = integer("factor");
-    if (!from || !to)
-      report.fail(range->source(), "grid.n", "a range needs 'from' and 'to'");
+    if (!from || !to) report.fail(range->source(), "grid.n", "a range needs 'from' and 'to'");
     if (step.has_value() == factor.has_value())
       report.fail(range->source(), "grid.n", "a range needs exactly one of 'step' or 'factor'");
     for (const char* key : {"from", "to"}) {
@@ -76,12 +75,15 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
         report.fail(range->get(key)->source(), fmt::format("grid.n.{}", key),
                     fmt::format("must be between 1 and {} (centres), found {}", max_n, value));
     }
-    if (step && *step < 1) report.fail(range->get("step")->source(), "grid.n.step",
-                                       fmt::format("must be >= 1, found {}", *step));
-    if (factor && *factor < 2) report.fail(range->get("factor")->source(), "grid.n.factor",
-                                           fmt::format("must be >= 2, found {}", *factor));
+    if (step && *step < 1)
+      report.fail(range->get("step")->source(), "grid.n.step",
+                  fmt::format("must be >= 1, found {}", *step));
+    if (factor && *factor < 2)
+      report.fail(range->get("factor")->source(), "grid.n.factor",
+                  fmt::format("must be >= 2, found {}", *factor));
     if (*to < *from)
-      report.fail(range->source(), "grid.n", fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
+      report.fail(range->source(), "grid.n",
+                  fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
     // 1 <= from <= to <= max_n: neither the count nor the values can overflow.
     if (step) {
       const std::int64_t count = (*to - *from) / *step + 1;
@@ -89,7 +91,8 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
         report.fail(range->source(), "grid.n",
                     fmt::format("{} values of n (from {} to {} in steps of {}), more than {}",
                                 count, *from, *to, *step, max_n_values));
-      for (std::int64_t i = 0; i < count; ++i) values.emplace_back(*from + i * *step, range->source());
+      for (std::int64_t i = 0; i < count; ++i)
+        values.emplace_back(*from + i * *step, range->source());
     } else {
       for (std::int64_t v = *from;; v *= *factor) {
         values.emplace_back(v, range->source());
@@ -126,11 +129,11 @@ std::uint64_t saturating_product(std::uint64_t a, std::uint64_t b) {
 }
 
 struct GridFactor {
-  std::string text;            // "60 kernels ([[kernel]] 'gaussian' at line 8: sigma 10 x nu 6)"
-  std::uint64_t count = 1;     // of this axis
-  std::uint64_t largest = 0;   // of its largest entry (or list)
-  toml::source_region where;   // of that entry
-  std::string key;             // of that entry: "kernel", "grid.n", "adaptive.laps"
+  std::string text;           // "60 kernels ([[kernel]] 'gaussian' at line 8: sigma 10 x nu 6)"
+  std::uint64_t count = 1;    // of this axis
+  std::uint64_t largest = 0;  // of its largest entry (or list)
+  toml::source_region where;  // of that entry
+  std::string key;            // of that entry: "kernel", "grid.n", "adaptive.laps"
 };
 
 // `[[section]]` entries: how many choices they expand to, without expanding them.
@@ -185,10 +188,10 @@ GridFactor count_plugin_axis(const toml::table& root, std::string_view section,
 // list that contributes most, naming the product and the lists that multiply to it.
 void check_grid_size(const Reporter& report, const toml::table& root, StudyKind kind,
                      std::size_t n_count, const toml::node& n_node, std::uint64_t cap) {
-  std::vector<GridFactor> factors{count_plugin_axis(root, "kernel", "kernel", "kernels"),
-                                  count_plugin_axis(root, "target", "target", "targets"),
-                                  count_plugin_axis(root, "centres", "centre placement",
-                                                    "centre placements")};
+  std::vector<GridFactor> factors{
+      count_plugin_axis(root, "kernel", "kernel", "kernels"),
+      count_plugin_axis(root, "target", "target", "targets"),
+      count_plugin_axis(root, "centres", "centre placement", "centre placements")};
   if (root.get("projection"))
     factors.push_back(count_plugin_axis(root, "projection", "projection", "projections"));
   if (kind == StudyKind::adaptive) {
@@ -196,11 +199,12 @@ void check_grid_size(const Reporter& report, const toml::table& root, StudyKind 
     factors.push_back(count_plugin_axis(root, "law", "learning law", "learning laws"));
     factors.push_back(count_plugin_axis(root, "integrator", "integrator", "integrators"));
     const auto* adaptive = root.get("adaptive");
-    const auto* laps = adaptive && adaptive->as_table() ? adaptive->as_table()->get("laps") : nullptr;
+    const auto* laps =
+        adaptive && adaptive->as_table() ? adaptive->as_table()->get("laps") : nullptr;
     if (laps && laps->as_array() && laps->as_array()->size() > 1) {
       const auto count = laps->as_array()->size();
-      factors.push_back({fmt::format("{} values of laps", count), count, count, laps->source(),
-                         "adaptive.laps"});
+      factors.push_back(
+          {fmt::format("{} values of laps", count), count, count, laps->source(), "adaptive.laps"});
     }
   }
   factors.push_back({fmt::format("{} value{} of n", n_count, n_count == 1 ? "" : "s"), n_count,
@@ -271,6 +275,12 @@ PluginChoice resolve_choice(const Reporter& report, std::string_view section,
   std::map<std::string, ParameterValue> given;
   for (std::size_t a = 0; a < entry.axes.size(); ++a)
     given[entry.axes[a].name] = entry.axes[a].values[at[a]].first;
+  // A data file (a text parameter `file`) names a file below the data root, or an absolute
+  // path: a relative path that climbs out of the root through ".." is refused here, at its key.
+  if (const auto it = given.find("file"); it != given.end())
+    if (const auto* path = std::get_if<std::string>(&it->second); path && leaves_data_root(*path))
+      report.fail(parameter_location(entry, at, "file"), fmt::format("{}.file", section),
+                  data_root_escape_message(*path));
   try {
     return {entry.name, ParameterSet::resolve(*entry.specs, given, entry.user_parameters),
             entry.tiers};
@@ -394,8 +404,8 @@ PluginEntry read_plugin_entry(const Reporter& report, const toml::table& table,
 }
 
 // Every combination of an entry's lists, the first parameter varying slowest.
-void expand_plugin_entry(const Reporter& report, std::string_view section,
-                         const PluginEntry& entry, std::vector<PluginChoice>& out) {
+void expand_plugin_entry(const Reporter& report, std::string_view section, const PluginEntry& entry,
+                         std::vector<PluginChoice>& out) {
   for_each_combination(entry, [&](const std::vector<std::size_t>& at) {
     out.push_back(resolve_choice(report, section, entry, at));
   });
@@ -461,10 +471,9 @@ std::vector<PluginChoice> expand_plugins(const Reporter& report, const PluginAxi
 
 // One lap count of [adaptive] laps: a finite number > 0, or "limit" (+infinity).
 double parse_lap_count(const Reporter& report, const toml::node& node, bool in_list) {
-  const auto allowed = in_list
-                           ? "a lap count > 0 or \"limit\" (the periodic steady state)"
-                           : "a lap count > 0, \"limit\" (the periodic steady state) or an "
-                             "array of them";
+  const auto allowed = in_list ? "a lap count > 0 or \"limit\" (the periodic steady state)"
+                               : "a lap count > 0, \"limit\" (the periodic steady state) or an "
+                                 "array of them";
   if (const auto* text = node.as_string()) {
     if (text->get() != "limit")
       report.fail(node.source(), "adaptive.laps",
@@ -557,7 +566,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   AdaptiveSettings& settings = section.settings;
   const auto* table = optional_table(report, root, "adaptive");
   if (!table)
-    report.fail({}, "adaptive", "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
+    report.fail({}, "adaptive",
+                "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
   check_keys(report, *table, "adaptive.",
              {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
               "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol", "reference", "path"});
@@ -595,8 +605,10 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   else
     report.fail(table->get("engine")->source(), "adaptive.engine",
                 fmt::format("unknown engine \"{}\" {}", engine, with_suggestion(engine, engines)));
-  settings.lap_map_rtol = get_number(report, *table, "lap_map_rtol", "adaptive.", settings.lap_map_rtol, 0);
-  settings.lap_map_atol = get_number(report, *table, "lap_map_atol", "adaptive.", settings.lap_map_atol, 0);
+  settings.lap_map_rtol =
+      get_number(report, *table, "lap_map_rtol", "adaptive.", settings.lap_map_rtol, 0);
+  settings.lap_map_atol =
+      get_number(report, *table, "lap_map_atol", "adaptive.", settings.lap_map_atol, 0);
 
   // laps = 10 | "limit" | [10, 100, "limit"] (a list is an axis of the grid).
   const auto* laps_node = table->get("laps");
@@ -604,8 +616,10 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   if (!laps_node) {
     lap_counts.emplace_back(settings.laps, nullptr);
   } else if (const auto* array = laps_node->as_array()) {
-    if (array->empty()) report.fail(laps_node->source(), "adaptive.laps", "empty list of lap counts");
-    for (const auto& item : *array) lap_counts.emplace_back(parse_lap_count(report, item, true), &item);
+    if (array->empty())
+      report.fail(laps_node->source(), "adaptive.laps", "empty list of lap counts");
+    for (const auto& item : *array)
+      lap_counts.emplace_back(parse_lap_count(report, item, true), &item);
     std::stable_sort(lap_counts.begin(), lap_counts.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     for (std::size_t i = 1; i < lap_counts.size(); ++i)
@@ -632,7 +646,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
       report.fail(node->source(), "adaptive.laps",
                   "found \"limit\" with engine = \"time_stepping\", which cannot step through "
                   "infinitely many laps; \"limit\" needs engine = \"automatic\" or \"lap_map\"");
-    if (std::isfinite(laps) && laps != std::floor(laps) && settings.engine == AdaptiveEngine::lap_map)
+    if (std::isfinite(laps) && laps != std::floor(laps) &&
+        settings.engine == AdaptiveEngine::lap_map)
       report.fail(node->source(), "adaptive.laps",
                   fmt::format("found {} with engine = \"lap_map\", which advances whole laps; "
                               "give a whole number of laps, or engine = \"automatic\" or "
@@ -672,7 +687,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   if (road != "target" && road != "projection")
     report.fail(table->get("road")->source(), "adaptive.road",
                 fmt::format("found \"{}\", expected \"target\" (f) or \"projection\" (Pi_n f, "
-                            "a road in H_n)", road));
+                            "a road in H_n)",
+                            road));
   settings.projected_road = road == "projection";
 
   // A snapshot must be within the longest finite run: the laps (the largest finite value of a
@@ -705,12 +721,14 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
       if (last_lap && lap > *last_lap * (1 + 1e-12))
         report.fail(item.source(), "adaptive.snapshot_laps",
                     fmt::format("found {}, after the end of the run ({}); snapshot laps must be "
-                                "<= {}", show(item), last_lap_text, format_real(*last_lap)));
+                                "<= {}",
+                                show(item), last_lap_text, format_real(*last_lap)));
       settings.snapshot_laps.push_back(lap);
     }
   }
   auto count = [&](std::string_view key, std::size_t fallback) {
-    const double value = get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
+    const double value =
+        get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
     if (value != std::floor(value) || value > 1e7)
       report.fail(table->get(key)->source(), fmt::format("adaptive.{}", key),
                   fmt::format("must be a whole number >= 1, found {}", format_real(value)));
@@ -757,11 +775,17 @@ namespace {
 
 // The metrics measured on the evaluation grid s_m = m L / M: sups and L2 norms over the domain.
 bool measured_on_grid(std::string_view metric) {
-  static constexpr std::string_view grid_metrics[] = {
-      "power_function_sup",   "power_function_floor",  "l2_error",          "sup_error",
-      "error_floor",          "interpolant_l2_error",  "interpolant_sup_error",
-      "gap_to_projection",    "l2_projection_l2_error", "l2_projection_sup_error",
-      "gap_to_l2_projection"};
+  static constexpr std::string_view grid_metrics[] = {"power_function_sup",
+                                                      "power_function_floor",
+                                                      "l2_error",
+                                                      "sup_error",
+                                                      "error_floor",
+                                                      "interpolant_l2_error",
+                                                      "interpolant_sup_error",
+                                                      "gap_to_projection",
+                                                      "l2_projection_l2_error",
+                                                      "l2_projection_sup_error",
+                                                      "gap_to_l2_projection"};
   return std::find(std::begin(grid_metrics), std::end(grid_metrics), metric) !=
          std::end(grid_metrics);
 }
@@ -855,7 +879,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   if (!valid_study_name(study.name))
     report.fail(header->get("name")->source(), "study.name",
                 fmt::format("'{}' is not a valid name (letters, digits, '_', '-', '.'; it names "
-                            "the output folder)", study.name));
+                            "the output folder)",
+                            study.name));
   study.description = get_string(report, *header, "description", "study.", std::string{});
   const auto kind = get_string(report, *header, "kind", "study.", std::string("approximation"));
   if (const auto known = study_kind_from_name(kind))
@@ -869,8 +894,10 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
         report.fail(node->source(), section,
                     "only for adaptive studies: add kind = \"adaptive\" to [study]");
   const auto abscissa = get_string(report, *header, "abscissa", "study.", std::string("n"));
-  if (abscissa == "n") study.abscissa = Abscissa::n;
-  else if (abscissa == "h" || abscissa == "fill_distance") study.abscissa = Abscissa::fill_distance;
+  if (abscissa == "n")
+    study.abscissa = Abscissa::n;
+  else if (abscissa == "h" || abscissa == "fill_distance")
+    study.abscissa = Abscissa::fill_distance;
   else
     report.fail(header->get("abscissa")->source(), "study.abscissa",
                 fmt::format("found \"{}\", expected \"n\" or \"h\" (fill distance)", abscissa));
@@ -894,8 +921,9 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                     fmt::format("expected a metric name, found {}", describe(item)));
       const std::string metric = item.as_string()->get();
       if (std::find(all_metrics.begin(), all_metrics.end(), metric) == all_metrics.end())
-        report.fail(item.source(), "study.metrics",
-                    fmt::format("unknown metric '{}' {}", metric, with_suggestion(metric, all_metrics)));
+        report.fail(
+            item.source(), "study.metrics",
+            fmt::format("unknown metric '{}' {}", metric, with_suggestion(metric, all_metrics)));
       chosen.insert(metric);
     }
     for (const auto& metric : all_metrics)  // output order is the canonical order
@@ -928,9 +956,9 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       const auto& item = *list->get(a);
       const auto value = item.value<double>();
       if (!item.is_number() || !value || !(*value > 0) || !std::isfinite(*value))
-        report.fail(item.source(), "domain.lengths",
-                    fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1,
-                                show(item)));
+        report.fail(
+            item.source(), "domain.lengths",
+            fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1, show(item)));
       (a == 0 ? study.domain.length : a == 1 ? study.domain.width : study.domain.height) = *value;
     }
   } else {
@@ -939,12 +967,12 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
             ? get_number(report, *domain, "length", "domain.", 0, 0)
             : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
     if (!std::isfinite(study.domain.length))  // 2 pi radius beyond the largest double
-      report.fail(domain->get("radius")->source(), "domain.radius",
-                  fmt::format("must be at most {} (the track's length, 2 pi radius, must be a "
-                              "finite number), found {}",
-                              format_real(std::numeric_limits<double>::max() /
-                                          (2 * std::numbers::pi)),
-                              show(*domain->get("radius"))));
+      report.fail(
+          domain->get("radius")->source(), "domain.radius",
+          fmt::format("must be at most {} (the track's length, 2 pi radius, must be a "
+                      "finite number), found {}",
+                      format_real(std::numeric_limits<double>::max() / (2 * std::numbers::pi)),
+                      show(*domain->get("radius"))));
   }
   study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
   // An adaptive study in d > 1 learns f of a plant's read-out of d coordinates: every plant
@@ -960,9 +988,10 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   std::uint64_t max_trials = default_max_trials;
   if (const auto* limits = optional_table(report, root, "limits")) {
     check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes", "trials"});
-    study.limits.trial_seconds = get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
-    study.limits.matrix_megabytes =
-        get_number(report, *limits, "matrix_megabytes", "limits.", study.limits.matrix_megabytes, 0);
+    study.limits.trial_seconds =
+        get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
+    study.limits.matrix_megabytes = get_number(report, *limits, "matrix_megabytes", "limits.",
+                                               study.limits.matrix_megabytes, 0);
     const double trials =
         get_number(report, *limits, "trials", "limits.", static_cast<double>(max_trials), 0);
     if (trials != std::floor(trials) || trials > 1e15)
@@ -981,15 +1010,17 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       read_plugins(report, root, "target", target_registry(), std::string("sine")),
       read_plugins(report, root, "centres", centre_registry(), std::string("uniform"))};
   if (study.kind == StudyKind::adaptive) {
-    axes.push_back(read_plugins(report, root, "plant", plant_registry(), std::string("quarter_car")));
-    axes.push_back(read_plugins(report, root, "law", law_registry(), std::string("rkhs")));
     axes.push_back(
-        read_plugins(report, root, "integrator", integrator_registry(), std::string("rosenbrock4")));
+        read_plugins(report, root, "plant", plant_registry(), std::string("quarter_car")));
+    axes.push_back(read_plugins(report, root, "law", law_registry(), std::string("rkhs")));
+    axes.push_back(read_plugins(report, root, "integrator", integrator_registry(),
+                                std::string("rosenbrock4")));
     auto adaptive = parse_adaptive(report, root, study.domain.length);
     study.adaptive = std::move(adaptive.settings);
     study.laps_values = std::move(adaptive.laps_values);
     study.reference = std::move(adaptive.reference);
-    if (study.adaptive.snapshot_points == 0) study.adaptive.snapshot_points = study.evaluation_points;
+    if (study.adaptive.snapshot_points == 0)
+      study.adaptive.snapshot_points = study.evaluation_points;
   }
   // [[projection]]: an axis only when the file has the section (a study without one projects
   // by interpolation at the centres, and its keys say nothing about projections).
@@ -1001,15 +1032,21 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
 
   if (const auto* solver = optional_table(report, root, "solver")) {
     check_keys(report, *solver, "solver.", {"singular", "regularisation"});
-    const auto policy = get_string(report, *solver, "singular", "solver.", std::string("pseudo_inverse"));
-    if (policy == "pseudo_inverse") study.solver.singular = SingularPolicy::pseudo_inverse;
-    else if (policy == "regularised") study.solver.singular = SingularPolicy::regularised;
-    else if (policy == "fail") study.solver.singular = SingularPolicy::fail;
+    const auto policy =
+        get_string(report, *solver, "singular", "solver.", std::string("pseudo_inverse"));
+    if (policy == "pseudo_inverse")
+      study.solver.singular = SingularPolicy::pseudo_inverse;
+    else if (policy == "regularised")
+      study.solver.singular = SingularPolicy::regularised;
+    else if (policy == "fail")
+      study.solver.singular = SingularPolicy::fail;
     else
-      report.fail(solver->get("singular")->source(), "solver.singular",
-                  fmt::format("found \"{}\", expected \"pseudo_inverse\", \"regularised\" or \"fail\"",
-                              policy));
-    study.solver.regularisation = get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
+      report.fail(
+          solver->get("singular")->source(), "solver.singular",
+          fmt::format("found \"{}\", expected \"pseudo_inverse\", \"regularised\" or \"fail\"",
+                      policy));
+    study.solver.regularisation =
+        get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
   }
 
   if (const auto* rates = optional_table(report, root, "rates")) {
@@ -1085,9 +1122,9 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     for (const auto& k : study.kernels) {
       const auto kernel = kernel_registry().find(k.name)->factory(k.parameters, study.domain);
       if (!properties.requires_kernel.empty() && kernel->name() != properties.requires_kernel)
-        throw std::invalid_argument(fmt::format(
-            "works with the {} kernel only, and the study pairs it with kernel '{}'",
-            properties.requires_kernel, k.label()));
+        throw std::invalid_argument(
+            fmt::format("works with the {} kernel only, and the study pairs it with kernel '{}'",
+                        properties.requires_kernel, k.label()));
       for (const auto n : study.n_values) {
         try {
           projection->check(*kernel, n);
@@ -1125,8 +1162,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     const auto d = plant->A().rows();
     const auto Q = parse_matrix(study.adaptive.q, d);
     if (Q.rows() != d || Q.cols() != d)
-      throw std::invalid_argument(fmt::format("adaptive.q is {} x {}, this plant needs {} x {}",
-                                              Q.rows(), Q.cols(), d, d));
+      throw std::invalid_argument(
+          fmt::format("adaptive.q is {} x {}, this plant needs {} x {}", Q.rows(), Q.cols(), d, d));
     solve_lyapunov(plant->A(), Q);
     const int dimension = study.domain.dimension;
     if (!plant->state_dependent() && dimension > 1)

@@ -5,14 +5,15 @@
 // unknown name comes with the known ones and the closest of them.
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <optional>
 #include <string>
 #include <string_view>
-#include <toml++/toml.h>
 #include <vector>
 
 #include "rkhs/core/parameters.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs::detail {
@@ -28,13 +29,16 @@ class Reporter {
   }
   const std::string& source() const { return source_; }
   /// The same position and form as fail(), for a warning.
+  /// Control characters and bytes that are not UTF-8 in the key and the message (which quote
+  /// the study file's text) are shown as escapes ("\x1b"): a message is one line, and carries
+  /// no terminal escape sequences.
   std::string locate(const toml::source_region& where, std::string_view key,
                      std::string_view message) const {
-    std::string out = source_;
+    std::string out = printable(source_);
     if (where.begin.line > 0) out += fmt::format(":{}:{}", where.begin.line, where.begin.column);
     out += ": ";
-    if (!key.empty()) out += std::string(key) + ": ";
-    return out + std::string(message);
+    if (!key.empty()) out += printable(key) + ": ";
+    return out + printable(message);
   }
 
  private:
@@ -83,8 +87,8 @@ std::optional<ParameterValue> scalar_value(const toml::node& node);
 /// checked against the study: numbers, from <= to, h_* only with abscissa = "h", `last` a whole
 /// number >= 2, and a window that holds at least 2 of the grid's n (n_from, n_to, last).
 /// Other keys are the caller's to check. `prefix` ("rates.", "expect.") qualifies keys.
-FitWindow read_fit_window(const Reporter& report, const toml::table& table,
-                          std::string_view prefix, const StudyDefinition& study);
+FitWindow read_fit_window(const Reporter& report, const toml::table& table, std::string_view prefix,
+                          const StudyDefinition& study);
 
 /// The keys read_fit_window reads.
 inline const std::vector<std::string> fit_window_keys{"n_from", "n_to", "h_from", "h_to", "last"};

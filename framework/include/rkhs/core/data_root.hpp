@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace rkhs {
 
@@ -26,9 +27,18 @@ void set_data_root(const std::filesystem::path& directory);
 /// The data root by the resolution order above.
 DataRoot data_root();
 
+/// Whether the relative path `name` leaves the data root through "..": its lexically normal form
+/// starts with ".." ("../x", "a/../../x"). An absolute path never does (it is taken as given).
+/// Lexical only: a symbolic link below the root is followed wherever it points.
+bool leaves_data_root(std::string_view name);
+
+/// The message for a `name` that leaves_data_root: what was refused and what to write instead.
+std::string data_root_escape_message(std::string_view name);
+
 /// The file `name` names: an absolute `name` as it is, a relative one below data_root().
-/// Throws std::invalid_argument when no such regular file exists; the message names `name`, the
-/// full path looked at, where the root came from and how to change it.
+/// Throws std::invalid_argument when no such regular file exists, and for a relative `name`
+/// that leaves the root through ".." (leaves_data_root); the message names `name` (control
+/// characters escaped), the full path looked at, where the root came from and how to change it.
 std::filesystem::path resolve_data_file(const std::string& name);
 
 }  // namespace rkhs

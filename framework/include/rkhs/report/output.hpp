@@ -25,7 +25,7 @@ struct RunRecord {
   const std::vector<MetricSeries>& rates;
   int threads = 1;
   double wall_seconds = 0;
-  std::string started;  ///< ISO 8601 UTC time the run started
+  std::string started;                 ///< ISO 8601 UTC time the run started
   std::vector<RankRecord> ranks = {};  ///< MPI ranks of a distributed run (empty: one process)
   std::string tier = {};  ///< the tier the run was restricted to (`check --tier`; "": none)
   /// The expectations' outcomes on this run (verify_expectations, the cases `check -k`
@@ -64,6 +64,29 @@ std::string console_tables(const RunRecord& run, std::size_t group_tables_shown 
 /// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and
 /// timeseries.csv) into `directory` (created if needed).
 void write_outputs(const RunRecord& run, const std::filesystem::path& directory);
+
+/// Makes sure, before the first trial runs, that `directory` can take a run's outputs: creates
+/// it (and its parents) when needed, and creates, writes and removes a probe file in it. Throws
+/// std::runtime_error "cannot write the output folder <dir>: <why> (choose another with --out
+/// DIR)" otherwise.
+void prepare_output_directory(const std::filesystem::path& directory);
+
+/// The marker of a folder whose outputs may be of two runs: <directory>/INCOMPLETE.
+inline constexpr const char* incomplete_marker = "INCOMPLETE";
+
+/// The files a run writes into its folder, in the order it writes them ("plots/" for the plots
+/// folder, report.html last), for the INCOMPLETE marker.
+std::vector<std::string> output_file_names(const RunRecord& run, bool with_report, bool with_plots);
+
+/// Writes <directory>/INCOMPLETE (atomically) before a run's first output file: it says that
+/// the folder's outputs may be of two runs, which run wrote it, and lists `files`. Each file is
+/// replaced atomically, but a write that fails part-way (a full disk) leaves the folder with
+/// some new and some old files: the marker stays and says so. mark_outputs_complete removes it
+/// after the last file is written. Throws (std::runtime_error) when it cannot be written: then
+/// nothing has been written over.
+void mark_outputs_incomplete(const RunRecord& run, const std::filesystem::path& directory,
+                             const std::vector<std::string>& files);
+void mark_outputs_complete(const std::filesystem::path& directory);
 
 /// Writes `content` to `file` atomically: to `<file>.tmp.<pid>.<counter>` in the same
 /// directory (created exclusively), fsync, rename over `file`, fsync of the directory. On any

@@ -63,10 +63,13 @@ struct PlotOutcome {
 };
 
 /// Writes plots/<stem>.gp and renders plots/<stem>.svg, .png and .pdf with `gnuplot` (found on
-/// PATH, run in plots/), each plot on its own, after removing the plot files (.gp, .svg, .png,
-/// .pdf, .log) an earlier run
-/// left in plots/. A failed plot keeps its script and its log (plots/<stem>.log). Throws only
-/// when the plots folder cannot be written.
+/// PATH, run in plots/ by fork and exec, never through a shell), each plot on its own. First it
+/// removes the files an earlier run listed in plots/.rkhs-study-manifest (and only those: a file
+/// of the user's own in plots/ stays), then lists in the manifest every file this run may write.
+/// Text from the study (names, labels, parameter values, file names) reaches the scripts only as
+/// single-quoted gnuplot strings (no backquote substitution, no macros, no escapes), control
+/// characters replaced. A failed plot keeps its script and its log (plots/<stem>.log). Throws
+/// only when the plots folder cannot be written.
 PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory);
 
 }  // namespace rkhs
