@@ -214,6 +214,7 @@ TEST_CASE("store merge refuses two different records of one trial unless told wh
   // A record that verifies but holds another result (resealed with the documented checksum).
   auto body = row[3].substr(0, row[3].rfind("checksum "));
   body.replace(body.find("\nmetrics ") + 9, 0, "0.125 ");
+  body.replace(body.find("\nfloors ") + 8, 0, "nan ");  // one floor per metric
   body.replace(body.find("metric_names "), 13, "metric_names extra ");
   const auto conflicting = resealed(row[0], row[1], row[2], body);
   execute(other, "UPDATE trials SET result = '" + conflicting + "' WHERE hash = '" + row[0] + "'");

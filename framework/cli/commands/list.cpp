@@ -79,7 +79,9 @@ int command_list(const std::string& kind) {
   if (all || kind == "metric" || kind == "metrics") {
     for (const auto study_kind : study_kinds) {
       std::cout << "metrics (" << study_kind_name(study_kind) << " trials):\n";
-      for (const auto& name : metric_names(study_kind)) std::cout << "  " << name << "\n";
+      for (const auto& name : metric_names(study_kind))
+        std::cout << fmt::format("  {:<28} floor: {}\n", name,
+                                 floor_rule_name(metric_floor_rule(study_kind, name)));
     }
   }
   if (const auto plugins = loaded_plugins(); all && !plugins.empty()) {

@@ -30,6 +30,7 @@ const std::vector<std::string>& adaptive_metric_names() {
 namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+constexpr double eps = std::numeric_limits<double>::epsilon();
 
 bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps < 9.2e18; }
 
@@ -207,7 +208,70 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> basis_matrix(const KernelBasis& bas
   return out;
 }
 
+// The largest sum of |basis values| at a point: how much an error of 1 in every coefficient
+// moves the estimate there.
+double evaluation_scale(const Eigen::SparseMatrix<double, Eigen::RowMajor>& values) {
+  double largest = 0;
+  for (Eigen::Index row = 0; row < values.outerSize(); ++row) {
+    double sum = 0;
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(values, row); it; ++it)
+      sum += std::abs(it.value());
+    largest = std::max(largest, sum);
+  }
+  return largest;
+}
+double evaluation_scale(const Eigen::MatrixXd& values) {
+  return values.size() ? values.cwiseAbs().rowwise().sum().maxCoeff() : 0.0;
+}
+
+
 }  // namespace
+
+void set_integration_floors(const AdaptiveSettings& settings, AdaptiveEngine engine,
+                            const Domain& domain, const Eigen::VectorXd& estimate,
+                            const Eigen::VectorXd& alpha, const Eigen::VectorXd& alpha_star,
+                            double largest_state_pair, Eigen::Index d, double basis_scale,
+                            double radius_uncertainty, AdaptiveMeasurement& out) {
+  using M = AdaptiveMetric;
+  auto& metrics = out.metrics;
+  auto& floors = out.floors;
+  const double radius = metrics[M::learning_spectral_radius];
+  if (engine == AdaptiveEngine::lap_map && radius > 0 && radius < 1) {
+    floors[M::learning_spectral_radius] = radius_uncertainty;
+    const double log_radius = std::log(radius);
+    floors[M::slowest_time_constant_laps] = radius_uncertainty / (radius * log_radius * log_radius);
+    floors[M::laps_to_limit] =
+        metrics[M::laps_to_limit] * radius_uncertainty / (radius * std::abs(log_radius));
+  }
+  // The lap map's state comes from its powers or limit, whose floors the caller measures
+  // (measure_adaptive); the integrator's tolerances give the samples' (max_state_error, V).
+  const double rtol = settings.integrator_rtol, atol = settings.integrator_atol;
+  if (!(rtol > 0 && atol >= 0 && std::isfinite(rtol) && std::isfinite(atol))) return;
+  const auto l2 = [&](const Eigen::VectorXd& v) {
+    return domain.l2_norm(std::span<const double>(v.data(), static_cast<std::size_t>(v.size())));
+  };
+  const double l2_floor = rtol * l2(estimate) + atol * basis_scale * std::sqrt(domain.volume());
+  for (const M metric : {M::l2_error, M::gap_to_projection, M::gap_to_l2_projection,
+                         M::path_l2_error, M::off_path_l2_error})
+    floors[metric] = l2_floor;
+  floors[M::sup_error] =
+      rtol * (estimate.size() ? estimate.cwiseAbs().maxCoeff() : 0.0) + atol * basis_scale;
+  floors[M::coefficient_error] =
+      (rtol * alpha.norm() + atol * std::sqrt(static_cast<double>(alpha.size()))) /
+      std::max(alpha_star.norm(), 1e-300);
+  const double state_floor = rtol * largest_state_pair + atol * std::sqrt(2.0 * static_cast<double>(d));
+  floors[M::final_state_error] = state_floor;
+  floors[M::max_state_error] = state_floor;
+  if (!out.samples.empty() && out.samples.front().lyapunov > 0) {
+    double largest = 0;
+    for (const auto& sample : out.samples) largest = std::max(largest, sample.lyapunov);
+    // V is quadratic in the state: twice its relative tolerance.
+    const double lyapunov_floor = 2 * rtol * largest / out.samples.front().lyapunov;
+    floors[M::lyapunov_ratio] = lyapunov_floor;
+    floors[M::lyapunov_max_increase] = lyapunov_floor;
+  }
+  floors[M::lap_map_residual] = rtol;
+}
 
 AdaptiveSystem::LearningSignal learning_signal_for(const AnyKernel& kernel) {
   // A feature basis applies M to its precomputed features, cheaper than M phi for a full M.
@@ -346,6 +410,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
 
   // V = 1/2 e^T P e + 1/2 Gamma (c* - c)^T W (c* - c), W = G (rkhs law) or I (gradient law, and
   // feature coordinates: there Gamma |beta* - beta|^2 = Gamma ||Pi_n f - fhat||_H^2).
+  double largest_state_pair = 0;  // max over the samples of |x| + |xhat| (the floors' scale)
   out.snapshots.resize(settings.snapshot_laps.size());
   for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
     out.snapshots[i].lap = settings.snapshot_laps[i];
@@ -356,6 +421,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     const double weighted =
         gram_inverse ? coefficient_gap.dot(gram * coefficient_gap) : coefficient_gap.squaredNorm();
     out.samples.push_back({t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
+    largest_state_pair = std::max(largest_state_pair, x.norm() + xhat.norm());
   };
   auto snapshot = [&](std::size_t index, const double* z) {
     const Eigen::Map<const Eigen::VectorXd> alpha(z + 2 * d, coefficients);
@@ -381,6 +447,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   };
 
   Eigen::VectorXd z = Eigen::VectorXd::Zero(m);
+  Eigen::VectorXd lap_map_spread;  // lap map: z from the perturbed map minus z (the floors)
   std::shared_ptr<const LapMap> lap_map;
   std::size_t reused_rhs_evaluations = 0, reused_jacobian_evaluations = 0;
   if (engine == AdaptiveEngine::time_stepping) {
@@ -467,6 +534,23 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     }
     std::sort(out.samples.begin(), out.samples.end(),
               [](const auto& a, const auto& b) { return a.t < b.t; });
+    // The floor of what the map's powers or limit give: the same state from the map perturbed
+    // by its tolerance, entry by entry with alternating signs (the spread under a perturbation
+    // of its inputs, a sample rather than a bound; 1 / (1 - rho) times the tolerance bounds it
+    // but is orders of magnitude too pessimistic along the slow learning mode).
+    LapMap perturbed = *lap_map;
+    for (Eigen::Index j = 0; j < perturbed.monodromy.cols(); ++j)
+      for (Eigen::Index i = 0; i < perturbed.monodromy.rows(); ++i)
+        perturbed.monodromy(i, j) *= 1.0 + ((i + j) % 2 ? -1.0 : 1.0) * settings.lap_map_rtol;
+    for (Eigen::Index i = 0; i < perturbed.offset.size(); ++i)
+      perturbed.offset(i) *= 1.0 + (i % 2 ? -1.0 : 1.0) * settings.lap_map_rtol;
+    const Eigen::VectorXd z_perturbed =
+        settings.limit()
+            ? periodic_limit(perturbed, z0, d, 100 * settings.lap_map_rtol, settings.lap_map_rtol)
+                  .state
+            : LapPowers(perturbed).advance(
+                  z0, static_cast<std::uint64_t>(settings.laps));
+    lap_map_spread = z_perturbed - z;
   }
   out.road.resize(snapshot_grid.size());
   for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
@@ -514,6 +598,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     metrics[M::lyapunov_max_increase] = v0 > 0 ? max_increase / v0 : max_increase;
     metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : nan;
   }
+  std::pair<double, double> l2_projection_scale{nan, nan};  // ||P_L2 f|| in L2 and on the grid
   {  // P_L2 f, the averaged (v -> 0) limit of the law, on the same grid: onto H_n, or onto H
      // itself in feature coordinates. Its E = Mbar gives the excitation of the same space.
     // Over the path's part of the track: the shuttle's time average is uniform there.
@@ -528,6 +613,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
     metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
     metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
     metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
+    l2_projection_scale = {l2(l2_projection), l2_projection.cwiseAbs().maxCoeff()};
     if (!limit.quadrature_converged) out.flags.push_back("l2_projection_unconverged");
     // pe_level (rkhs/adaptive/excitation.hpp): NaN with a singular G (the trial is flagged
     // gram_singular already); flagged pe_level_unresolved when its round-off estimate exceeds 1%
@@ -537,6 +623,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
                                 ? excitation_level_on_range(limit.averaged_gram_eigenvalues)
                                 : excitation_level(limit.averaged_gram, gram, solver.spectrum());
     metrics[M::pe_level] = excitation.value;
+    out.floors[M::pe_level] = excitation.error_bound;
     // Directions a shuttle leaves unexcited (on laps around the track there are none: E is
     // positive definite with G): in H_n the pencil's eigenvalues at their round-off, NaN with a
     // singular G; in H the rank E lacks against the whole track's E.
@@ -572,20 +659,56 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       const double rate_per_lap = -std::log(radius);
       const double error_per_lap = radius_uncertainty / radius;
       unresolved = !(error_per_lap <= 0.01 * rate_per_lap);
-      if (error_per_lap < rate_per_lap) metrics[M::learning_decay_rate] = rate_per_lap / lap_time;
+      if (error_per_lap < rate_per_lap) {
+        metrics[M::learning_decay_rate] = rate_per_lap / lap_time;
+        out.floors[M::learning_decay_rate] = error_per_lap / lap_time;
+      }
     }
     if (unresolved) out.flags.push_back("decay_rate_unresolved");
     if (gram_inverse || in_features) {
       const double dc_gain = B.dot(P * A.partialPivLu().solve(-B));  // H(0) = B^T P (-A)^-1 B
       metrics[M::averaged_decay_rate] = dc_gain * metrics[M::pe_level] / gamma;
+      out.floors[M::averaged_decay_rate] = std::abs(dc_gain) * out.floors[M::pe_level] / gamma;
     }
     if (metrics[M::averaged_decay_rate] > 0) {
       metrics[M::pe_decay_ratio] = metrics[M::learning_decay_rate] / metrics[M::averaged_decay_rate];
+      out.floors[M::pe_decay_ratio] =
+          metrics[M::pe_decay_ratio] *
+          (out.floors[M::learning_decay_rate] / metrics[M::learning_decay_rate] +
+           out.floors[M::averaged_decay_rate] / metrics[M::averaged_decay_rate]);
       const auto& flags = out.flags;
       if (!unresolved &&
           std::find(flags.begin(), flags.end(), "pe_level_unresolved") != flags.end())
         out.flags.push_back("decay_rate_unresolved");
     }
+  }
+  set_integration_floors(settings, engine, domain, estimate, alpha, coefficients_star,
+                         largest_state_pair, d, in_features ? evaluation_scale(grid_features)
+                                                            : evaluation_scale(cross),
+                         radius_uncertainty, out);
+  if (lap_map_spread.size() == m) {
+    const Eigen::VectorXd estimate_spread = on_grid(lap_map_spread.tail(coefficients));
+    const double l2_floor = l2(estimate_spread);
+    for (const M metric : {M::l2_error, M::gap_to_projection, M::gap_to_l2_projection,
+                           M::path_l2_error, M::off_path_l2_error})
+      out.floors[metric] = l2_floor;
+    out.floors[M::sup_error] = estimate_spread.cwiseAbs().maxCoeff();
+    out.floors[M::coefficient_error] =
+        lap_map_spread.tail(coefficients).norm() / std::max(coefficients_star.norm(), 1e-300);
+    out.floors[M::final_state_error] = lap_map_spread.head(2 * d).norm();
+  }
+  for (auto [adaptive, approximation_metric] :
+       {std::pair{M::gram_condition_number, Static::gram_condition_number},
+        {M::power_function_sup, Static::power_function_sup},
+        {M::interpolant_l2_error, Static::l2_error},
+        {M::interpolant_sup_error, Static::sup_error}})
+    out.floors[adaptive] = approximation.floors[approximation_metric];
+  {  // P_L2 f from a solve with G: its round-off relative to its size.
+    const auto& spectrum = solver.spectrum();
+    const double relative = std::min(1.0, static_cast<double>(n) * eps * spectrum.lambda_max /
+                                              std::max(spectrum.lambda_min, 1e-300));
+    out.floors[M::l2_projection_l2_error] = relative * l2_projection_scale.first;
+    out.floors[M::l2_projection_sup_error] = relative * l2_projection_scale.second;
   }
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);

@@ -154,6 +154,17 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
   });
   out.gaps_at_integration_floor = out.estimate_gap_H <= 10 * largest_coefficients * out.plant_gap /
                                                             std::max(largest_state, 1e-300);
+  {
+    const double rtol = std::max(settings.integrator_rtol, 0.0);
+    const double atol = std::max(settings.integrator_atol, 0.0);
+    const double discrepancy = 10 * out.plant_gap / std::max(largest_state, 1e-300);
+    const double relative = rtol + discrepancy;
+    const double largest_section = std::sqrt(kernel.diagonal(grid).maxCoeff());
+    out.estimate_gap_H_floor = relative * largest_coefficients;
+    out.estimate_gap_C_floor = out.estimate_gap_H_floor * largest_section;
+    out.state_gap_floor = relative * largest_state + atol;
+    out.plant_gap_floor = rtol * largest_state + atol;
+  }
 
   // ||f - Pi_j^* fhat_j(T)|| in L2 on the grid, and the projection's norms there.
   const Eigen::VectorXd estimate = on_grid * (V * z.tail(dimension));
@@ -162,10 +173,15 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
     residual(m) = target(grid[static_cast<std::size_t>(m)]) - estimate(m);
   out.projected_l2_error = domain.l2_norm(
       std::span<const double>(residual.data(), static_cast<std::size_t>(residual.size())));
+  out.projected_l2_error_floor =
+      std::max(settings.integrator_rtol, 0.0) *
+      domain.l2_norm(std::span<const double>(estimate.data(),
+                                             static_cast<std::size_t>(estimate.size())));
   out.projection_norm_H_to_C = projection_residual_norms(kernel, op, grid).maxCoeff();
-  out.projection_norm_at_floor =
-      out.projection_norm_H_to_C <= projection_norm_floor(kernel, op, grid);
-  out.projection_operator_norm = projection_operator_norm(kernel, op);
+  out.projection_norm_floor = projection_norm_floor(kernel, op, grid);
+  out.projection_norm_at_floor = out.projection_norm_H_to_C <= out.projection_norm_floor;
+  out.projection_operator_norm =
+      projection_operator_norm(kernel, op, &out.projection_operator_norm_floor);
   return out;
 }
 
@@ -181,6 +197,20 @@ void record_estimate_gaps(const EstimateGaps& gaps, AdaptiveMeasurement& out) {
   metrics[M::plant_gap] = gaps.plant_gap;
   metrics[M::gap_effectivity_H] = gaps.estimate_gap_H / gaps.projection_norm_H_to_C;
   metrics[M::gap_effectivity_C] = gaps.estimate_gap_C / gaps.projection_norm_H_to_C;
+  auto& floors = out.floors;
+  floors[M::projection_norm_H_to_C] = gaps.projection_norm_floor;
+  floors[M::projection_operator_norm] = gaps.projection_operator_norm_floor;
+  floors[M::projected_l2_error] = gaps.projected_l2_error_floor;
+  floors[M::estimate_gap_H] = gaps.estimate_gap_H_floor;
+  floors[M::estimate_gap_C] = gaps.estimate_gap_C_floor;
+  floors[M::state_gap] = gaps.state_gap_floor;
+  floors[M::plant_gap] = gaps.plant_gap_floor;
+  // A ratio's relative floor is the sum of its terms' (to first order).
+  const double norm_share = gaps.projection_norm_floor / gaps.projection_norm_H_to_C;
+  floors[M::gap_effectivity_H] =
+      metrics[M::gap_effectivity_H] * (gaps.estimate_gap_H_floor / gaps.estimate_gap_H + norm_share);
+  floors[M::gap_effectivity_C] =
+      metrics[M::gap_effectivity_C] * (gaps.estimate_gap_C_floor / gaps.estimate_gap_C + norm_share);
   if (gaps.projection_norm_at_floor) out.flags.push_back("projection_norm_at_floor");
   if (gaps.gaps_at_integration_floor) out.flags.push_back("estimate_gap_at_integration_floor");
 }

@@ -98,6 +98,7 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   AdaptiveMeasurement out;
   out.engine = "time_stepping";
   auto& metrics = out.metrics;
+  double largest_state_pair = 0;  // max over the samples of |x| + |xhat| (the floors' scale)
 
   // The static part on Omega: H_n, Pi_n f, and the cross matrix on the evaluation grid.
   const Eigen::MatrixXd gram = kernel.gram(centres);
@@ -267,6 +268,7 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
       const Eigen::VectorXd gap = alpha_star - alpha;
       const double weighted = gram_inverse ? gap.dot(gram * gap) : gap.squaredNorm();
       out.samples.push_back({point.t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
+      largest_state_pair = std::max(largest_state_pair, x.norm() + xhat.norm());
       if (point.t >= 0.5 * final_time) {
         evaluate_phi(y, phi.data());
         excitation.selfadjointView<Eigen::Lower>().rankUpdate(phi);
@@ -395,12 +397,20 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
     metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
     metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
     metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
+    // Its round-off: the solves with G, relative to its size.
+    const auto& spectrum = solver.spectrum();
+    const double relative =
+        std::min(1.0, static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
+                          spectrum.lambda_max / std::max(spectrum.lambda_min, 1e-300));
+    out.floors[M::l2_projection_l2_error] = relative * l2(l2_projection);
+    out.floors[M::l2_projection_sup_error] = relative * l2_projection.cwiseAbs().maxCoeff();
   }
   {  // Persistence of excitation along the trajectory.
     const auto level = excitation_level(excitation, gram, solver.spectrum());
     const double unexcited =
         solver.spectrum().singular ? std::nan("") : static_cast<double>(level.unexcited);
     metrics[M::pe_level] = level.value;
+    out.floors[M::pe_level] = level.error_bound;
     metrics[M::unexcited_dimension] = unexcited;
     if (unexcited > 0) {
       metrics[M::pe_level] = 0.0;
@@ -409,6 +419,17 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
       out.flags.push_back("pe_level_unresolved");
     }
   }
+  set_integration_floors(settings, AdaptiveEngine::time_stepping, domain, estimate, alpha,
+                         alpha_star, largest_state_pair, d,
+                         cross.size() ? cross.cwiseAbs().rowwise().sum().maxCoeff() : 0.0,
+                         std::numeric_limits<double>::quiet_NaN(), out);
+  out.floors[M::visited_rms_error] = out.floors[M::sup_error];
+  for (auto [adaptive, static_metric] :
+       {std::pair{M::gram_condition_number, Static::gram_condition_number},
+        {M::power_function_sup, Static::power_function_sup},
+        {M::interpolant_l2_error, Static::l2_error},
+        {M::interpolant_sup_error, Static::sup_error}})
+    out.floors[adaptive] = approximation.floors[static_metric];
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
   metrics[M::segments] = static_cast<double>(stats.segments);

@@ -194,8 +194,45 @@ GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
 void keep_selected(const MetricSelection& selection, ApproximationMeasurement& out) {
   if (selection.empty()) return;
   for (std::size_t i = 0; i < MetricValues<ApproximationMetric>::count; ++i)
-    if (i >= selection.size() || !selection[i])
+    if (i >= selection.size() || !selection[i]) {
       out.metrics[static_cast<ApproximationMetric>(i)] = nan;
+      out.floors[static_cast<ApproximationMetric>(i)] = nan;
+    }
+}
+
+// The relative round-off of a solve with G (backward error n eps lambda_max, amplified by
+// cond(G)), at most 1: what a value computed from G^-1 is known to.
+double solve_round_off(const GramSpectrum& spectrum, Eigen::Index n) {
+  const double relative =
+      static_cast<double>(n) * eps * spectrum.lambda_max / std::max(spectrum.lambda_min, 0.0);
+  return std::isfinite(relative) ? std::min(1.0, relative) : 1.0;
+}
+
+// The floor of ||Pi f||_H = sqrt(alpha^T G alpha): the larger of what a backward error E of
+// n eps lambda_max in G moves it by (alpha^T E alpha in the square) and what the round-off of the
+// data, eps |f(X)|, becomes through the smallest eigenvalue the solve keeps (lambda_min, at least
+// the n eps lambda_max a singular G is cut at): eps |f(X)| / sqrt(that).
+double native_norm_floor(double norm, double coefficients_squared, double data_norm,
+                         const GramSpectrum& spectrum, Eigen::Index n) {
+  const double perturbation = static_cast<double>(n) * eps * spectrum.lambda_max;
+  const double backward = norm > 0 ? perturbation * coefficients_squared / (2 * norm)
+                                   : std::sqrt(perturbation * coefficients_squared);
+  const double kept = std::max(spectrum.lambda_min, perturbation);
+  const double data = kept > 0 ? eps * data_norm / std::sqrt(kept) : 0.0;
+  return std::max(backward, data);
+}
+
+// The floors of the extreme eigenvalues (Weyl: a perturbation of G by n eps lambda_max moves
+// each by at most that much) and of their ratio.
+void set_spectrum_floors(const GramSpectrum& spectrum, double n,
+                         MetricValues<ApproximationMetric>& floors) {
+  using M = ApproximationMetric;
+  const double perturbation = n * eps * spectrum.lambda_max;
+  floors[M::gram_min_eigenvalue] = perturbation;
+  floors[M::gram_max_eigenvalue] = perturbation;
+  floors[M::gram_condition_number] =
+      spectrum.lambda_min > 0 ? spectrum.condition_number * perturbation / spectrum.lambda_min
+                              : std::numeric_limits<double>::infinity();
 }
 
 // measure_approximation on a built Gram matrix and solver, computing what `work` asks.
@@ -223,15 +260,18 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
     metrics[M::gram_condition_number] = spectrum.condition_number;
     metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
     metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+    set_spectrum_floors(spectrum, static_cast<double>(n), out.floors);
   }
   if (spectrum.singular) out.flags.push_back("gram_singular");
 
   // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
   Eigen::VectorXd alpha, at_points;
+  double target_norm_at_centres = 0;  // |f(X)|
   if (work & (work_interpolant | work_residual)) {
     Eigen::VectorXd at_centres(n);
     target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
     alpha = solver.solve(at_centres);
+    target_norm_at_centres = at_centres.norm();
   }
   if (work & work_residual) {
     at_points.resize(static_cast<Eigen::Index>(point_count));
@@ -254,12 +294,19 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
     const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
     metrics[M::power_function_sup] = power_sup;
     metrics[M::power_function_floor] = power_floor;
+    out.floors[M::power_function_sup] = power_floor;
+    out.floors[M::power_function_floor] = power_floor * solve_round_off(spectrum, n);
     if (cardinal && power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
   }
   if (work & work_interpolant) {
-    metrics[M::interpolant_native_norm] = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
-    if (cardinal)
+    const double native_norm = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
+    metrics[M::interpolant_native_norm] = native_norm;
+    out.floors[M::interpolant_native_norm] =
+        native_norm_floor(native_norm, alpha.squaredNorm(), target_norm_at_centres, spectrum, n);
+    if (cardinal) {
       metrics[M::error_floor] = round_off * std::sqrt(largest_solution_norm_squared) * alpha.norm();
+      out.floors[M::error_floor] = metrics[M::error_floor] * solve_round_off(spectrum, n);
+    }
   }
   if (work & work_residual) {
     const Eigen::VectorXd& residual = pass.residual;
@@ -267,6 +314,8 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
     const double sup = residual.cwiseAbs().maxCoeff();
     metrics[M::l2_error] = l2;
     metrics[M::sup_error] = sup;
+    out.floors[M::l2_error] = metrics[M::error_floor] * std::sqrt(domain.volume());
+    out.floors[M::sup_error] = metrics[M::error_floor];
     if (cardinal) {
       const double error_floor = metrics[M::error_floor];
       if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
@@ -278,7 +327,9 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
   if (work & work_projection_residual) {
     const double norm = metrics[M::power_function_sup];
     metrics[M::projection_norm_H_to_C] = norm;
-    if (norm <= projection_norm_floor(kernel, static_cast<std::size_t>(n), points))
+    out.floors[M::projection_norm_H_to_C] =
+        projection_norm_floor(kernel, static_cast<std::size_t>(n), points);
+    if (norm <= out.floors[M::projection_norm_H_to_C])
       out.flags.push_back("projection_norm_at_floor");
   }
   return out;
@@ -311,7 +362,13 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
     ProjectionOperator op;
     interpolation_operator(kernel, centres, gram, solver, op);
     check_cancelled();
-    out.metrics[ApproximationMetric::projection_operator_norm] = projection_operator_norm(kernel, op);
+    auto& floor = out.floors[ApproximationMetric::projection_operator_norm];
+    const double norm = projection_operator_norm(kernel, op, &floor);
+    out.metrics[ApproximationMetric::projection_operator_norm] = norm;
+    // The operator's weights come from solves with G: their round-off, relative to the norm.
+    floor = std::max(floor, 0.5 * norm *
+                                 solve_round_off(solver.spectrum(),
+                                                 static_cast<Eigen::Index>(op.dimension())));
   }
   keep_selected(selection, out);
   return out;
@@ -339,11 +396,13 @@ void measure_projection_norms(const AnyKernel& kernel, const ProjectionOperator&
     check_cancelled();
     const double norm = residual.maxCoeff();
     out.metrics[M::projection_norm_H_to_C] = norm;
-    if (norm <= projection_norm_floor(kernel, op, points))
+    out.floors[M::projection_norm_H_to_C] = projection_norm_floor(kernel, op, points);
+    if (norm <= out.floors[M::projection_norm_H_to_C])
       out.flags.push_back("projection_norm_at_floor");
   }
   if (work & work_operator_norm)
-    out.metrics[M::projection_operator_norm] = projection_operator_norm(kernel, op);
+    out.metrics[M::projection_operator_norm] =
+        projection_operator_norm(kernel, op, &out.floors[M::projection_operator_norm]);
 }
 
 ApproximationMeasurement measure_projection(const AnyKernel& kernel, const TargetFunction& target,
@@ -377,6 +436,7 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
       metrics[M::gram_condition_number] = spectrum.condition_number;
       metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
       metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+      set_spectrum_floors(spectrum, static_cast<double>(dim), out.floors);
     }
     if (spectrum.singular) out.flags.push_back("gram_singular");
   }
@@ -401,6 +461,8 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
     const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
     metrics[M::power_function_sup] = power_sup;
     metrics[M::power_function_floor] = power_floor;
+    out.floors[M::power_function_sup] = power_floor;
+    out.floors[M::power_function_floor] = power_floor * solve_round_off(solver->spectrum(), dim);
     if (power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
   }
 
@@ -413,10 +475,18 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
     const Eigen::VectorXd coefficients = op.weights() * at_samples;
     const double error_floor =
         round_off * std::sqrt(largest_solution_norm_squared) * coefficients.norm();
-    if (cardinal) metrics[M::error_floor] = error_floor;
-    if (work & work_interpolant)
-      metrics[M::interpolant_native_norm] =
-          std::sqrt(std::max(0.0, coefficients.dot(gram * coefficients)));
+    if (cardinal) {
+      metrics[M::error_floor] = error_floor;
+      out.floors[M::error_floor] = error_floor * solve_round_off(solver->spectrum(), dim);
+    }
+    if (work & work_interpolant) {
+      const double native_norm = std::sqrt(std::max(0.0, coefficients.dot(gram * coefficients)));
+      metrics[M::interpolant_native_norm] = native_norm;
+      if (solver)
+        out.floors[M::interpolant_native_norm] =
+            native_norm_floor(native_norm, coefficients.squaredNorm(), at_samples.norm(),
+                              solver->spectrum(), dim);
+    }
     if (work & work_residual) {
       Eigen::VectorXd at_points(static_cast<Eigen::Index>(point_count));
       target.evaluate(points, std::span<double>(at_points.data(), point_count));
@@ -425,6 +495,10 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
       const double sup = residual.cwiseAbs().maxCoeff();
       metrics[M::l2_error] = l2;
       metrics[M::sup_error] = sup;
+      if (cardinal) {
+        out.floors[M::l2_error] = error_floor * std::sqrt(domain.volume());
+        out.floors[M::sup_error] = error_floor;
+      }
       if (cardinal && sup <= error_floor) out.flags.push_back("sup_error_at_floor");
       if (cardinal && l2 <= error_floor * std::sqrt(domain.volume()))
         out.flags.push_back("l2_error_at_floor");

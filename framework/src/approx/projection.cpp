@@ -163,7 +163,8 @@ double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& 
   return projection_norm_floor(kernel, op.sample_count(), points);
 }
 
-double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op) {
+double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op,
+                                double* floor) {
   // G_B = V diag(lambda) V^T, R = V diag(sqrt(lambda)) (round-off negatives clamped to 0);
   // ||Pi||^2 = lambda_max(R^T A R).
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> basis(projection_basis_gram(kernel, op));
@@ -172,7 +173,19 @@ double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperato
   Eigen::MatrixXd T = R.transpose() * functional_gram(kernel, op) * R;
   T = 0.5 * (T + T.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> norm(T, Eigen::EigenvaluesOnly);
-  return std::sqrt(std::max(0.0, norm.eigenvalues().maxCoeff()));
+  const double value = std::sqrt(std::max(0.0, norm.eigenvalues().maxCoeff()));
+  if (floor) {
+    const auto& lambda = basis.eigenvalues();
+    const double dim = static_cast<double>(lambda.size());
+    const double largest = lambda.size() ? lambda.maxCoeff() : 0.0;
+    const double resolved = dim * std::numeric_limits<double>::epsilon() * largest;
+    double smallest = largest;
+    for (Eigen::Index i = 0; i < lambda.size(); ++i)
+      if (lambda(i) > resolved) smallest = std::min(smallest, lambda(i));
+    *floor = largest > 0 ? 0.5 * value * resolved / smallest
+                         : std::numeric_limits<double>::quiet_NaN();
+  }
+  return value;
 }
 
 }  // namespace rkhs

@@ -226,6 +226,16 @@ std::string FitWindow::text() const {
 
 namespace {
 
+// ΔAIC to one decimal, or to the digits its floor leaves ("~6" with a floor of 0.1 to 1, "~10"
+// with one of 1 to 10, "unresolved" beyond): digits below the floor are not printed.
+std::string evidence_text(double evidence, double floor) {
+  if (!(floor >= 0.05)) return fmt::format("{:.1f}", evidence);
+  if (!std::isfinite(floor) || floor >= std::abs(evidence)) return "unresolved (at the values' floors)";
+  const int decade = static_cast<int>(std::ceil(std::log10(floor)));
+  const double step = std::pow(10.0, decade);
+  return fmt::format("~{:.{}f}", std::round(evidence / step) * step, std::max(0, -decade));
+}
+
 // Whether successive rates move the same way, each step no larger than the one before: a
 // smooth approach to a limit, as a pre-asymptotic term C n^p D n^-q produces (not scatter).
 bool bends_monotonically(const std::vector<double>& rates) {
@@ -247,7 +257,8 @@ bool bends_monotonically(const std::vector<double>& rates) {
 
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,
-                              double confidence, const FitWindow& set_window) {
+                              double confidence, const FitWindow& set_window,
+                              std::span<const double> floors) {
   if (x.size() != y.size() || n.size() != y.size() || usable.size() != y.size())
     throw std::invalid_argument("analyse_series: x, n, y and usable differ in size");
   if (!(confidence > 0.0 && confidence < 1.0))
@@ -294,10 +305,12 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     auto to_positions = [&](std::vector<std::size_t>& indices) {
       for (auto& k : indices) k = positions[k];
     };
-    std::vector<double> fit_x, fit_y;
+    std::vector<double> fit_x, fit_y, fit_u, fit_floor_values;
     for (auto k : window.points) {
       fit_x.push_back(model == RateModel::power_law ? x[positions[k]] : n[positions[k]]);
       fit_y.push_back(y[positions[k]]);
+      fit_u.push_back(u[k]);
+      fit_floor_values.push_back(positions[k] < floors.size() ? floors[positions[k]] : 0.0);
     }
     to_positions(window.points);
     to_positions(window.head);
@@ -305,8 +318,10 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     result.window = std::move(window);
     result.fit = model == RateModel::power_law ? fit_power_law(fit_x, fit_y, confidence)
                                                : fit_exponential(fit_x, fit_y, confidence);
-    if (result.fit)
+    if (result.fit) {
+      result.floors = fit_floors(*result.fit, fit_u, fit_y, fit_floor_values);
       for (auto& k : result.fit->used) k = result.window.points[k];
+    }
     result.pairwise = model == RateModel::power_law ? pairwise_rates(x, y)
                                                     : pairwise_exponential_rates(n, y);
   };
@@ -328,9 +343,27 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
                                                                 : power / exponential;
     return m * std::log(ratio);
   };
+  // The floor of that ΔAIC: both models' ln SSE on the window, moved by the values' floors.
+  auto own_window_advantage_floor = [&](const ModelAnalysis& analysis) -> double {
+    std::vector<std::size_t> window;
+    double norm_squared = 0.0;
+    for (auto p : analysis.window.points) {
+      window.push_back(static_cast<std::size_t>(
+          std::lower_bound(positions.begin(), positions.end(), p) - positions.begin()));
+      const double floor = p < floors.size() && floors[p] > 0.0 ? floors[p] : 0.0;
+      norm_squared += (floor / y[p]) * (floor / y[p]);
+    }
+    if (window.size() < minimum_window || norm_squared == 0.0) return 0.0;
+    const double norm = std::sqrt(norm_squared);
+    return static_cast<double>(window.size()) *
+           (log_sse_floor(line_sse(log_x, log_y, window), norm) +
+            log_sse_floor(line_sse(plain_n, log_y, window), norm));
+  };
   const double power_advantage = out.power_law.advantage = own_window_advantage(out.power_law);
   const double exponential_advantage = out.exponential.advantage =
       own_window_advantage(out.exponential);
+  out.power_law.advantage_floor = own_window_advantage_floor(out.power_law);
+  out.exponential.advantage_floor = own_window_advantage_floor(out.exponential);
   const double power_per_point = power_advantage / static_cast<double>(out.power_law.window.points.size());
   const double exponential_per_point =
       exponential_advantage / static_cast<double>(out.exponential.window.points.size());
@@ -338,10 +371,12 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     out.preferred = RateModel::power_law;
     out.evidence = power_advantage;
     out.evidence_points = out.power_law.window.points.size();
+    out.evidence_floor = out.power_law.advantage_floor;
   } else if (exponential_advantage > 0.0) {
     out.preferred = RateModel::exponential;
     out.evidence = exponential_advantage;
     out.evidence_points = out.exponential.window.points.size();
+    out.evidence_floor = out.exponential.advantage_floor;
   }
   out.reported = out.preferred == RateModel::exponential && out.decisive() ? RateModel::exponential
                                                                           : RateModel::power_law;
@@ -349,12 +384,16 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     const auto& window = out.analysis(*out.preferred).window.points;
     const auto other = *out.preferred == RateModel::power_law ? RateModel::exponential
                                                               : RateModel::power_law;
-    const auto why_not = out.evidence < decisive_evidence ? ", not decisive (ΔAIC < 2)"
-                         : out.evidence_points < 4    ? ", not decisive (a decision needs 4 points)"
-                                                      : "";
-    out.note = fmt::format("{} preferred (ΔAIC = {:.1f} over the {} on n = {}){}",
-                           model_name(*out.preferred), out.evidence, model_name(other),
-                           label_range(n, window), out.decisive() ? "" : why_not);
+    const auto why_not =
+        out.evidence < decisive_evidence ? ", not decisive (ΔAIC < 2)"
+        : out.evidence - out.evidence_floor < decisive_evidence
+            ? ", not decisive (ΔAIC within its floor of 2: the values' floors decide it)"
+        : out.evidence_points < 4 ? ", not decisive (a decision needs 4 points)"
+                                  : "";
+    out.note = fmt::format("{} preferred (ΔAIC = {} over the {} on n = {}){}",
+                           model_name(*out.preferred), evidence_text(out.evidence, out.evidence_floor),
+                           model_name(other), label_range(n, window),
+                           out.decisive() ? "" : why_not);
   } else if (std::isnan(power_advantage) || std::isnan(exponential_advantage)) {
     out.note = "models not compared (fewer than 3 points in a window)";
   } else {
@@ -375,6 +414,34 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
       if (!bends_monotonically(pairwise_rates(cx, cy))) return false;
       auto fit = fit_power_law_corrected(cx, cy, upward, confidence);
       if (!fit) return false;
+      // Its floors: refits with the values moved within them (both sign patterns).
+      std::vector<double> relative;
+      for (auto p : candidate)
+        relative.push_back(p < floors.size() && floors[p] > 0.0 ? floors[p] / y[p] : 0.0);
+      if (std::any_of(relative.begin(), relative.end(), [](double d) { return d > 0.0; })) {
+        double mean_u = 0.0;
+        for (double v : cx) mean_u += std::log(v) / static_cast<double>(cx.size());
+        for (const double sign : {1.0, -1.0}) {
+          std::vector<double> moved(cy);
+          for (std::size_t k = 0; k < moved.size(); ++k)
+            moved[k] *= 1.0 + sign * (std::log(cx[k]) >= mean_u ? 1.0 : -1.0) * relative[k];
+          const auto refit = fit_power_law_corrected(cx, moved, upward, confidence);
+          if (!refit) {
+            out.corrected_floors = {std::numeric_limits<double>::infinity(),
+                                    std::numeric_limits<double>::infinity(),
+                                    std::numeric_limits<double>::infinity()};
+            break;
+          }
+          auto& f = out.corrected_floors;
+          for (double change : {refit->fit.rate - fit->fit.rate,
+                                refit->fit.std_error - fit->fit.std_error,
+                                refit->fit.ci_low - fit->fit.ci_low,
+                                refit->fit.ci_high - fit->fit.ci_high})
+            if (std::isfinite(change)) f.rate = std::max(f.rate, std::abs(change));
+          f.r_squared = std::max(f.r_squared, std::abs(refit->fit.r_squared - fit->fit.r_squared));
+          f.log_sse = std::max(f.log_sse, std::abs(refit->advantage - fit->advantage));
+        }
+      }
       for (auto& k : fit->fit.used) k = candidate[k];
       out.corrected = std::move(fit);
       out.corrected_points = candidate;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <limits>
@@ -140,6 +141,55 @@ std::optional<RateFit> fit_power_law(std::span<const double> x, std::span<const 
 std::optional<RateFit> fit_exponential(std::span<const double> x, std::span<const double> y,
                                        double confidence) {
   return fit_log_linear(x, y, confidence, RateModel::exponential, "fit_exponential");
+}
+
+double log_sse_floor(double sse, double relative_floor_norm) {
+  if (!(relative_floor_norm > 0.0)) return 0.0;
+  const double share = relative_floor_norm / std::sqrt(std::max(sse, 0.0));
+  return share < 1.0 ? -2.0 * std::log1p(-share) : std::numeric_limits<double>::infinity();
+}
+
+FitFloors fit_floors(const RateFit& fit, std::span<const double> u, std::span<const double> y,
+                     std::span<const double> floors) {
+  FitFloors out;
+  const std::size_t m = fit.used.size();
+  if (m < 2) return out;
+  std::vector<double> relative(m);
+  double u_mean = 0.0, v_mean = 0.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto i = fit.used[k];
+    const double floor = i < floors.size() && floors[i] > 0.0 ? floors[i] : 0.0;
+    relative[k] = floor / std::abs(y[i]);
+    u_mean += u[i] / static_cast<double>(m);
+    v_mean += std::log(y[i]) / static_cast<double>(m);
+  }
+  double suu = 0.0, sst = 0.0, norm_squared = 0.0, slope_shift = 0.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto i = fit.used[k];
+    suu += (u[i] - u_mean) * (u[i] - u_mean);
+    sst += (std::log(y[i]) - v_mean) * (std::log(y[i]) - v_mean);
+    norm_squared += relative[k] * relative[k];
+  }
+  if (!(suu > 0.0) || norm_squared == 0.0) return out;
+  for (std::size_t k = 0; k < m; ++k)
+    slope_shift += std::abs((u[fit.used[k]] - u_mean) / suu) * relative[k];
+  const double norm = std::sqrt(norm_squared);
+  out.rate = slope_shift;
+  if (m > 2) {
+    const double degrees = static_cast<double>(m - 2);
+    const double t_quantile = std::isfinite(fit.std_error) && fit.std_error > 0.0
+                                  ? (fit.ci_high - fit.rate) / fit.std_error
+                                  : 0.0;
+    out.rate += t_quantile * norm / std::sqrt(degrees * suu);
+    const double sse = fit.residual_std * fit.residual_std * degrees;
+    out.log_sse = log_sse_floor(sse, norm);
+    // |r + P d| <= |r| + |d|: SSE and SST move by at most 2 |d| sqrt(S) + |d|^2.
+    const double sse_shift = 2.0 * norm * std::sqrt(sse) + norm_squared;
+    const double sst_shift = 2.0 * norm * std::sqrt(sst) + norm_squared;
+    out.r_squared = sst > 0.0 ? sse_shift / sst + sse * sst_shift / (sst * sst)
+                              : std::numeric_limits<double>::quiet_NaN();
+  }
+  return out;
 }
 
 }  // namespace rkhs

@@ -16,6 +16,7 @@
 #include <limits>
 #include <map>
 
+#include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/printable.hpp"
@@ -156,6 +157,34 @@ std::string csv_number(double value) {
   return std::isnan(value) ? "" : format_real(value);
 }
 
+namespace {
+
+// The flags of `result` that concern what the study reports: every flag but the floor flag
+// "<metric>_at_floor" of a metric the study does not report (a trial flags every metric it
+// computes; rows' own flags, such as power_function_at_floor, are always written).
+template <class Metric>
+std::vector<std::string> reported_flags_of(const StudyDefinition& study,
+                                           const std::vector<std::string>& flags) {
+  std::vector<std::string> out;
+  for (const auto& flag : flags) {
+    bool unreported = false;
+    for (const auto& row : MetricTable<Metric>::rows)
+      if (flag == floor_flag(row) && flag != row.flag &&
+          std::find(study.metrics.begin(), study.metrics.end(), row.name) == study.metrics.end())
+        unreported = true;
+    if (!unreported) out.push_back(flag);
+  }
+  return out;
+}
+
+std::vector<std::string> reported_flags(const StudyDefinition& study,
+                                        const std::vector<std::string>& flags) {
+  return study.kind == StudyKind::adaptive ? reported_flags_of<AdaptiveMetric>(study, flags)
+                                           : reported_flags_of<ApproximationMetric>(study, flags);
+}
+
+}  // namespace
+
 std::string trials_csv(const RunRecord& run) {
   const auto columns = axis_columns(run.trials);
   std::vector<std::string> header = columns;
@@ -164,6 +193,13 @@ std::string trials_csv(const RunRecord& run) {
   for (const char* extra : {"status", "reason", "solve", "flags"}) header.push_back(extra);
   const bool adaptive = run.study.kind == StudyKind::adaptive;
   if (adaptive) header.push_back("engine");
+  // The floors of the metrics that have one (MetricRow::floor), after the other columns.
+  std::vector<std::string> floored;
+  for (const auto& metric : run.study.metrics)
+    if (metric_floor_rule(run.study.kind, metric) != FloorRule::exact) {
+      floored.push_back(metric);
+      header.push_back(metric + "_floor");
+    }
   std::string out = csv_row(header);
   for (const auto& trial : run.trials) {
     const auto& result = run.results[trial.index];
@@ -174,19 +210,42 @@ std::string trials_csv(const RunRecord& run) {
     row.push_back(result.ok ? "ok" : "failed");
     row.push_back(result.reason);
     row.push_back(result.solve_method);
-    row.push_back(fmt::format("{}", fmt::join(result.flags, ";")));
+    row.push_back(fmt::format("{}", fmt::join(reported_flags(run.study, result.flags), ";")));
     if (adaptive) row.push_back(result.engine);
+    for (const auto& metric : floored) {
+      const auto position = run.study.metric_index(metric);
+      row.push_back(position < result.floors.size() ? csv_number(result.floors[position]) : "");
+    }
     out += csv_row(row);
   }
   return out;
 }
+
+namespace {
+
+// The floor of the pairwise rate between points k and k + 1 of the reported model: their
+// relative floors over the step in its abscissa (ln x, or n).
+double pairwise_rate_floor(const MetricSeries& series, std::size_t k) {
+  const auto relative = [&](std::size_t i) {
+    const double floor = i < series.floors.size() && series.floors[i] > 0 ? series.floors[i] : 0.0;
+    return floor / std::abs(series.values[i]);
+  };
+  const bool power_law = series.analysis.reported == RateModel::power_law;
+  const double step = power_law ? std::log(series.abscissa[k + 1] / series.abscissa[k])
+                                : series.n[k + 1] - series.n[k];
+  const double value = (relative(k) + relative(k + 1)) / std::abs(step);
+  return std::isfinite(series.pairwise[k]) ? value : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
 
 std::string rates_csv(const RunRecord& run) {
   const auto columns = axis_columns(run.trials);
   std::vector<std::string> header = columns;
   for (const char* extra :
        {"metric", "abscissa", "kind", "model", "n_from", "n_to", "points", "rate", "std_error",
-        "ci_low", "ci_high", "r_squared", "delta_aic", "note"})
+        "ci_low", "ci_high", "r_squared", "delta_aic", "note", "rate_floor", "r_squared_floor",
+        "delta_aic_floor"})
     header.push_back(extra);
   std::string out = csv_row(header);
   for (const auto& series : run.rates) {
@@ -230,6 +289,9 @@ std::string rates_csv(const RunRecord& run) {
         if (fit && !fit->note.empty()) notes.push_back(fit->note);
       }
       row.push_back(fmt::format("{}", fmt::join(notes, "; ")));
+      for (double v : {fit ? analysis.floors.rate : nan, fit ? analysis.floors.r_squared : nan,
+                       analysis.advantage_floor})
+        row.push_back(csv_number(v));
       out += csv_row(row);
     }
     // The power law with a pre-asymptotic term, where the pairwise rates bend (asymptotic.hpp).
@@ -248,6 +310,8 @@ std::string rates_csv(const RunRecord& run) {
           : series.analysis.reported != RateModel::power_law
               ? "not judged: the exponential model is reported"
               : "not judged: the correction does not earn its two parameters (ΔAICc < 2)"));
+      const auto& floors = series.analysis.corrected_floors;
+      for (double v : {floors.rate, floors.r_squared, floors.log_sse}) row.push_back(csv_number(v));
       out += csv_row(row);
     }
     const auto& window = series.analysis.reported_analysis().window;
@@ -265,6 +329,9 @@ std::string rates_csv(const RunRecord& run) {
                     : outside(k) || outside(k + 1)
                         ? "outside the asymptotic window (not used in the fit)"
                         : "");
+      row.push_back(csv_number(pairwise_rate_floor(series, k)));
+      row.push_back("");
+      row.push_back("");
       out += csv_row(row);
     }
   }
@@ -404,15 +471,21 @@ std::string summary_json(const RunRecord& run) {
   out += "  \"trials\": [\n";
   for (const auto& trial : run.trials) {
     const auto& result = run.results[trial.index];
-    std::vector<std::string> metrics, flags;
-    for (const auto& metric : study.metrics)
-      metrics.push_back(json_string(metric) + ": " +
-                        json_number(result.metrics[study.metric_index(metric)]));
-    for (const auto& flag : result.flags) flags.push_back(json_string(flag));
+    std::vector<std::string> metrics, flags, floors;
+    for (const auto& metric : study.metrics) {
+      const auto position = study.metric_index(metric);
+      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[position]));
+      if (metric_floor_rule(study.kind, metric) != FloorRule::exact)
+        floors.push_back(json_string(metric) + ": " +
+                         json_number(position < result.floors.size()
+                                         ? result.floors[position]
+                                         : std::numeric_limits<double>::quiet_NaN()));
+    }
+    for (const auto& flag : reported_flags(study, result.flags)) flags.push_back(json_string(flag));
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
         "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
-        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}, \"work\": {}, "
+        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}, \"floors\": {{{}}}, \"work\": {}, "
         "\"work_missing\": {}}}{}\n",
         trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
         json_plugin(trial.centres), trial.n,
@@ -421,7 +494,7 @@ std::string summary_json(const RunRecord& run) {
         json_string(result.solve_method), fmt::join(flags, ", "),
         result.engine.empty() ? std::string() : " \"engine\": " + json_string(result.engine) + ",",
         json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
-        trial_work_json(study, result), missing_work_json(result),
+        fmt::join(floors, ", "), trial_work_json(study, result), missing_work_json(result),
         trial.index + 1 < run.trials.size() ? "," : "");
   }
   out += "  ],\n  \"rates\": [\n";
@@ -439,12 +512,16 @@ std::string summary_json(const RunRecord& run) {
       return fmt::format(
           "\"model\": {}, \"rate\": {}, \"std_error\": {}, \"ci_low\": {}, \"ci_high\": {}, "
           "\"r_squared\": {}, \"points\": {}, \"window\": {}, \"head\": {}, \"floor\": {}, "
-          "\"delta_aic\": {}",
+          "\"delta_aic\": {}, \"rate_floor\": {}, \"r_squared_floor\": {}, "
+          "\"delta_aic_floor\": {}",
           json_string(model_id(analysis.model)), json_number(fit ? fit->rate : nan),
           json_number(fit ? fit->std_error : nan), json_number(fit ? fit->ci_low : nan),
           json_number(fit ? fit->ci_high : nan), json_number(fit ? fit->r_squared : nan),
           fit ? fit->points : 0, n_list(analysis.window.points), n_list(analysis.window.head),
-          n_list(analysis.window.floor), json_number(analysis.advantage));
+          n_list(analysis.window.floor), json_number(analysis.advantage),
+          json_number(fit ? analysis.floors.rate : nan),
+          json_number(fit ? analysis.floors.r_squared : nan),
+          json_number(analysis.advantage_floor));
     };
     const auto reported = series.analysis.reported;
     const auto& alternative = series.analysis.analysis(

@@ -236,6 +236,7 @@ std::string serialize_result(const TrialResult& r) {
   out += "seconds " + format_real(r.seconds) + "\n";
   out += "data " + escape(r.data_provenance) + "\n";
   out += "metrics " + join_reals(r.metrics) + "\n";
+  if (!r.floors.empty()) out += "floors " + join_reals(r.floors) + "\n";
   if (r.work) out += "work " + work_line(*r.work) + "\n";
   std::vector<double> samples;
   for (const auto& s : r.samples) samples.insert(samples.end(), {s.t, s.state_error, s.lyapunov});
@@ -283,6 +284,8 @@ TrialResult deserialize_result(std::string_view text) {
       r.data_provenance = unescape(value);
     else if (field == "metrics")
       r.metrics = split_reals(value);
+    else if (field == "floors")
+      r.floors = split_reals(value);
     else if (field == "work")
       r.work = parse_work_line(value);
     else if (field == "samples") {
@@ -393,6 +396,11 @@ RecordCheck read_record(const std::string& hash, const std::string& study, const
   if (result.metrics.size() != check.metric_names.size()) {
     check.problem = fmt::format("{} metric values for {} metric names", result.metrics.size(),
                                 check.metric_names.size());
+    return check;
+  }
+  if (!result.floors.empty() && result.floors.size() != result.metrics.size()) {
+    check.problem = fmt::format("{} floors for {} metric values", result.floors.size(),
+                                result.metrics.size());
     return check;
   }
   if (expected_metrics && check.metric_names != *expected_metrics) {

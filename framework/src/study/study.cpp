@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/random.hpp"
 
@@ -47,6 +48,20 @@ std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) n
 
 const std::vector<std::string>& metric_names(StudyKind kind) {
   return kind == StudyKind::adaptive ? adaptive_metric_names() : approximation_metric_names();
+}
+
+namespace {
+template <class Metric>
+FloorRule floor_rule_in(std::string_view metric) {
+  for (const auto& row : MetricTable<Metric>::rows)
+    if (row.name == metric) return row.floor;
+  return FloorRule::exact;
+}
+}  // namespace
+
+FloorRule metric_floor_rule(StudyKind kind, std::string_view metric) {
+  return kind == StudyKind::adaptive ? floor_rule_in<AdaptiveMetric>(metric)
+                                     : floor_rule_in<ApproximationMetric>(metric);
 }
 
 const std::vector<std::string>& StudyDefinition::all_metrics() const { return metric_names(kind); }
@@ -180,6 +195,11 @@ std::string laps_text(double laps) {
 AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial) {
   AdaptiveSettings settings = study.adaptive;
   if (!study.reference.name.empty()) settings.engine = AdaptiveEngine::time_stepping;
+  for (const auto& [name, value] : trial.integrator.parameters.values()) {
+    if (name != "rtol" && name != "atol") continue;
+    (name == "rtol" ? settings.integrator_rtol : settings.integrator_atol) =
+        trial.integrator.parameters.real(name);
+  }
   if (!trial.laps) return settings;
   settings.laps = *trial.laps;
   std::erase_if(settings.snapshot_laps, [&](double lap) { return lap > settings.laps; });

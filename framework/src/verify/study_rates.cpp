@@ -1,9 +1,11 @@
 #include "rkhs/verify/study_rates.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "rkhs/adaptive/metrics.hpp"
@@ -19,6 +21,19 @@ std::string_view excluding_flag_in(std::string_view metric) {
   for (const auto& row : MetricTable<Metric>::rows)
     if (row.name == metric) return row.flag_excludes_from_fits ? row.flag : std::string_view();
   return {};
+}
+
+// The row's flag and its floor flag, where they leave a value out of fits.
+template <class Metric>
+std::vector<std::string> excluding_flags_in(std::string_view metric) {
+  std::vector<std::string> flags;
+  for (const auto& row : MetricTable<Metric>::rows) {
+    if (row.name != metric || !row.flag_excludes_from_fits) continue;
+    if (!row.flag.empty()) flags.emplace_back(row.flag);
+    if (auto floor = floor_flag(row); !floor.empty() && floor != row.flag)
+      flags.push_back(std::move(floor));
+  }
+  return flags;
 }
 
 }  // namespace
@@ -40,7 +55,8 @@ void fit_series(MetricSeries& series, const FitWindow& window) {
       first_flagged = std::min(first_flagged, k);
     }
   }
-  series.analysis = analyse_series(series.abscissa, series.n, series.values, usable, 0.95, window);
+  series.analysis =
+      analyse_series(series.abscissa, series.n, series.values, usable, 0.95, window, series.floors);
   const auto& reported = series.analysis.reported_analysis();
   series.pairwise = reported.pairwise;
   series.fit = reported.fit;
@@ -105,12 +121,14 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
               [&](auto a, auto b) { return trials[a].n < trials[b].n; });
     for (const auto& metric : study.metrics) {
       const std::size_t m = study.metric_index(metric);
-      const auto flag = excluding_flag(study.kind, metric);
+      const auto flags = study.kind == StudyKind::adaptive
+                             ? excluding_flags_in<AdaptiveMetric>(metric)
+                             : excluding_flags_in<ApproximationMetric>(metric);
+      std::vector<std::string> seen;  // the flags found, in the order of `flags`
       MetricSeries series;
       series.metric = metric;
       series.group = g;
       series.trials = indices;
-      series.exclusion_flag = std::string(flag);
       for (std::size_t k = 0; k < indices.size(); ++k) {
         const auto& result = results[indices[k]];
         const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)
@@ -118,11 +136,23 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
         series.abscissa.push_back(x);
         series.n.push_back(static_cast<double>(trials[indices[k]].n));
         series.values.push_back(result.metrics[m]);
-        series.flagged.push_back(
-            !flag.empty() &&
-            std::find(result.flags.begin(), result.flags.end(), flag) != result.flags.end());
+        series.floors.push_back(m < result.floors.size()
+                                    ? result.floors[m]
+                                    : std::numeric_limits<double>::quiet_NaN());
+        bool flagged = false;
+        for (const auto& flag : flags)
+          if (std::find(result.flags.begin(), result.flags.end(), flag) != result.flags.end()) {
+            flagged = true;
+            if (std::find(seen.begin(), seen.end(), flag) == seen.end()) seen.push_back(flag);
+          }
+        series.flagged.push_back(flagged);
         series.failed.push_back(!result.ok);
       }
+      std::sort(seen.begin(), seen.end(), [&](const auto& a, const auto& b) {
+        return std::find(flags.begin(), flags.end(), a) < std::find(flags.begin(), flags.end(), b);
+      });
+      series.exclusion_flag = seen.empty() ? (flags.empty() ? std::string() : flags.front())
+                                           : fmt::format("{}", fmt::join(seen, ", "));
       fit_series(series, study.rates_window);
       out.push_back(std::move(series));
     }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <functional>
 #include <memory>
 #include <span>
@@ -268,6 +269,12 @@ struct AdaptiveSettings {
   /// velocities (computed from forces of 1e5 that cancel): Newton iterations then stall.
   double lap_map_rtol = 1e-10;
   double lap_map_atol = 1e-10;
+  /// The trial's integrator's tolerances (its rtol and atol parameters; 0 for an integrator
+  /// without them, and then no integration floor is estimated): the scale of the integration
+  /// floors (FloorRule::integration). Set per trial by trial_adaptive_settings from the
+  /// integrator's parameters (which are part of the trial's identity), never read from a file.
+  double integrator_rtol = 0;
+  double integrator_atol = 0;
   /// The path s(t): every lap around the track (shuttle_length = 0, s = v t mod L), or a shuttle
   /// back and forth between shuttle_from and shuttle_from + shuttle_length (`[adaptive] path`):
   /// s = from + u for u = v t mod 2l below l, from + 2l - u above, so that a "lap" is one round
@@ -313,6 +320,8 @@ struct Snapshot {
 
 struct AdaptiveMeasurement {
   MetricValues<AdaptiveMetric> metrics;  ///< in adaptive_metric_names() order
+  /// The floor of each metric (MetricRow::floor; NaN: exact, or not estimated by this trial).
+  MetricValues<AdaptiveMetric> floors;
   std::string solve_method;
   std::string engine;  ///< "time_stepping" or "lap_map" (AdaptiveEngine)
   std::vector<std::string> flags;
@@ -323,6 +332,21 @@ struct AdaptiveMeasurement {
   /// of the trial's wall time, which then measures the trial's own integrator.
   double reference_seconds = 0;
 };
+
+/// Sets the floors of `out`'s values computed from the integrated state (FloorRule::integration,
+/// docs/metrics.md "Floors"): the tolerance the state z(T) is known to, rtol |z| + atol, carried
+/// to each value's scale: `estimate` (fhat(T) on the evaluation grid), `alpha` (its
+/// coefficients), `alpha_star` (those of Pi_n f), `largest_state_pair` (max over the samples of
+/// |x| + |xhat|, d the plant's dimension) and `basis_scale` (the largest sum of |basis values| at
+/// a grid point). Time stepping: settings.integrator_rtol and _atol (nothing is set when rtol is
+/// 0: an integrator without tolerances). The lap map: the floors of its own metrics from the
+/// spectral radius's `radius_uncertainty` (rkhs/adaptive/lap_map.hpp); the caller replaces
+/// those of the state its powers give by the spread under a perturbation of the map.
+void set_integration_floors(const AdaptiveSettings& settings, AdaptiveEngine engine,
+                            const Domain& domain, const Eigen::VectorXd& estimate,
+                            const Eigen::VectorXd& alpha, const Eigen::VectorXd& alpha_star,
+                            double largest_state_pair, Eigen::Index d, double basis_scale,
+                            double radius_uncertainty, AdaptiveMeasurement& out);
 
 /// Runs one adaptive trial. Throws on invalid input or failed integration. A plant with
 /// Plant::state_dependent() is measured by measure_state_dependent

@@ -48,6 +48,12 @@ struct EstimateGaps {
   /// The gaps are within 10x the integration's own discrepancy: estimate_gap_H / sup_t |beta|
   /// <= 10 plant_gap / sup_t |x| (the two plant copies drift apart by the integration error).
   bool gaps_at_integration_floor = false;
+  /// The floors of the values above (FloorRule; docs/metrics.md "Floors"): the gaps' from the
+  /// integration, rtol (of settings.integrator_rtol, 0 when unknown) at the scale of the
+  /// integrated state plus 10 times the plants' relative discrepancy; the norms' round-off.
+  double estimate_gap_H_floor = 0, estimate_gap_C_floor = 0, state_gap_floor = 0,
+         plant_gap_floor = 0, projected_l2_error_floor = 0, projection_norm_floor = 0,
+         projection_operator_norm_floor = 0;
   std::size_t dimension = 0;    ///< dim H_j
   std::size_t breakpoints = 0;  ///< times at which the gaps were taken
 };

@@ -40,6 +40,8 @@ const std::vector<std::string>& approximation_metric_names();
 
 struct ApproximationMeasurement {
   MetricValues<ApproximationMetric> metrics;  ///< in approximation_metric_names() order
+  /// The floor of each metric (MetricRow::floor; NaN: exact, or not estimated by this trial).
+  MetricValues<ApproximationMetric> floors;
   std::string solve_method;     ///< GramSolver::method()
   std::vector<std::string> flags;  ///< gram_singular, power_function_at_floor, sup_error_at_floor, ...
 };

@@ -1,9 +1,10 @@
 #pragma once
 // Metric tables: for each study kind, one enum naming its metrics and one constexpr table with,
-// per metric, its output name, unit, meaning, whether NaN is a legitimate value and the flag
-// that excludes it from rate fits. The enum order is the output order (trials.csv columns,
+// per metric, its output name, how its round-off floor is estimated, its unit, meaning, whether
+// NaN is a legitimate value and the flag that excludes it from rate fits. The enum order is the output order (trials.csv columns,
 // `rkhs-study list metrics`, docs/metrics.md); trials fill their values by identifier.
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <limits>
@@ -14,11 +15,51 @@
 
 namespace rkhs {
 
+/// How a metric's floor is estimated: the size below which its value is not resolved, because
+/// round-off, an integrator's tolerance or the step controller's decisions decide its digits
+/// there (docs/metrics.md, "Floors"). A trial writes the floor beside the value (`<metric>_floor`
+/// in trials.csv, `floors` in summary.json) for every rule but `exact`; a value at or below its
+/// floor is flagged (the row's flag, or `<metric>_at_floor`) and left out of rate fits, and two
+/// runs (two processors, two code paths of glibc's exp and log) agree within the larger floor.
+enum class FloorRule {
+  /// Correctly rounded arithmetic on exact inputs, or a count of the grid or of thresholded
+  /// eigenvalues: the same value on every processor to a few ulps. No floor is written.
+  exact,
+  /// The round-off of the linear algebra that computes it, from the trial's own estimate:
+  /// n eps lambda_max(G) propagated through the solve (the power function's and the errors'
+  /// floors, an eigenvalue's perturbation bound, the projection norm's sqrt(|S| eps max k)).
+  round_off,
+  /// The tolerances of the adaptive integration that computes it (the integrator's rtol and
+  /// atol, or the lap map's), at the scale of the integrated state: rtol |z| + atol.
+  integration,
+  /// From the floors of the values it is computed from, to first order (a ratio, a logarithm).
+  propagated,
+  /// A count of the integrator's work: the step controller accepts or rejects a step whose
+  /// error estimate is near its tolerance according to the last bits of the state, so the count
+  /// moves from processor to processor (215775 against 215794 steps; up to 0.84 % seen, and 28
+  /// against 42 rejected steps). Its floor is 0.02 N + 3 sqrt(N) for a count N: a measure of
+  /// work, compared as such, never flagged, never of the result.
+  step_controller,
+};
+
+/// The rule's identifier ("exact", "round_off", ...), as `rkhs-study list metrics` prints it.
+constexpr std::string_view floor_rule_name(FloorRule rule) {
+  switch (rule) {
+    case FloorRule::exact: return "exact";
+    case FloorRule::round_off: return "round_off";
+    case FloorRule::integration: return "integration";
+    case FloorRule::propagated: return "propagated";
+    case FloorRule::step_controller: return "step_controller";
+  }
+  return "";
+}
+
 /// One row of a metric table; `id` is the row's position (checked at compile time).
 template <class Metric>
 struct MetricRow {
   Metric id;
   std::string_view name;  ///< column of trials.csv, key of study.metrics in study files
+  FloorRule floor;        ///< how its floor is estimated (`exact`: none is written)
   /// m (arc length), s, 1 (dimensionless), count, [k] (units of the kernel), [f] (of the
   /// target f), [x] (of the plant state), [V] (of the Lyapunov function), or products of these
   std::string_view unit;
@@ -54,6 +95,20 @@ constexpr const MetricRow<Metric>& metric_row(Metric metric) {
 }
 
 /// The names of a table, in table (output) order.
+/// The flag a value of `row` at or below its floor carries: the row's own flag when it is a
+/// floor flag of this metric ("<stem>_at_floor" with the metric's name starting with <stem>:
+/// power_function_at_floor for power_function_sup), else "<name>_at_floor" ("" for an exact
+/// metric).
+template <class Metric>
+std::string floor_flag(const MetricRow<Metric>& row) {
+  if (row.floor == FloorRule::exact) return {};
+  constexpr std::string_view suffix = "_at_floor";
+  if (row.flag.ends_with(suffix) &&
+      row.name.starts_with(row.flag.substr(0, row.flag.size() - suffix.size())))
+    return std::string(row.flag);
+  return std::string(row.name) + std::string(suffix);
+}
+
 template <class Metric>
 std::vector<std::string> metric_table_names() {
   std::vector<std::string> names;
@@ -76,6 +131,8 @@ class MetricValues {
   /// The values in table order.
   const std::vector<double>& values() const& noexcept { return values_; }
   std::vector<double> values() && noexcept { return std::move(values_); }
+  /// Sets every value to NaN.
+  void clear() { std::fill(values_.begin(), values_.end(), std::numeric_limits<double>::quiet_NaN()); }
 
  private:
   std::vector<double> values_;
@@ -141,44 +198,45 @@ enum class ApproximationMetric : std::size_t {
 template <>
 struct MetricTable<ApproximationMetric> {
   using M = ApproximationMetric;
+  using F = FloorRule;
   static constexpr std::array<MetricRow<M>, 13> rows{{
-      {M::fill_distance, "fill_distance", "m", "h = sup_x min_i |x - c_i|", false, "", true,
+      {M::fill_distance, "fill_distance", F::exact, "m", "h = sup_x min_i |x - c_i|", false, "", true,
        work_fill},
-      {M::separation_distance, "separation_distance", "m",
+      {M::separation_distance, "separation_distance", F::exact, "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, "", true,
        work_separation},
-      {M::gram_condition_number, "gram_condition_number", "1",
+      {M::gram_condition_number, "gram_condition_number", F::round_off, "1",
        "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular", true,
        work_spectrum},
-      {M::gram_min_eigenvalue, "gram_min_eigenvalue", "[k]", "lambda_min(G)", false,
+      {M::gram_min_eigenvalue, "gram_min_eigenvalue", F::round_off, "[k]", "lambda_min(G)", false,
        "gram_singular", true,
        work_spectrum},
-      {M::gram_max_eigenvalue, "gram_max_eigenvalue", "[k]", "lambda_max(G)", false, "", true,
+      {M::gram_max_eigenvalue, "gram_max_eigenvalue", F::round_off, "[k]", "lambda_max(G)", false, "", true,
        work_spectrum},
-      {M::power_function_sup, "power_function_sup", "sqrt([k])",
+      {M::power_function_sup, "power_function_sup", F::round_off, "sqrt([k])",
        "max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid", false, "power_function_at_floor", true,
        work_power | work_cardinal},
-      {M::power_function_floor, "power_function_floor", "sqrt([k])",
+      {M::power_function_floor, "power_function_floor", F::round_off, "sqrt([k])",
        "round-off level of P_n: max_m sqrt(n eps lambda_max |G^-1 k_X(s_m)|^2)", false, "", true,
        work_power | work_cardinal},
-      {M::l2_error, "l2_error", "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
+      {M::l2_error, "l2_error", F::round_off, "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
        "l2_error_at_floor", true,
        work_interpolant | work_residual | work_cardinal},
-      {M::sup_error, "sup_error", "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
+      {M::sup_error, "sup_error", F::round_off, "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
        "sup_error_at_floor", true,
        work_interpolant | work_residual | work_cardinal},
-      {M::error_floor, "error_floor", "[f]",
+      {M::error_floor, "error_floor", F::round_off, "[f]",
        "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, "", true,
        work_interpolant | work_cardinal},
-      {M::interpolant_native_norm, "interpolant_native_norm", "[f] / sqrt([k])",
+      {M::interpolant_native_norm, "interpolant_native_norm", F::round_off, "[f] / sqrt([k])",
        "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, "", true,
        work_interpolant},
-      {M::projection_norm_H_to_C, "projection_norm_H_to_C", "sqrt([k])",
+      {M::projection_norm_H_to_C, "projection_norm_H_to_C", F::round_off, "sqrt([k])",
        "max_m ||(I - Pi)^* k(s_m, .)||_H = ||I - Pi||_{H -> C} on the grid, from the "
        "projection's own definition (the power function for interpolation)",
        false, "projection_norm_at_floor", true,
        work_projection_residual},
-      {M::projection_operator_norm, "projection_operator_norm", "1",
+      {M::projection_operator_norm, "projection_operator_norm", F::round_off, "1",
        "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
        work_operator_norm},
   }};

@@ -191,7 +191,12 @@ double projection_norm_floor(const AnyKernel& kernel, std::size_t sample_count,
                              std::span<const double> points);
 /// ||Pi||_{H -> H} = sqrt(lambda_max(R^T W K_SS W^T R)) with G_B = R R^T: the largest
 /// ||Pi f||_H over ||f||_H = 1 (f ranges over H, seen by Pi through f(S)).
-double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op);
+/// With `floor`, also its round-off floor (FloorRule::round_off): the value times
+/// dim eps cond(G_B) / 2, cond(G_B) the ratio of the basis Gram matrix's largest eigenvalue to its
+/// smallest one above dim eps lambda_max (the relative error its eigendecomposition and the
+/// weights built from the same matrices leave in ||Pi||^2).
+double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op,
+                                double* floor = nullptr);
 
 }  // namespace rkhs
 

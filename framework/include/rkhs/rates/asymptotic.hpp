@@ -65,11 +65,15 @@ struct ModelAnalysis {
   RateModel model = RateModel::power_law;
   AsymptoticWindow window;
   std::optional<RateFit> fit;  ///< on window.points (RateFit::used holds positions); empty if < 2
+  /// How far the fit's statistics move with the values within their floors (zero without).
+  FitFloors floors;
   /// Size y.size() - 1 over every point given (usable or not), NaN where undefined.
   std::vector<double> pairwise;
   /// ΔAIC of this model over the other on this model's window, m ln(SSE_other / SSE_this):
   /// positive when this model fits its own window better. NaN with fewer than 3 points.
   double advantage = 0.0;
+  /// How far `advantage` moves with the values within their floors (0 without floors).
+  double advantage_floor = 0.0;
 };
 
 /// Both models and which one describes the series.
@@ -84,6 +88,9 @@ struct SeriesAnalysis {
   double evidence = 0.0;
   /// Points of the preferred model's window, on which `evidence` was measured (0 when none).
   std::size_t evidence_points = 0;
+  /// How far `evidence` moves with the values within their floors: m times the floors of both
+  /// models' ln SSE on that window (+inf when the residuals are at the floors). 0 without floors.
+  double evidence_floor = 0.0;
   /// The model whose fit is reported: exponential when it is preferred decisively, otherwise
   /// the power law (the convention of rates against ln n or ln h).
   RateModel reported = RateModel::power_law;
@@ -91,8 +98,9 @@ struct SeriesAnalysis {
   /// law on n = 10..60)".
   std::string note;
 
+  /// ΔAIC >= 2 beyond its floor, on at least 4 points.
   bool decisive() const {
-    return preferred.has_value() && evidence >= 2.0 && evidence_points >= 4;
+    return preferred.has_value() && evidence - evidence_floor >= 2.0 && evidence_points >= 4;
   }
   const ModelAnalysis& analysis(RateModel model) const {
     return model == RateModel::power_law ? power_law : exponential;
@@ -106,6 +114,12 @@ struct SeriesAnalysis {
   std::optional<CorrectedRateFit> corrected;
   /// Positions of the points `corrected` used (its RateFit::used holds positions too).
   std::vector<std::size_t> corrected_points;
+  /// How far `corrected`'s statistics move with the values within their floors, measured: the
+  /// largest change over two refits with each value moved by its floor, up where the slope's
+  /// weight is positive and down where it is negative, and the reverse (a nonlinear fit has no
+  /// first-order formula here). rate covers p, its standard error and interval; log_sse holds
+  /// the advantage's change. 0 without floors.
+  FitFloors corrected_floors;
   /// The bend describes the series: the power law is reported, and the correction earns its
   /// two parameters (ΔAICc = corrected->advantage >= 2 over the straight line on its points).
   /// Rate verdicts then judge the corrected fit.
@@ -136,10 +150,12 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
 /// non-positive value or abscissa are left out before anything else. Throws
 /// std::invalid_argument when the sizes differ or confidence is not in (0, 1). A non-empty
 /// `window` restricts the points (h_from and h_to apply to x) and replaces the automatic
-/// window; fewer than 2 points in it leave both models without a fit.
+/// window; fewer than 2 points in it leave both models without a fit. `floors` (empty, or one
+/// absolute floor per point: MetricRow::floor) give the fits' FitFloors and the evidence's.
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,
-                              double confidence = 0.95, const FitWindow& window = {});
+                              double confidence = 0.95, const FitWindow& window = {},
+                              std::span<const double> floors = {});
 
 /// Pairwise exponential rates ln(y_{i+1} / y_i) / (n_{i+1} - n_i), the counterpart of
 /// pairwise_rates; NaN where a value is non-positive or non-finite or n_{i+1} = n_i.

@@ -60,6 +60,31 @@ struct RateFit {
   std::string note;
 };
 
+/// How far a fit's statistics may move when each value it used moves within its floor
+/// (docs/verification.md, "Floors"): with d_i = floor_i / y_i the relative floor of point i (its
+/// floor in ln y, to first order), w_i = (u_i - mean u) / S_uu the slope's weights and r the
+/// residuals,
+///   rate:      sum |w_i| d_i + t |d|_2 / sqrt((m - 2) S_uu)   (the slope, and its standard
+///              error times the interval's t quantile: covers rate, std_error, ci_low, ci_high)
+///   ln SSE:    -2 ln(1 - |d|_2 / |r|_2), +inf once |d|_2 >= |r|_2 (the residuals are floor)
+///   r_squared: what |r + P d| and the spread of ln y can move 1 - SSE / SST by.
+/// All 0 when every floor is 0.
+struct FitFloors {
+  double rate = 0.0;
+  double log_sse = 0.0;
+  double r_squared = 0.0;
+};
+
+/// FitFloors of `fit` (a fit of ln y on u: u = ln x for the power law, x for the exponential
+/// model) from the abscissa `u`, the values `y` and their absolute `floors` (NaN or negative:
+/// 0), all indexed like fit.used.
+FitFloors fit_floors(const RateFit& fit, std::span<const double> u, std::span<const double> y,
+                     std::span<const double> floors);
+
+/// The floor of ln SSE for residuals of norm sqrt(sse) when the points move by
+/// relative_floor_norm (|d|_2) in ln y: -2 ln(1 - |d| / sqrt(sse)), +inf at or beyond it.
+double log_sse_floor(double sse, double relative_floor_norm);
+
 /// Local rates between successive points: r_i = ln(y_{i+1} / y_i) / ln(x_{i+1} / x_i) for
 /// i = 0 .. x.size() - 2 (result size x.size() - 1; empty when fewer than 2 points).
 /// r_i is NaN when any of the four values is non-positive or non-finite, or when

@@ -168,6 +168,10 @@ AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const Tri
 /// Every metric a trial of `kind` measures, in output order.
 const std::vector<std::string>& metric_names(StudyKind kind);
 
+/// How the floor of `metric` (a metric of a `kind` trial) is estimated (MetricRow::floor);
+/// FloorRule::exact for an unknown name.
+FloorRule metric_floor_rule(StudyKind kind, std::string_view metric);
+
 /// Reads and validates a study file. Throws StudyError (file, line, column, key, found,
 /// allowed, and a suggestion for misspelt names) for any problem.
 StudyDefinition load_study(const std::filesystem::path& file);

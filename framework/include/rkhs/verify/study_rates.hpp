@@ -25,6 +25,7 @@ struct MetricSeries {
   std::vector<double> abscissa;         ///< n or fill distance, per trial
   std::vector<double> n;                ///< n per trial (the exponential model's abscissa)
   std::vector<double> values;           ///< the metric, NaN for failed trials
+  std::vector<double> floors;           ///< their floors (TrialResult::floors), NaN for none
   std::vector<bool> flagged;            ///< excluded from the fit as numerically meaningless
   std::vector<bool> failed;             ///< the trial failed (its value is not a measurement)
   std::string exclusion_flag;           ///< the flag behind `flagged` ("" when none applies)
