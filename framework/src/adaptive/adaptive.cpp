@@ -544,12 +544,25 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
         perturbed.monodromy(i, j) *= 1.0 + ((i + j) % 2 ? -1.0 : 1.0) * settings.lap_map_rtol;
     for (Eigen::Index i = 0; i < perturbed.offset.size(); ++i)
       perturbed.offset(i) *= 1.0 + (i % 2 ? -1.0 : 1.0) * settings.lap_map_rtol;
-    const Eigen::VectorXd z_perturbed =
-        settings.limit()
-            ? periodic_limit(perturbed, z0, d, 100 * settings.lap_map_rtol, settings.lap_map_rtol)
-                  .state
-            : LapPowers(perturbed).advance(
-                  z0, static_cast<std::uint64_t>(settings.laps));
+    Eigen::VectorXd z_perturbed;
+    if (settings.limit()) {
+      z_perturbed =
+          periodic_limit(perturbed, z0, d, 100 * settings.lap_map_rtol, settings.lap_map_rtol)
+              .state;
+    } else {
+      // N laps by squaring, one power at a time (no table of powers: no more memory than the
+      // map itself).
+      z_perturbed = z0;
+      Eigen::MatrixXd power = perturbed.monodromy;
+      Eigen::VectorXd shift = perturbed.offset;  // z -> power z + shift is the map to the 2^k
+      for (std::uint64_t left = laps; left != 0; left >>= 1) {
+        if (left & 1u) z_perturbed = (power * z_perturbed + shift).eval();
+        if (left > 1) {
+          shift = (power * shift + shift).eval();
+          power = (power * power).eval();
+        }
+      }
+    }
     lap_map_spread = z_perturbed - z;
   }
   out.road.resize(snapshot_grid.size());
