@@ -30,7 +30,6 @@ const std::vector<std::string>& adaptive_metric_names() {
 namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-constexpr double eps = std::numeric_limits<double>::epsilon();
 
 bool whole(double laps) { return laps >= 1 && laps == std::floor(laps) && laps < 9.2e18; }
 
@@ -271,6 +270,22 @@ void set_integration_floors(const AdaptiveSettings& settings, AdaptiveEngine eng
     floors[M::lyapunov_max_increase] = lyapunov_floor;
   }
   floors[M::lap_map_residual] = rtol;
+}
+
+void set_static_floors(const ApproximationMeasurement& approximation, const GramSpectrum& spectrum,
+                       Eigen::Index n, double l2_projection_l2, double l2_projection_sup,
+                       AdaptiveMeasurement& out) {
+  using M = AdaptiveMetric;
+  using Static = ApproximationMetric;
+  for (auto [adaptive, static_metric] :
+       {std::pair{M::gram_condition_number, Static::gram_condition_number},
+        {M::power_function_sup, Static::power_function_sup},
+        {M::interpolant_l2_error, Static::l2_error},
+        {M::interpolant_sup_error, Static::sup_error}})
+    out.floors[adaptive] = approximation.floors[static_metric];
+  const double relative = solve_round_off(spectrum, n);
+  out.floors[M::l2_projection_l2_error] = relative * l2_projection_l2;
+  out.floors[M::l2_projection_sup_error] = relative * l2_projection_sup;
 }
 
 AdaptiveSystem::LearningSignal learning_signal_for(const AnyKernel& kernel) {
@@ -710,19 +725,8 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
         lap_map_spread.tail(coefficients).norm() / std::max(coefficients_star.norm(), 1e-300);
     out.floors[M::final_state_error] = lap_map_spread.head(2 * d).norm();
   }
-  for (auto [adaptive, approximation_metric] :
-       {std::pair{M::gram_condition_number, Static::gram_condition_number},
-        {M::power_function_sup, Static::power_function_sup},
-        {M::interpolant_l2_error, Static::l2_error},
-        {M::interpolant_sup_error, Static::sup_error}})
-    out.floors[adaptive] = approximation.floors[approximation_metric];
-  {  // P_L2 f from a solve with G: its round-off relative to its size.
-    const auto& spectrum = solver.spectrum();
-    const double relative = std::min(1.0, static_cast<double>(n) * eps * spectrum.lambda_max /
-                                              std::max(spectrum.lambda_min, 1e-300));
-    out.floors[M::l2_projection_l2_error] = relative * l2_projection_scale.first;
-    out.floors[M::l2_projection_sup_error] = relative * l2_projection_scale.second;
-  }
+  set_static_floors(approximation, solver.spectrum(), n, l2_projection_scale.first,
+                    l2_projection_scale.second, out);
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
   metrics[M::segments] = static_cast<double>(stats.segments);

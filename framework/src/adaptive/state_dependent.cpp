@@ -397,13 +397,8 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
     metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
     metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
     metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
-    // Its round-off: the solves with G, relative to its size.
-    const auto& spectrum = solver.spectrum();
-    const double relative =
-        std::min(1.0, static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
-                          spectrum.lambda_max / std::max(spectrum.lambda_min, 1e-300));
-    out.floors[M::l2_projection_l2_error] = relative * l2(l2_projection);
-    out.floors[M::l2_projection_sup_error] = relative * l2_projection.cwiseAbs().maxCoeff();
+    set_static_floors(approximation, solver.spectrum(), n, l2(l2_projection),
+                      l2_projection.cwiseAbs().maxCoeff(), out);
   }
   {  // Persistence of excitation along the trajectory.
     const auto level = excitation_level(excitation, gram, solver.spectrum());
@@ -424,12 +419,6 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
                          cross.size() ? cross.cwiseAbs().rowwise().sum().maxCoeff() : 0.0,
                          std::numeric_limits<double>::quiet_NaN(), out);
   out.floors[M::visited_rms_error] = out.floors[M::sup_error];
-  for (auto [adaptive, static_metric] :
-       {std::pair{M::gram_condition_number, Static::gram_condition_number},
-        {M::power_function_sup, Static::power_function_sup},
-        {M::interpolant_l2_error, Static::l2_error},
-        {M::interpolant_sup_error, Static::sup_error}})
-    out.floors[adaptive] = approximation.floors[static_metric];
   metrics[M::steps] = static_cast<double>(stats.steps);
   metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
   metrics[M::segments] = static_cast<double>(stats.segments);

@@ -200,14 +200,6 @@ void keep_selected(const MetricSelection& selection, ApproximationMeasurement& o
     }
 }
 
-// The relative round-off of a solve with G (backward error n eps lambda_max, amplified by
-// cond(G)), at most 1: what a value computed from G^-1 is known to.
-double solve_round_off(const GramSpectrum& spectrum, Eigen::Index n) {
-  const double relative =
-      static_cast<double>(n) * eps * spectrum.lambda_max / std::max(spectrum.lambda_min, 0.0);
-  return std::isfinite(relative) ? std::min(1.0, relative) : 1.0;
-}
-
 // The floor of ||Pi f||_H = sqrt(alpha^T G alpha): the larger of what a backward error E of
 // n eps lambda_max in G moves it by (alpha^T E alpha in the square) and what the round-off of the
 // data, eps |f(X)|, becomes through the smallest eigenvalue the solve keeps (lambda_min, at least
@@ -335,6 +327,12 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
   return out;
 }
 }  // namespace
+
+double solve_round_off(const GramSpectrum& spectrum, Eigen::Index n) {
+  const double relative =
+      static_cast<double>(n) * eps * spectrum.lambda_max / std::max(spectrum.lambda_min, 0.0);
+  return std::isfinite(relative) ? std::min(1.0, relative) : 1.0;
+}
 
 Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,
                                std::span<const double> centres, std::span<const double> points) {

@@ -23,6 +23,9 @@
 
 namespace rkhs {
 
+struct ApproximationMeasurement;  // rkhs/approx/approximation.hpp
+struct GramSpectrum;              // rkhs/approx/gram_solver.hpp
+
 /// The coupled system in z = [x (d), xhat (d), alpha (n)]:
 ///   x'     = A x + B f(s)
 ///   xhat'  = A xhat + B phi(s)^T alpha
@@ -347,6 +350,15 @@ void set_integration_floors(const AdaptiveSettings& settings, AdaptiveEngine eng
                             const Eigen::VectorXd& alpha, const Eigen::VectorXd& alpha_star,
                             double largest_state_pair, Eigen::Index d, double basis_scale,
                             double radius_uncertainty, AdaptiveMeasurement& out);
+
+/// Sets the floors of `out`'s metrics that come from the trial's static part: those of
+/// `approximation` (gram_condition_number, power_function_sup, and interpolant_l2_error and
+/// interpolant_sup_error from its l2_error and sup_error), and those of P_L2 f, from a solve with
+/// the Gram matrix of `spectrum` (n centres): solve_round_off times its size in L2
+/// (`l2_projection_l2`) and on the grid (`l2_projection_sup`).
+void set_static_floors(const ApproximationMeasurement& approximation, const GramSpectrum& spectrum,
+                       Eigen::Index n, double l2_projection_l2, double l2_projection_sup,
+                       AdaptiveMeasurement& out);
 
 /// Runs one adaptive trial. Throws on invalid input or failed integration. A plant with
 /// Plant::state_dependent() is measured by measure_state_dependent

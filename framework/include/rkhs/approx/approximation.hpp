@@ -46,6 +46,11 @@ struct ApproximationMeasurement {
   std::vector<std::string> flags;  ///< gram_singular, power_function_at_floor, sup_error_at_floor, ...
 };
 
+/// The relative round-off of a solve with a Gram matrix of this spectrum and size n (backward
+/// error n eps lambda_max, amplified by cond(G)), at most 1 (1 for a singular or unknown
+/// spectrum): what a value computed from G^-1 is known to.
+double solve_round_off(const GramSpectrum& spectrum, Eigen::Index n);
+
 /// Measures Pi_n for `kernel` at `centres` on `evaluation_points` uniform points of the
 /// kernel's domain: the metrics `selection` names (empty: all), computing only what they need
 /// (MetricRow::needs; the others are NaN). The Gram matrix is assembled and factorised once;
