@@ -20,7 +20,8 @@ integration moves by up to its floor (docs/metrics.md, "Floors"). So:
   - a floor agrees with its golden one within a factor of FLOOR_FACTOR (an estimate of a size);
   - a fit in rates.csv agrees within the floors of its statistics (rate_floor for the rate, its
     standard error and interval; r_squared_floor; delta_aic_floor), computed from the floors of
-    the values it used;
+    the values it used; a constant series' value and band within value_floor (the largest
+    floor of its values);
   - text (flags, notes, reasons) and verdicts agree exactly but for their numbers, which agree
     within the row's floors or one unit of their last printed digit.
 Columns may be added, never removed, renamed or changed; rows must match in number and order.
@@ -187,7 +188,8 @@ FLOOR_FACTOR = 4.0
 # FitFloors): rate_floor covers the rate, its standard error and interval.
 RATE_FLOOR_COLUMNS = {"rate": "rate_floor", "std_error": "rate_floor", "ci_low": "rate_floor",
                       "ci_high": "rate_floor", "r_squared": "r_squared_floor",
-                      "delta_aic": "delta_aic_floor"}
+                      "delta_aic": "delta_aic_floor", "value": "value_floor",
+                      "band": "value_floor"}
 
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 

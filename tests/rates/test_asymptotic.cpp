@@ -253,3 +253,83 @@ TEST_CASE("pairwise exponential rates and label ranges", "[asymptotic]") {
   CHECK(rkhs::label_range(n, {1}) == "20");
   CHECK(rkhs::label_range(n, {0, 1, 2}) == "10..30");
 }
+
+TEST_CASE("constant series: within the floors, within a relative band, or not at all",
+          "[asymptotic][constant]") {
+  const std::vector<double> n{10, 20, 30, 40, 50, 60};
+  const std::vector<bool> all(n.size(), true);
+  // Exactly constant: band 0, within the floors (none given: 4 ulps).
+  const std::vector<double> one(n.size(), 1.0);
+  auto exact = rkhs::analyse_series(n, n, one, all);
+  REQUIRE(exact.constant);
+  CHECK(exact.constant->value == 1.0);
+  CHECK(exact.constant->band == 0.0);
+  CHECK(exact.constant->within_floors);
+  CHECK(exact.constant->points.size() == n.size());
+  CHECK(exact.constant->text(n) == "1 ± 0 on n = 10..60");
+
+  // Round-off about 1 within floors of 1e-11: constant with the relative band 0 too.
+  const std::vector<double> noisy{1.0, 1.0 + 3e-12, 1.0 - 2e-12, 1.0 + 8e-12, 1.0, 1.0 - 5e-12};
+  const std::vector<double> floors(n.size(), 1e-11);
+  auto round_off = rkhs::analyse_series(n, n, noisy, all, 0.95, {}, floors, 0.0);
+  REQUIRE(round_off.constant);
+  CHECK(round_off.constant->within_floors);
+  CHECK(round_off.constant->value == Approx(1.0 + 1.5e-12).epsilon(1e-15));
+  CHECK(round_off.constant->band == Approx(6.5e-12).epsilon(1e-3));
+  CHECK_THAT(round_off.constant->text(n),
+             Catch::Contains("(within the values' floors) on n = 10..60"));
+  // Without floors and without a band the same values vary.
+  CHECK_FALSE(rkhs::analyse_series(n, n, noisy, all, 0.95, {}, {}, 0.0).constant);
+
+  // A limit approached within 0.75 % (an interpolant's native norm): constant at the default 1 %,
+  // not at 0.1 %.
+  const std::vector<double> settling{3.741, 3.762, 3.765, 3.767, 3.768, 3.769};
+  auto settled = rkhs::analyse_series(n, n, settling, all);
+  REQUIRE(settled.constant);
+  CHECK_FALSE(settled.constant->within_floors);
+  CHECK(settled.constant->value == Approx(3.755));
+  CHECK(settled.constant->band == Approx(0.014));
+  CHECK(settled.constant->relative_band() == Approx(0.014 / 3.755));
+  CHECK(settled.constant->text(n) == "3.755 ± 0.014 (0.37 %) on n = 10..60");
+  // At 0.1 % only after its head; at 0.001 % not at all.
+  const auto tighter = rkhs::analyse_series(n, n, settling, all, 0.95, {}, {}, 0.001);
+  CHECK((!tighter.constant || !tighter.constant->head.empty()));
+  CHECK_FALSE(rkhs::analyse_series(n, n, settling, all, 0.95, {}, {}, 1e-5).constant);
+
+  // A power law is never constant; nor are fewer than 3 usable points.
+  std::vector<double> decaying;
+  for (double e : n) decaying.push_back(std::pow(e, -0.5));
+  CHECK_FALSE(rkhs::analyse_series(n, n, decaying, all).constant);
+  std::vector<bool> two(n.size(), false);
+  two[0] = two[1] = true;
+  CHECK_FALSE(rkhs::analyse_series(n, n, one, two).constant);
+
+  // Zeros and negative values count (no logarithm is taken).
+  const std::vector<double> zeros(n.size(), 0.0);
+  auto zero = rkhs::analyse_series(n, n, zeros, all);
+  REQUIRE(zero.constant);
+  CHECK(zero.constant->value == 0.0);
+  CHECK(zero.constant->relative_band() == 0.0);
+}
+
+TEST_CASE("constant series: a pre-asymptotic head is left out", "[asymptotic][constant]") {
+  // A B-spline interpolant's native norm: a head at n = 10 1.2 % below, then within 0.3 %.
+  const std::vector<double> n{10, 20, 30, 40, 50, 60, 70, 80, 90, 100};
+  const std::vector<double> y{2.8813, 2.9345, 2.9401, 2.9488, 2.9471,
+                              2.9510, 2.9503, 2.9529, 2.9523, 2.9528};
+  const auto a = rkhs::analyse_series(n, n, y, std::vector<bool>(n.size(), true));
+  REQUIRE(a.constant);
+  REQUIRE(a.constant->head == std::vector<std::size_t>{0});
+  CHECK(a.constant->points.front() == 1);
+  CHECK(a.constant->band < 0.01 * a.constant->value);
+  // With a set window there is no automatic head: the whole window must be constant.
+  rkhs::FitWindow window;
+  window.n_from = 10;
+  CHECK_FALSE(
+      rkhs::analyse_series(n, n, y, std::vector<bool>(n.size(), true), 0.95, window).constant);
+  window.n_from = 20;
+  const auto windowed =
+      rkhs::analyse_series(n, n, y, std::vector<bool>(n.size(), true), 0.95, window);
+  REQUIRE(windowed.constant);
+  CHECK(windowed.constant->head.empty());
+}

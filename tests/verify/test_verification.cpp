@@ -162,7 +162,7 @@ TEST_CASE("[[expect]] mistakes are errors with file:line:column", "[verification
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\n")),
              Catch::Contains("expect: say what is expected"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ntheory = true\nrate = -1\n")),
-             Catch::Contains("give one of theory = true, rate = ... or bound"));
+             Catch::Contains("give one of theory = true, rate = ..., bound = { ... } or constant"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { min = 1, max = 0 }\n")),
              Catch::Contains("s.toml:18:8: expect.rate: min (1) is above max (0)"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { low = 1 }\n")),
@@ -670,4 +670,123 @@ theory = true
     CHECK_THAT(outcomes[i].reason, Catch::StartsWith("the centres are not quasi-uniform"));
     CHECK_THAT(outcomes[i].expected, Catch::Contains("stated in the separation distance q"));
   }
+}
+
+TEST_CASE("verdicts: constant series and constant expectations", "[verification][constant]") {
+  // interpolant_native_norm is 3 everywhere in the textbook series: constant, not a rate.
+  const Synthetic study(R"([[expect]]
+metric = "interpolant_native_norm"
+constant = { value = 3.0 }
+[[expect]]
+metric = "interpolant_native_norm"
+constant = { value = 3.1, within = 0.05 }
+[[expect]]
+metric = "interpolant_native_norm"
+constant = true
+[[expect]]
+metric = "power_function_sup"
+constant = true
+[[expect]]
+metric = "interpolant_native_norm"
+rate = 0.0
+[[expect]]
+metric = "interpolant_native_norm"
+rate = -1.0
+[[expect]]
+metric = "interpolant_native_norm"
+model = "exponential"
+)",
+                        textbook);
+  for (const auto& series : study.rates) {
+    if (series.metric != "interpolant_native_norm") continue;
+    REQUIRE(series.constant());
+    CHECK_FALSE(series.fit);
+    CHECK(series.no_fit_reason == "constant 3 ± 0 on n = 10..100: not a rate");
+  }
+  const auto outcomes = study.verify();
+  REQUIRE(outcomes.size() == 21);  // 7 expectations x 3 groups
+  auto of = [&](std::size_t expectation) {
+    std::vector<const ExpectationOutcome*> out;
+    for (const auto& o : outcomes)
+      if (o.expectation->number == expectation) out.push_back(&o);
+    REQUIRE(out.size() == 3);
+    return out;
+  };
+  for (const auto* o : of(1)) {
+    CHECK(o->verdict == Verdict::pass);
+    CHECK(o->expected == "interpolant_native_norm = 3 within each value's floor at every n");
+    CHECK(o->reason == "every usable value lies within the band");
+  }
+  for (const auto* o : of(2)) {
+    CHECK(o->verdict == Verdict::fail);
+    CHECK(o->reason == "it deviates from 3.1 by 0.1 at n = 10, 0.05 beyond the band");
+  }
+  for (const auto* o : of(3)) CHECK(o->verdict == Verdict::pass);
+  for (const auto* o : of(4)) {
+    // The B-splines' power function decays; the Gaussian's too.
+    CHECK(o->verdict == Verdict::fail);
+    CHECK(o->reason == "it varies with n beyond its floors and the relative band");
+  }
+  for (const auto* o : of(5)) {
+    CHECK(o->verdict == Verdict::pass);
+    CHECK_THAT(o->reason, Catch::StartsWith("the series is constant: the rates its band allows"));
+    CHECK_THAT(o->found, Catch::StartsWith("constant 3 ± 0 on n = 10..100 (10 of 10 points"));
+    CHECK(o->rate == 0.0);
+  }
+  for (const auto* o : of(6)) {
+    CHECK(o->verdict == Verdict::fail);
+    CHECK_THAT(o->reason, Catch::Contains("lie entirely above -0.900"));
+  }
+  for (const auto* o : of(7)) {
+    CHECK(o->verdict == Verdict::fail);
+    CHECK_THAT(o->reason, Catch::StartsWith("the series is constant"));
+  }
+}
+
+TEST_CASE("constant expectations: mistakes are errors with file:line:column",
+          "[verification][constant]") {
+  auto with = [](const std::string& expectation) {
+    return error_of(base + "[[expect]]\nmetric = \"interpolant_native_norm\"\n" + expectation);
+  };
+  CHECK_THAT(with("constant = false\n"),
+             Catch::Contains("expect.constant: constant = false expects nothing"));
+  CHECK_THAT(with("constant = { within = 1 }\n"),
+             Catch::Contains("expect.constant.value: missing"));
+  CHECK_THAT(with("constant = { value = 1, within = -1 }\n"),
+             Catch::Contains("expect.constant.within: must be >= 0"));
+  CHECK_THAT(with("constant = { value = 1, band = 1 }\n"),
+             Catch::Contains("expect.constant.band: unknown key (known: value, within)"));
+  CHECK_THAT(with("constant = 1\n"),
+             Catch::Contains("expect.constant: expected true or { value = 1, within = 1e-12 }"));
+  CHECK_THAT(with("constant = true\nrate = 0\n"), Catch::Contains("give one of theory = true"));
+  CHECK_THAT(with("constant = true\nmodel = \"exponential\"\n"),
+             Catch::Contains("a constant has no rate model"));
+  CHECK_THAT(
+      error_of(base + "[rates]\nconstant_within = 1.5\n"),
+      Catch::Contains("rates.constant_within: expected a relative band in [0, 1), found 1.5"));
+  CHECK(parse_study(base + "[rates]\nconstant_within = 0\n", "s.toml").constant_within == 0.0);
+}
+
+TEST_CASE("verdicts: a bound's extremes and its verdict are decided beyond the floors",
+          "[verification][floors]") {
+  // sup_error / power_function_sup is 1 within 1e-12 at every n, each with a floor of 1e-10:
+  // the largest effectivity is named at the first n, whichever n holds the last bits' maximum,
+  // and 1 + 1e-12 is not known to exceed the bound 1.
+  auto wobble = [](const TrialSpec& t, const std::string& metric) {
+    if (metric == "power_function_sup") return 0.1;
+    if (metric == "sup_error") return 0.1 * (1.0 + (t.n % 20 == 0 ? 1e-12 : -1e-12));
+    return textbook(t, metric);
+  };
+  Synthetic study(
+      "[[expect]]\nmetric = \"sup_error\"\ndegree = 1\nbound = { by = "
+      "\"power_function_sup\" }\n",
+      wobble);
+  auto outcomes = study.verify();
+  REQUIRE(outcomes.size() == 1);
+  CHECK(outcomes[0].verdict == Verdict::fail);  // no floors: exceeded by 1e-12
+  for (auto& r : study.results) r.floors.assign(r.metrics.size(), 1e-11);
+  outcomes = study.verify();
+  REQUIRE(outcomes.size() == 1);
+  CHECK(outcomes[0].verdict == Verdict::pass);
+  CHECK_THAT(outcomes[0].found, Catch::Contains("(largest at n = 10)"));
 }

@@ -255,10 +255,69 @@ bool bends_monotonically(const std::vector<double>& rates) {
 
 }  // namespace
 
+double ConstantSeries::relative_band() const {
+  if (value != 0.0) return band / std::fabs(value);
+  return band == 0.0 ? 0.0 : std::numeric_limits<double>::infinity();
+}
+
+std::string ConstantSeries::text(std::span<const double> labels) const {
+  std::string out;
+  if (band == 0.0 || !std::isfinite(band)) {
+    out = fmt::format("{} ± 0", format_real(value));
+  } else {
+    // The digits of the value that the band leaves, and one more.
+    const double ratio = value != 0.0 ? std::fabs(value) / band : 1.0;
+    const int digits = std::clamp(static_cast<int>(std::ceil(std::log10(ratio))) + 1, 2, 17);
+    out = fmt::format("{:#.{}g} ± {:.2g}", value, digits, band);
+    if (out.find('.') != std::string::npos && out.find("e") == std::string::npos) {
+      // "3.0 ± 0.1" rather than "3. ± 0.1" when the value ends at its point.
+      auto dot = out.find(". ");
+      if (dot != std::string::npos) out.erase(dot, 1);
+    }
+  }
+  if (within_floors && band > 0.0)
+    out += " (within the values' floors)";
+  else if (band > 0.0 && value != 0.0)
+    out += fmt::format(" ({:.2g} %)", 100.0 * relative_band());
+  return out + fmt::format(" on n = {}", label_range(labels, points));
+}
+
+std::optional<ConstantSeries> detect_constant(std::span<const double> y,
+                                              std::span<const double> floors,
+                                              const std::vector<std::size_t>& points,
+                                              double within) {
+  if (points.size() < minimum_window) return std::nullopt;
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  // The intervals y_i +- floor_i share a point when the highest lower end is below the lowest
+  // upper end; 4 ulps of slack, as values without a floor are known to their last bits.
+  double highest_lower = -std::numeric_limits<double>::infinity(), lowest_upper = -highest_lower;
+  double largest_floor = 0.0;
+  for (auto p : points) {
+    if (p >= y.size() || !std::isfinite(y[p])) return std::nullopt;
+    const double floor = p < floors.size() && floors[p] > 0.0 ? floors[p] : 0.0;
+    const double slack = floor + 4.0 * std::numeric_limits<double>::epsilon() * std::fabs(y[p]);
+    low = std::min(low, y[p]);
+    high = std::max(high, y[p]);
+    highest_lower = std::max(highest_lower, y[p] - slack);
+    lowest_upper = std::min(lowest_upper, y[p] + slack);
+    largest_floor = std::max(largest_floor, floor);
+  }
+  ConstantSeries constant;
+  constant.value = 0.5 * low + 0.5 * high;
+  constant.band = 0.5 * high - 0.5 * low;
+  constant.floor = largest_floor;
+  constant.within = within;
+  constant.within_floors = highest_lower <= lowest_upper;
+  if (!constant.within_floors && !(constant.band <= within * std::fabs(constant.value)))
+    return std::nullopt;
+  constant.points = points;
+  return constant;
+}
+
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,
                               double confidence, const FitWindow& set_window,
-                              std::span<const double> floors) {
+                              std::span<const double> floors, double constant_within) {
   if (x.size() != y.size() || n.size() != y.size() || usable.size() != y.size())
     throw std::invalid_argument("analyse_series: x, n, y and usable differ in size");
   if (!(confidence > 0.0 && confidence < 1.0))
@@ -451,6 +510,30 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
     std::vector<std::size_t> with_head = window.head;
     with_head.insert(with_head.end(), window.points.begin(), window.points.end());
     if (!try_bend(with_head) && !window.head.empty()) try_bend(window.points);
+  }
+
+  // A constant: every usable finite value (of the set window), any sign; else the power law's
+  // automatic window without its head.
+  std::vector<std::size_t> levels;
+  for (std::size_t i = 0; i < y.size(); ++i)
+    if (usable[i] && std::isfinite(y[i]) && std::isfinite(n[i]) &&
+        (set_window.empty() || ((!set_window.n_from || n[i] >= *set_window.n_from) &&
+                                (!set_window.n_to || n[i] <= *set_window.n_to) &&
+                                (!set_window.h_from || x[i] >= *set_window.h_from) &&
+                                (!set_window.h_to || x[i] <= *set_window.h_to))))
+      levels.push_back(i);
+  if (set_window.last && levels.size() > *set_window.last)
+    levels.erase(levels.begin(), levels.end() - static_cast<std::ptrdiff_t>(*set_window.last));
+  out.constant = detect_constant(y, floors, levels, constant_within);
+  // Else without the shortest part of the power law's pre-asymptotic head that leaves a
+  // constant (the head bounds what may be left out: a slow decay is not cut to its last points).
+  const auto& head = out.power_law.window.head;
+  for (std::size_t cut = 1; !out.constant && set_window.empty() && cut <= head.size(); ++cut) {
+    std::vector<std::size_t> rest(head.begin() + static_cast<std::ptrdiff_t>(cut), head.end());
+    rest.insert(rest.end(), out.power_law.window.points.begin(), out.power_law.window.points.end());
+    out.constant = detect_constant(y, floors, rest, constant_within);
+    if (out.constant)
+      out.constant->head.assign(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(cut));
   }
   return out;
 }

@@ -30,6 +30,8 @@ std::string fit_footer(const std::optional<RateFit>& fit, std::span<const TableR
                        std::string_view abscissa_name, std::string_view no_fit_reason) {
   if (!fit) {
     if (rows.empty()) return "fitted rate: not available (no points)";
+    // A constant series (MetricSeries::no_fit_reason "constant ...: not a rate") is its value.
+    if (no_fit_reason.starts_with("constant ")) return std::string(no_fit_reason);
     if (!no_fit_reason.empty())
       return fmt::format("fitted rate: not available ({})", no_fit_reason);
     const auto usable = std::count_if(rows.begin(), rows.end(), [](const TableRow& r) {
@@ -221,7 +223,9 @@ std::string format_group_table(const GroupTable& group, const std::vector<RateTa
   if (group.shows_h()) foot.push_back("");
   for (auto t : group.columns) {
     foot.push_back("");
-    foot.push_back(tables[t].fit ? fixed_rate(tables[t].fit->rate, tables[t].model) : "-");
+    foot.push_back(tables[t].fit        ? fixed_rate(tables[t].fit->rate, tables[t].model)
+                   : tables[t].constant ? "const"
+                                        : "-");
   }
 
   std::string out = (group.label.empty() ? "group " + group.group : group.label) + '\n';
@@ -231,8 +235,10 @@ std::string format_group_table(const GroupTable& group, const std::vector<RateTa
     const auto& table = tables[t];
     std::vector<TableRow> rows;
     for (const auto& row : table.rows) rows.push_back({row.abscissa, row.value, row.flagged});
-    out += fmt::format("  {}, {}", table.metric,
-                       fit_footer(table.fit, rows, table.axis, table.no_fit_reason));
+    out +=
+        fmt::format("  {}, {}", table.metric,
+                    table.constant ? "constant " + table.constant_text + ", not a rate"
+                                   : fit_footer(table.fit, rows, table.axis, table.no_fit_reason));
     if (const auto window = window_text(table); !window.empty())
       out += fmt::format("; window {}{}{}", window, table.window_note.empty() ? "" : "; ",
                          table.window_note);

@@ -108,6 +108,7 @@ bool is_number(const std::string& cell) {
 // $R^2 = \num{0.999}$, 10 points)", with siunitx's real minus signs.
 std::string latex_fit(const RateTable& table) {
   const auto& fit = table.fit;
+  if (table.constant) return "constant " + latex_escape(table.constant_text);
   if (!fit) return "no fit: " + latex_escape(table.no_fit_reason);
   const std::string model = fit->model == RateModel::exponential ? ", exponential in $n$" : "";
   if (!std::isfinite(fit->std_error))
@@ -122,6 +123,7 @@ std::string latex_fit(const RateTable& table) {
 }
 
 std::string latex_fit_cell(const RateTable& table) {
+  if (table.constant) return fmt::format("const \\num{{{:.4g}}}", table.constant->value);
   const auto cell = fit_cell_parts(table);
   if (!cell) return "--";
   std::string out = fmt::format("\\num{{{}}}", cell->rate);
@@ -337,7 +339,8 @@ std::string latex_tables(const RunRecord& run) {
         const auto& table = tables[t];
         for (const auto& row : table.rows) any_flagged = any_flagged || row.flagged;
         any_exponential = any_exponential || table.model == RateModel::exponential;
-        out += fmt::format("{}: fitted rate {}", latex_escape(table.metric), latex_fit(table));
+        out += fmt::format("{}: {}{}", latex_escape(table.metric),
+                           table.constant ? "" : "fitted rate ", latex_fit(table));
         if (const auto window = window_text(table); !window.empty())
           out += fmt::format("; window {}", latex_escape(window));
         out += ".\\\\\n";

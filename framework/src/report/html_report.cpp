@@ -176,7 +176,8 @@ std::string group_table(const GroupTable& group, const std::vector<RateTable>& t
   for (auto t : group.columns)
     out += tables[t].fit
                ? fmt::format("<td></td><td>{}</td>", document_rate({.rate = tables[t].fit->rate}))
-               : "<td></td><td>&ndash;</td>";
+           : tables[t].constant ? std::string("<td></td><td>const</td>")
+                                : std::string("<td></td><td>&ndash;</td>");
   out += "</tr>\n</table></div>\n<ul class=\"fits\">\n";
   for (auto t : group.columns) {
     const auto& table = tables[t];

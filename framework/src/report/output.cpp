@@ -245,7 +245,7 @@ std::string rates_csv(const RunRecord& run) {
   for (const char* extra :
        {"metric", "abscissa", "kind", "model", "n_from", "n_to", "points", "rate", "std_error",
         "ci_low", "ci_high", "r_squared", "delta_aic", "note", "rate_floor", "r_squared_floor",
-        "delta_aic_floor"})
+        "delta_aic_floor", "value", "band", "value_floor"})
     header.push_back(extra);
   std::string out = csv_row(header);
   for (const auto& series : run.rates) {
@@ -262,6 +262,25 @@ std::string rates_csv(const RunRecord& run) {
       return row;
     };
     const auto& n_of = [&](std::size_t k) { return run.trials[series.trials[k]].n; };
+    // A constant series: its value and band are what is reported ("fit", model "constant"); both
+    // models' fits follow as alternatives, for reference.
+    const auto& constant = series.analysis.constant;
+    if (constant) {
+      auto row = axes;
+      for (const std::string& cell :
+           {series.metric, std::string(abscissa_name(run.study)), std::string("fit"),
+            std::string("constant"), std::to_string(n_of(constant->points.front())),
+            std::to_string(n_of(constant->points.back())), std::to_string(constant->points.size())})
+        row.push_back(cell);
+      for (int i = 0; i < 6; ++i) row.push_back("");
+      row.push_back(series.note.empty() ? series.no_fit_reason
+                                        : series.no_fit_reason + "; " + series.note);
+      for (int i = 0; i < 3; ++i) row.push_back("");
+      row.push_back(csv_number(constant->value));
+      row.push_back(csv_number(constant->band));
+      row.push_back(csv_number(constant->floor));
+      out += csv_row(row);
+    }
     // The reported fit ("fit") and the other model's ("alternative_fit"), each on its window.
     const auto reported = series.analysis.reported;
     const auto other =
@@ -274,14 +293,15 @@ std::string rates_csv(const RunRecord& run) {
         from = n_of(fit->used.front());
         to = n_of(fit->used.back());
       }
-      auto row = row_start(model == reported ? "fit" : "alternative_fit", model, from, to);
+      auto row =
+          row_start(model == reported && !constant ? "fit" : "alternative_fit", model, from, to);
       const double nan = std::numeric_limits<double>::quiet_NaN();
       row.push_back(std::to_string(fit ? fit->points : 0));
       for (double v : {fit ? fit->rate : nan, fit ? fit->std_error : nan, fit ? fit->ci_low : nan,
                        fit ? fit->ci_high : nan, fit ? fit->r_squared : nan, analysis.advantage})
         row.push_back(csv_number(v));
       std::vector<std::string> notes;
-      if (model == reported) {
+      if (model == reported && !constant) {
         if (!series.note.empty()) notes.push_back(series.note);
         if (!series.analysis.note.empty()) notes.push_back(series.analysis.note);
       } else {
@@ -292,6 +312,7 @@ std::string rates_csv(const RunRecord& run) {
       for (double v : {fit ? analysis.floors.rate : nan, fit ? analysis.floors.r_squared : nan,
                        analysis.advantage_floor})
         row.push_back(csv_number(v));
+      for (int i = 0; i < 3; ++i) row.push_back("");  // value, band, value_floor
       out += csv_row(row);
     }
     // The power law with a pre-asymptotic term, where the pairwise rates bend (asymptotic.hpp).
@@ -312,12 +333,16 @@ std::string rates_csv(const RunRecord& run) {
               : "not judged: the correction does not earn its two parameters (ΔAICc < 2)"));
       const auto& floors = series.analysis.corrected_floors;
       for (double v : {floors.rate, floors.r_squared, floors.log_sse}) row.push_back(csv_number(v));
+      for (int i = 0; i < 3; ++i) row.push_back("");  // value, band, value_floor
       out += csv_row(row);
     }
     const auto& window = series.analysis.reported_analysis().window;
     auto outside = [&](std::size_t k) {
-      return std::find(window.head.begin(), window.head.end(), k) != window.head.end() ||
-             std::find(window.floor.begin(), window.floor.end(), k) != window.floor.end();
+      auto in = [k](const std::vector<std::size_t>& v) {
+        return std::find(v.begin(), v.end(), k) != v.end();
+      };
+      if (constant) return in(constant->head);  // a constant keeps every point after its head
+      return in(window.head) || in(window.floor);
     };
     for (std::size_t k = 0; k < series.pairwise.size(); ++k) {
       auto row = row_start("pairwise", reported, n_of(k), n_of(k + 1));
@@ -330,8 +355,7 @@ std::string rates_csv(const RunRecord& run) {
                         ? "outside the asymptotic window (not used in the fit)"
                         : "");
       row.push_back(csv_number(pairwise_rate_floor(series, k)));
-      row.push_back("");
-      row.push_back("");
+      for (int i = 0; i < 5; ++i) row.push_back("");  // ..., value, band, value_floor
       out += csv_row(row);
     }
   }
@@ -531,12 +555,23 @@ std::string summary_json(const RunRecord& run) {
       if (series.flagged[k]) flagged.push_back(k);
     std::vector<std::string> pairwise;
     for (double r : series.pairwise) pairwise.push_back(json_number(r));
+    const auto& constant = series.analysis.constant;
+    const auto constant_json =
+        constant ? fmt::format(
+                       "{{\"value\": {}, \"band\": {}, \"floor\": {}, "
+                       "\"within_floors\": {}, \"within\": {}, \"window\": {}, "
+                       "\"head\": {}, \"text\": {}}}",
+                       json_number(constant->value), json_number(constant->band),
+                       json_number(constant->floor), constant->within_floors ? "true" : "false",
+                       json_number(constant->within), n_list(constant->points),
+                       n_list(constant->head), json_string(constant->text(series.n)))
+                 : std::string("null");
     out += fmt::format(
-        "    {{\"group\": {}, \"metric\": {}, {}, \"preferred\": {}, \"decisive\": {}, "
-        "\"model_note\": {}, \"flagged\": {}, \"pairwise\": [{}], \"note\": {}, "
-        "\"alternative\": {{{}}}}}{}\n",
+        "    {{\"group\": {}, \"metric\": {}, \"constant\": {}, {}, \"preferred\": {}, "
+        "\"decisive\": {}, \"model_note\": {}, \"flagged\": {}, \"pairwise\": [{}], "
+        "\"note\": {}, \"alternative\": {{{}}}}}{}\n",
         json_string(group_label(run.trials[series.trials.front()])), json_string(series.metric),
-        model_fields(series.analysis.reported_analysis()),
+        constant_json, model_fields(series.analysis.reported_analysis()),
         series.analysis.preferred ? json_string(model_id(*series.analysis.preferred)) : "null",
         series.analysis.decisive() ? "true" : "false", json_string(series.analysis.note),
         n_list(flagged), fmt::join(pairwise, ", "), json_string(series.note),

@@ -463,6 +463,17 @@ std::string curve_data(const Curve& curve, std::size_t c) {
                         usable && series.flagged[k] ? format_real(v) : "nan");
   }
   data += "EOD\n";
+  // A constant series: its value over its points, shaded its band (on a log axis: positive).
+  if (const auto& constant = series.analysis.constant) {
+    if (!(constant->value > 0.0)) return data;
+    data += fmt::format("$f{} << EOD\n", c);
+    for (auto k : {constant->points.front(), constant->points.back()})
+      data += fmt::format(
+          "{} {} {} {}\n", format_real(x[k]), format_real(constant->value),
+          format_real(std::max(constant->value - constant->band, 0.5 * constant->value)),
+          format_real(constant->value + constant->band));
+    return data + "EOD\n";
+  }
   const auto& fit = series.fit;
   if (!fit || fit->used.empty()) return data;
   const bool exponential = fit->model == RateModel::exponential;
@@ -656,7 +667,7 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
 
   // One x and y range for every panel and part of the metric: the values plotted, with a margin.
   Extent xs, ys;
-  bool any_flagged = false, any_band = false, any_theory = false;
+  bool any_flagged = false, any_band = false, any_theory = false, any_constant = false;
   for (const auto& curve : curves) {
     const auto& series = *curve.series;
     for (std::size_t k = 0; k < series.trials.size(); ++k)
@@ -666,6 +677,8 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
         any_flagged = any_flagged || series.flagged[k];
       }
     any_band = any_band || (series.fit && !series.fit->used.empty());
+    any_constant =
+        any_constant || (series.analysis.constant && series.analysis.constant->value > 0);
     any_theory = any_theory || (curve.theory_slope && series.fit && !series.fit->used.empty());
   }
   const bool against_n = run.study.abscissa == Abscissa::n;
@@ -673,6 +686,7 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
   style.push_back("points: values");
   if (any_flagged) style.push_back("hollow: flagged, not fitted");
   if (any_band) style.push_back("dashed: fitted rate on its window, shaded its 95% band");
+  if (any_constant) style.push_back("const: a series constant on its window, shaded its band");
   if (any_theory) style.push_back("dotted: theory slope");
 
   const std::size_t parts = (panels.size() + most_panels_per_file - 1) / most_panels_per_file;
@@ -745,8 +759,13 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
         const std::size_t lt =
             1 + (colour_by_identity ? colour_of.at(values_of(c, others)) : position) % palette_size;
         auto label = identity_text(identity, c, legend_factors);
-        const bool fitted = series.fit && !series.fit->used.empty();
-        if (fitted) label += (label.empty() ? "" : ": ") + rate_text(*series.fit);
+        const auto& constant = series.analysis.constant;
+        const bool fitted =
+            (series.fit && !series.fit->used.empty()) || (constant && constant->value > 0.0);
+        if (constant)
+          label += (label.empty() ? "" : ": ") + fmt::format("const {:.4g}", constant->value);
+        else if (fitted)
+          label += (label.empty() ? "" : ": ") + rate_text(*series.fit);
         if (label.empty()) label = metric;
         longest = std::max(longest, label.size());
         // Unflagged values (the key's entry), then flagged ones hollow; a series whose every
@@ -768,7 +787,7 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
             "notitle, ",
             c, lt);
         fits += fmt::format("$f{} using 1:2 with lines lt {} dt 2 lw 1.2 notitle, ", c, lt);
-        if (curve.theory_slope) {
+        if (curve.theory_slope && !constant) {
           const auto text = fmt::format("theory slope {:.3g}", *curve.theory_slope);
           theories += fmt::format("$t{} using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 {}, ", c,
                                   theory_titles.insert(text).second ? "title " + gp_text(text)

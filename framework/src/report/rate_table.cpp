@@ -34,8 +34,11 @@ std::vector<RateTable> rate_tables(const RunRecord& run) {
              k == 0 ? std::numeric_limits<double>::quiet_NaN() : series.pairwise[k - 1]});
       table.fit = series.fit;
       table.no_fit_reason = series.no_fit_reason;
-      table.window = series.analysis.reported_analysis().window.points;
-      table.window_note = series.analysis.note;
+      table.constant = series.analysis.constant;
+      if (table.constant) table.constant_text = table.constant->text(series.n);
+      table.window = table.constant ? table.constant->points
+                                    : series.analysis.reported_analysis().window.points;
+      table.window_note = table.constant ? std::string() : series.analysis.note;
       table.note = series.note;
       out.push_back(std::move(table));
     }
@@ -57,6 +60,7 @@ std::string document_rate(const RateTableRow& row, std::string_view missing) {
 
 std::string document_fit(const RateTable& table) {
   const auto& fit = table.fit;
+  if (table.constant) return "constant " + table.constant_text;
   if (!fit) return "no fit: " + table.no_fit_reason;
   if (!std::isfinite(fit->std_error))
     return fmt::format("{:.3g} ({} points, no uncertainty)", fit->rate, fit->points);
@@ -67,7 +71,7 @@ std::string document_fit(const RateTable& table) {
 }
 
 std::string window_text(const RateTable& table) {
-  if (table.window.empty()) return "";
+  if (table.window.empty() || table.constant) return "";  // constant_text names its points
   std::vector<double> n;
   for (const auto& row : table.rows) n.push_back(static_cast<double>(row.n));
   return fmt::format("n = {}, {} of {} points", label_range(n, table.window), table.window.size(),
@@ -107,6 +111,7 @@ std::optional<FitCell> fit_cell_parts(const RateTable& table) {
 }
 
 std::string fit_cell(const RateTable& table) {
+  if (table.constant) return fmt::format("const {:.4g}", table.constant->value);
   const auto cell = fit_cell_parts(table);
   if (!cell) return "no fit";
   std::string out = cell->rate;

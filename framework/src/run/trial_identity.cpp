@@ -96,6 +96,8 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
        "what rates are fitted against, after the trials; what trials compute for it enters as "
        "computed_metrics()"},
       {&study.rates_window, "rates_window", "which points rates are fitted on, after the trials"},
+      {&study.constant_within, "constant_within",
+       "which series are reported as constant, after the trials"},
       {&study.expectations, "expectations",
        "judged after the trials; what trials compute for them enters as computed_metrics()"},
       {&study.warnings, "warnings", "messages about the file"},

@@ -67,6 +67,8 @@ std::string_view expectation_kind_name(ExpectationKind kind) {
     case ExpectationKind::rate: return "rate";
     case ExpectationKind::model: return "model";
     case ExpectationKind::bound: return "bound";
+    case ExpectationKind::constant:
+      return "constant";
   }
   return "";
 }

@@ -51,8 +51,8 @@ class ExpectationReader {
 
  private:
   static inline const std::vector<std::string> reserved_{
-      "metric", "name", "tier", "xfail", "theory", "rate", "tolerance", "model", "bound",
-      "n_from", "n_to", "h_from", "h_to", "last"};
+      "metric", "name",     "tier",   "xfail", "theory", "rate", "tolerance", "model",
+      "bound",  "constant", "n_from", "n_to",  "h_from", "h_to", "last"};
 
   // xfail = "reason": why the expectation is known not to hold, which reports repeat.
   std::string read_xfail(const toml::node& node) const {
@@ -143,20 +143,23 @@ class ExpectationReader {
     const auto* rate = table.get("rate");
     const auto* model = table.get("model");
     const auto* bound = table.get("bound");
+    const auto* constant = table.get("constant");
     const auto* tolerance = table.get("tolerance");
     if (theory && !(theory->is_boolean() && theory->as_boolean()->get())) {
       if (!theory->is_boolean())
         fail(src, theory->source(), "expect.theory", fmt::format("expected true, found {}", show(*theory)));
       theory = nullptr;  // theory = false: as if absent
     }
-    const int what = (theory ? 1 : 0) + (rate ? 1 : 0) + (bound ? 1 : 0);
+    const int what = (theory ? 1 : 0) + (rate ? 1 : 0) + (bound ? 1 : 0) + (constant ? 1 : 0);
     if (what > 1)
       fail(src, table.source(), "expect",
-           "give one of theory = true, rate = ... or bound = { ... } per [[expect]] table");
+           "give one of theory = true, rate = ..., bound = { ... } or constant = ... per "
+           "[[expect]] table");
     if (what == 0 && !model)
       fail(src, table.source(), "expect",
            "say what is expected: theory = true, rate = -1.5 (or { min = ..., max = ... }), "
-           "model = \"exponential\", or bound = { by = \"...\" }");
+           "model = \"exponential\", bound = { by = \"...\" }, or constant = { value = 1, "
+           "within = 1e-12 }");
     if (model) {
       const auto name = string_at(*model, "expect.model");
       if (name == "power_law") e.model = RateModel::power_law;
@@ -165,10 +168,11 @@ class ExpectationReader {
         fail(src, model->source(), "expect.model",
              fmt::format("found \"{}\", expected \"power_law\" (log-log) or \"exponential\" "
                          "(log-linear in n)", name));
-      if (theory || bound)
+      if (theory || bound || constant)
         fail(src, model->source(), "expect.model",
-             theory ? "theory = true chooses the model from the kernel's metadata: remove 'model'"
-                    : "a bound has no rate model: remove 'model'");
+             theory  ? "theory = true chooses the model from the kernel's metadata: remove 'model'"
+             : bound ? "a bound has no rate model: remove 'model'"
+                     : "a constant has no rate model: remove 'model'");
     }
     if (tolerance) {
       e.tolerance = number_at(*tolerance, "expect.tolerance");
@@ -194,6 +198,9 @@ class ExpectationReader {
     } else if (bound) {
       e.kind = ExpectationKind::bound;
       read_bound(*bound, e);
+    } else if (constant) {
+      e.kind = ExpectationKind::constant;
+      read_constant(*constant, e);
     } else {
       e.kind = ExpectationKind::model;
     }
@@ -240,6 +247,37 @@ class ExpectationReader {
       fail(src, rate.source(), "expect.rate",
            fmt::format("min ({}) is above max ({})", format_real(e.interval.low),
                        format_real(e.interval.high)));
+  }
+
+  // constant = true, or constant = { value = 1, within = 1e-12 } (within optional, >= 0).
+  void read_constant(const toml::node& node, Expectation& e) const {
+    const auto& src = study_.source;
+    if (const auto* flag = node.as_boolean()) {
+      if (!flag->get())
+        fail(src, node.source(), "expect.constant",
+             "constant = false expects nothing: to expect a rate, write rate = ...");
+      return;
+    }
+    const auto* table = node.as_table();
+    if (!table)
+      fail(src, node.source(), "expect.constant",
+           fmt::format("expected true or {{ value = 1, within = 1e-12 }}, found {}", show(node)));
+    for (auto&& [key, value] : *table)
+      if (key.str() != "value" && key.str() != "within")
+        fail(src, key.source(), fmt::format("expect.constant.{}", key.str()),
+             "unknown key (known: value, within)");
+    const auto* value = table->get("value");
+    if (!value)
+      fail(src, node.source(), "expect.constant.value",
+           "missing: the value the series is expected to keep (or write constant = true for any "
+           "value)");
+    e.constant.value = number_at(*value, "expect.constant.value");
+    if (const auto* within = table->get("within")) {
+      e.constant.within = number_at(*within, "expect.constant.within");
+      if (!(e.constant.within >= 0))
+        fail(src, within->source(), "expect.constant.within",
+             fmt::format("must be >= 0 (an absolute band about value), found {}", show(*within)));
+    }
   }
 
   void read_bound(const toml::node& node, Expectation& e) const {

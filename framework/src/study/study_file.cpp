@@ -1050,8 +1050,16 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   }
 
   if (const auto* rates = optional_table(report, root, "rates")) {
-    check_keys(report, *rates, "rates.", fit_window_keys);
+    auto keys = fit_window_keys;
+    keys.push_back("constant_within");
+    check_keys(report, *rates, "rates.", keys);
     study.rates_window = read_fit_window(report, *rates, "rates.", study);
+    study.constant_within =
+        get_number(report, *rates, "constant_within", "rates.", default_constant_within, -1e-300);
+    if (!(study.constant_within < 1.0))
+      report.fail(rates->get("constant_within")->source(), "rates.constant_within",
+                  fmt::format("expected a relative band in [0, 1), found {}",
+                              format_real(study.constant_within)));
   }
 
   check_evaluation_grid(report, *header, study);

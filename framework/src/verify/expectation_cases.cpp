@@ -48,6 +48,12 @@ std::string expected_form(const Expectation& e) {
       if (e.bound.at_least) add("at_least = " + format_real(*e.bound.at_least));
       return fmt::format("bound = {{ {} }}", inner);
     }
+    case ExpectationKind::constant:
+      if (!e.constant.value) return "constant = true";
+      return e.constant.within == 0.0
+                 ? fmt::format("constant = {{ value = {} }}", format_real(*e.constant.value))
+                 : fmt::format("constant = {{ value = {}, within = {} }}",
+                               format_real(*e.constant.value), format_real(e.constant.within));
     case ExpectationKind::rate:
       break;
   }

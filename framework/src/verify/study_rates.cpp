@@ -55,11 +55,11 @@ void fit_series(MetricSeries& series, const FitWindow& window) {
       first_flagged = std::min(first_flagged, k);
     }
   }
-  series.analysis =
-      analyse_series(series.abscissa, series.n, series.values, usable, 0.95, window, series.floors);
+  series.analysis = analyse_series(series.abscissa, series.n, series.values, usable, 0.95, window,
+                                   series.floors, series.constant_within);
   const auto& reported = series.analysis.reported_analysis();
   series.pairwise = reported.pairwise;
-  series.fit = reported.fit;
+  series.fit = series.constant() ? std::nullopt : reported.fit;
   series.note.clear();
   series.no_fit_reason.clear();
 
@@ -79,10 +79,18 @@ void fit_series(MetricSeries& series, const FitWindow& window) {
   if (!window.empty())
     notes.push_back(fmt::format("window set by {}: n = {}", window.text(),
                                 label_range(series.n, reported.window.points)));
-  if (!reported.window.note.empty()) notes.push_back(reported.window.note);
+  if (const auto& constant = series.analysis.constant) {
+    series.no_fit_reason = fmt::format("constant {}: not a rate", constant->text(series.n));
+    if (!constant->head.empty())
+      notes.push_back(fmt::format("constant from n = {}: head n = {} excluded",
+                                  format_real(series.n[constant->points.front()]),
+                                  label_range(series.n, constant->head)));
+  } else if (!reported.window.note.empty()) {
+    notes.push_back(reported.window.note);
+  }
   if (series.fit) {
     if (!series.fit->note.empty()) notes.push_back(series.fit->note);
-  } else {
+  } else if (!series.constant()) {
     std::size_t usable_points = 0;
     for (std::size_t k = 0; k < size; ++k)
       usable_points += usable[k] && std::isfinite(series.values[k]) && series.values[k] > 0.0;
@@ -129,6 +137,7 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
       series.metric = metric;
       series.group = g;
       series.trials = indices;
+      series.constant_within = study.constant_within;
       for (std::size_t k = 0; k < indices.size(); ++k) {
         const auto& result = results[indices[k]];
         const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)

@@ -78,8 +78,47 @@ Judgement judge_interval(const RateFit* fit, const RateInterval& accepted) {
   return {Verdict::inconclusive, fmt::format("the {} CI straddles {}", level, num(edge))};
 }
 
+// The rates a constant series allows under `model`: every line within its band over its points,
+// slopes up to w = 2 band / |value| per span of ln x (power law) or of n (exponential).
+// +inf for a constant of value 0 with a band, or a span of 0.
+double constant_rate_width(const MetricSeries& series, RateModel model) {
+  const auto& constant = *series.analysis.constant;
+  const auto first = constant.points.front(), last = constant.points.back();
+  const double span = model == RateModel::power_law
+                          ? std::fabs(std::log(series.abscissa[last] / series.abscissa[first]))
+                          : std::fabs(series.n[last] - series.n[first]);
+  const double relative = constant.relative_band();
+  if (relative == 0.0) return 0.0;
+  return span > 0.0 && std::isfinite(relative) ? 2.0 * relative / span
+                                               : std::numeric_limits<double>::infinity();
+}
+
+// A rate verdict on a constant series: the rates its band allows, [-w, w], against the
+// accepted interval (the same rule as a CI: within passes, outside fails, across is open).
+Judgement judge_constant_rate(const MetricSeries& series, RateModel model,
+                              const RateInterval& accepted) {
+  const double w = constant_rate_width(series, model);
+  const auto allowed = fmt::format("the rates its band allows, [{}, {}],", num(0.0 - w), num(w));
+  if (-w >= accepted.low && w <= accepted.high)
+    return {Verdict::pass,
+            "the series is constant: " + allowed + " lie within the accepted interval"};
+  if (w < accepted.low)
+    return {Verdict::fail, fmt::format("the series is constant: {} lie entirely below {}", allowed,
+                                       num(accepted.low))};
+  if (-w > accepted.high)
+    return {Verdict::fail, fmt::format("the series is constant: {} lie entirely above {}", allowed,
+                                       num(accepted.high))};
+  const double edge = -w < accepted.low ? accepted.low : accepted.high;
+  return {Verdict::inconclusive,
+          fmt::format("the series is constant: {} straddle {}", allowed, num(edge))};
+}
+
 // A model expectation (also the first half of an analytic theory).
 Judgement judge_model(const SeriesAnalysis& analysis, RateModel required) {
+  if (analysis.constant)
+    return {Verdict::fail, fmt::format("the series is constant: neither the {} nor the other "
+                                       "model describes it",
+                                       model_text(required))};
   if (!analysis.preferred) return {Verdict::inconclusive, analysis.note};
   if (!analysis.decisive()) return {Verdict::inconclusive, analysis.note};
   if (*analysis.preferred == required)
@@ -93,7 +132,13 @@ Judgement judge_model(const SeriesAnalysis& analysis, RateModel required) {
 std::string describe_fit(const MetricSeries& series, const ModelAnalysis& analysis) {
   const auto& fit = analysis.fit;
   std::string out;
-  if (!fit) {
+  if (series.constant()) {
+    const double w = constant_rate_width(series, analysis.model);
+    out = fmt::format("constant {} ({} of {} points; the rates its band allows: [{}, {}]{})",
+                      series.analysis.constant->text(series.n),
+                      series.analysis.constant->points.size(), series.trials.size(), num(0.0 - w),
+                      num(w), analysis.model == RateModel::exponential ? " per unit n" : "");
+  } else if (!fit) {
     out = fmt::format("{}: no fit ({})", model_text(analysis.model),
                       series.no_fit_reason.empty() ? "fewer than 2 usable points" : series.no_fit_reason);
   } else {
@@ -125,6 +170,7 @@ std::string describe_bend(const MetricSeries& series, const ModelAnalysis& analy
 }
 
 std::string exclusions(const MetricSeries& series, const ModelAnalysis& analysis) {
+  if (series.constant()) return series.note.empty() ? "" : "; " + series.note;
   std::vector<std::string> parts;
   if (!series.note.empty() && &analysis == &series.analysis.reported_analysis())
     parts.push_back(series.note);
@@ -216,6 +262,9 @@ class Verifier {
       case ExpectationKind::theory: judge_theory(e, series, o); break;
       case ExpectationKind::model: judge_model_expectation(e, series, o); break;
       case ExpectationKind::bound: judge_bound(e, series, o); break;
+      case ExpectationKind::constant:
+        judge_constant(e, series, o);
+        break;
     }
     note_missing_excitation(series, o);
     return o;
@@ -251,9 +300,24 @@ class Verifier {
     return analysis.fit ? &*analysis.fit : nullptr;
   }
 
+  // The interval rule on the judged fit, or on the rates a constant series allows.
+  static Judgement judge_series(const MetricSeries& series, const ModelAnalysis& analysis,
+                                const RateInterval& accepted) {
+    if (series.constant()) return judge_constant_rate(series, analysis.model, accepted);
+    return judge_interval(judged_fit(series, analysis), accepted);
+  }
+
   void record_fit(const MetricSeries& series, const ModelAnalysis& analysis,
                   ExpectationOutcome& o) const {
-    if (const auto* fit = judged_fit(series, analysis)) {
+    if (const auto& constant = series.analysis.constant) {
+      const double w = constant_rate_width(series, analysis.model);
+      o.rate = 0.0;
+      o.ci_low = 0.0 - w;
+      o.ci_high = w;
+      o.window_points = constant->points.size();
+      o.window_from = trials_[series.trials[constant->points.front()]].n;
+      o.window_to = trials_[series.trials[constant->points.back()]].n;
+    } else if (const auto* fit = judged_fit(series, analysis)) {
       o.rate = fit->rate;
       o.ci_low = fit->ci_low;
       o.ci_high = fit->ci_high;
@@ -312,7 +376,7 @@ class Verifier {
       o.expected = fmt::format("at least as fast as {} against {} ({}; tolerance {}): {}",
                                e.rate_reference, axis_name(), why, num(e.tolerance),
                                interval_text(*interval));
-      auto [verdict, reason] = judge_interval(judged_fit(series, analysis), *interval);
+      auto [verdict, reason] = judge_series(series, analysis, *interval);
       o.verdict = verdict;
       o.reason = reason;
       return;
@@ -325,7 +389,7 @@ class Verifier {
                                           num(e.tolerance), against, interval_text(e.interval))
                             : fmt::format("{} against {}", interval_text(e.interval), against);
     record_fit(series, analysis, o);
-    auto [verdict, reason] = judge_interval(judged_fit(series, analysis), e.interval);
+    auto [verdict, reason] = judge_series(series, analysis, e.interval);
     o.verdict = verdict;
     o.reason = reason;
   }
@@ -353,8 +417,9 @@ class Verifier {
                                theory->statement, theory->direction < 0 ? "<" : ">");
       record_fit(series, analysis, o);
       const auto model = judge_model(series.analysis, RateModel::exponential);
-      auto sign_judgement = judge_interval(judged_fit(series, analysis), sign);
-      if (analysis.fit && analysis.fit->points >= 3 && std::isfinite(analysis.fit->ci_low))
+      auto sign_judgement = judge_series(series, analysis, sign);
+      if (!series.constant() && analysis.fit && analysis.fit->points >= 3 &&
+          std::isfinite(analysis.fit->ci_low))
         sign_judgement.reason = fmt::format(
               "its {:.4g}% CI [{}, {}] {}", 100.0 * analysis.fit->confidence, num(analysis.fit->ci_low),
               num(analysis.fit->ci_high),
@@ -402,7 +467,7 @@ class Verifier {
                              conversion, interval_text(interval), num(e.tolerance));
     const auto& analysis = series.analysis.power_law;
     record_fit(series, analysis, o);
-    auto [verdict, reason] = judge_interval(judged_fit(series, analysis), interval);
+    auto [verdict, reason] = judge_series(series, analysis, interval);
     o.verdict = verdict;
     o.reason = reason;
     if (!uniform && !any_centres) {  // the rates above hold for quasi-uniform centres only
@@ -420,6 +485,107 @@ class Verifier {
     auto [verdict, reason] = judge_model(series.analysis, e.model);
     o.verdict = verdict;
     o.reason = reason;
+  }
+
+  // The n an expectation judges pointwise: its window (n_from, n_to, last), else every n.
+  static std::vector<bool> window_members(const Expectation& e, const MetricSeries& series) {
+    std::vector<bool> inside(series.trials.size(), true);
+    std::size_t kept = 0;
+    for (std::size_t k = series.trials.size(); k-- > 0;) {
+      const double n = series.n[k];
+      inside[k] = (!e.window.n_from || n >= *e.window.n_from) &&
+                  (!e.window.n_to || n <= *e.window.n_to) &&
+                  (!e.window.last || kept < *e.window.last);
+      kept += inside[k];
+    }
+    return inside;
+  }
+
+  // constant = true: the series is constant (detect_constant); constant = { value, within }:
+  // every usable value lies within value +- (within + its floor).
+  void judge_constant(const Expectation& e, const MetricSeries& series,
+                      ExpectationOutcome& o) const {
+    record_fit(series, series.analysis.power_law, o);
+    if (!e.constant.value) {
+      o.expected = fmt::format("{} constant in n (within its floors or {} % of its value)",
+                               e.metric, format_real(100.0 * series.constant_within));
+      std::size_t usable = 0;
+      for (std::size_t k = 0; k < series.values.size(); ++k)
+        usable += !series.failed[k] && !series.flagged[k] && std::isfinite(series.values[k]);
+      if (series.constant()) {
+        o.verdict = Verdict::pass;
+        o.reason = "its values lie within the band";
+      } else if (usable < 3) {
+        o.verdict = Verdict::inconclusive;
+        o.reason = fmt::format("{} usable point{}: telling a constant needs at least 3", usable,
+                               usable == 1 ? "" : "s");
+      } else {
+        o.verdict = Verdict::fail;
+        o.reason = "it varies with n beyond its floors and the relative band";
+      }
+      return;
+    }
+    const double value = *e.constant.value;
+    o.expected = fmt::format(
+        "{} = {} {} at every n", e.metric, format_real(value),
+        e.constant.within > 0 ? "± " + format_real(e.constant.within) + " (plus each value's floor)"
+                              : std::string("within each value's floor"));
+    const auto inside = window_members(e, series);
+    std::size_t used = 0, failed = 0, flagged = 0, non_finite = 0, worst_n = 0;
+    double worst = -1.0, worst_excess = -std::numeric_limits<double>::infinity();
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    for (std::size_t k = 0; k < series.values.size(); ++k) {
+      if (!inside[k]) continue;
+      if (series.failed[k]) {
+        ++failed;
+        continue;
+      }
+      if (series.flagged[k]) {
+        ++flagged;
+        continue;
+      }
+      const double y = series.values[k];
+      if (!std::isfinite(y)) {
+        ++non_finite;
+        continue;
+      }
+      const double floor =
+          k < series.floors.size() && series.floors[k] > 0 ? series.floors[k] : 0.0;
+      const double allowed =
+          e.constant.within + floor + 4.0 * std::numeric_limits<double>::epsilon() * std::fabs(y);
+      const double deviation = std::fabs(y - value);
+      ++used;
+      low = std::min(low, y);
+      high = std::max(high, y);
+      if (deviation - allowed > worst_excess) {
+        worst_excess = deviation - allowed;
+        worst = deviation;
+        worst_n = static_cast<std::size_t>(series.n[k]);
+      }
+    }
+    o.window_points = used;
+    std::vector<std::string> left_out;
+    if (failed) left_out.push_back(fmt::format("{} failed", failed));
+    if (flagged) left_out.push_back(fmt::format("{} flagged at a floor", flagged));
+    if (non_finite) left_out.push_back(fmt::format("{} non-finite", non_finite));
+    std::string excluded;
+    for (const auto& part : left_out) excluded += (excluded.empty() ? "" : ", ") + part;
+    if (non_finite || used == 0) {
+      o.verdict = Verdict::inconclusive;
+      o.reason = non_finite ? fmt::format("{} value{} not finite: no verdict on it", non_finite,
+                                          non_finite == 1 ? " is" : "s are")
+                            : fmt::format("no usable value ({})", excluded);
+      return;
+    }
+    o.found =
+        fmt::format("{} from {} to {} at {} of {} n{}; {}", e.metric, format_real(low),
+                    format_real(high), used, series.trials.size(),
+                    excluded.empty() ? std::string() : " (left out: " + excluded + ")", o.found);
+    o.verdict = worst_excess > 0.0 ? Verdict::fail : Verdict::pass;
+    o.reason = worst_excess > 0.0
+                   ? fmt::format("it deviates from {} by {:.3g} at n = {}, {:.3g} beyond the band",
+                                 format_real(value), worst, worst_n, worst_excess)
+                   : "every usable value lies within the band";
   }
 
   void judge_bound(const Expectation& e, const MetricSeries& series, ExpectationOutcome& o) const {
@@ -450,15 +616,18 @@ class Verifier {
     double low = std::numeric_limits<double>::infinity(), high = -low;
     std::size_t used = 0, at_max = 0, at_min = 0, skipped = 0;
     std::size_t failed_trials = 0, flagged_values = 0, unusable_values = 0;
-    // The n the bound is checked at: the expectation's window (n_from, n_to, last), else all.
-    std::vector<bool> inside(series.trials.size(), true);
-    std::size_t kept = 0;
-    for (std::size_t k = series.trials.size(); k-- > 0;) {
-      const double n = series.n[k];
-      inside[k] = (!e.window.n_from || n >= *e.window.n_from) &&
-                  (!e.window.n_to || n <= *e.window.n_to) && (!e.window.last || kept < *e.window.last);
-      kept += inside[k];
-    }
+    const auto inside = window_members(e, series);
+    // Each usable n's effectivity and its floor (the relative floors of its factors, added).
+    struct Point {
+      double effectivity, floor;
+      std::size_t n;
+    };
+    std::vector<Point> points;
+    auto relative_floor = [](const TrialResult& r, std::size_t index) {
+      const double floor = index < r.floors.size() ? r.floors[index] : 0.0;
+      const double value = std::fabs(r.metrics[index]);
+      return floor > 0.0 && value > 0.0 ? floor / value : 0.0;
+    };
     for (std::size_t k = 0; k < series.trials.size(); ++k) {
       if (!inside[k]) continue;
       const auto t = series.trials[k];
@@ -478,15 +647,24 @@ class Verifier {
         continue;
       }
       const double effectivity = value / bound;
+      const double floor = effectivity * (relative_floor(r, metric_index) +
+                                          (has_by ? relative_floor(r, by_index) : 0.0) +
+                                          (has_times ? relative_floor(r, times_index) : 0.0));
+      points.push_back({effectivity, floor, trials_[t].n});
       ++used;
-      if (effectivity < low) {
-        low = effectivity;
-        at_min = trials_[t].n;
-      }
-      if (effectivity > high) {
-        high = effectivity;
-        at_max = trials_[t].n;
-      }
+      low = std::min(low, effectivity);
+      high = std::max(high, effectivity);
+    }
+    // Where the extremes are: the first n whose effectivity reaches the extreme within the two
+    // floors, so that ties are decided only beyond the floors (the same n on every processor).
+    double high_floor = 0.0, low_floor = 0.0;
+    for (const auto& p : points) {
+      if (p.effectivity == high) high_floor = std::max(high_floor, p.floor);
+      if (p.effectivity == low) low_floor = std::max(low_floor, p.floor);
+    }
+    for (auto it = points.rbegin(); it != points.rend(); ++it) {
+      if (it->effectivity + it->floor >= high - high_floor) at_max = it->n;
+      if (it->effectivity - it->floor <= low + low_floor) at_min = it->n;
     }
     o.window_points = used;
     std::vector<std::string> left_out;
@@ -510,7 +688,9 @@ class Verifier {
                           skipped ? fmt::format(" (left out: {})", excluded) : std::string(),
                           e.window.empty() ? std::string()
                                            : fmt::format(" (window set by {})", e.window.text()));
-    const bool above = high > 1.0, below = low < lowest;
+    // Beyond the bound by more than the effectivity's floor: a value within its floor of the
+    // bound is not known to exceed it.
+    const bool above = high - high_floor > 1.0, below = low + low_floor < lowest;
     o.verdict = above || below ? Verdict::fail : Verdict::pass;
     if (above)
       o.reason = fmt::format("the bound is exceeded by a factor {:.3g} at n = {}", high, at_max);

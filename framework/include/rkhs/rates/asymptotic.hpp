@@ -59,6 +59,42 @@ struct AsymptoticWindow {
   std::string note;
 };
 
+/// A series that does not vary with n (docs/verification.md, "Constant series"): every point of
+/// `points` lies within value +- band, and band is within the values' floors or within the
+/// relative band asked (default_constant_within of |value|). Such a series is reported as its
+/// value and band, never as a rate: a slope fitted through it is noise.
+struct ConstantSeries {
+  double value = 0.0;  ///< the midpoint of the extreme values of the points
+  double band = 0.0;   ///< half their spread: |y_i - value| <= band for every point
+  /// The largest floor among the points (0 without floors).
+  double floor = 0.0;
+  /// The values agree within their floors: the intervals y_i +- floor_i share a point.
+  bool within_floors = false;
+  /// The relative band the series was judged against (the larger of this and the floors').
+  double within = 0.0;
+  std::vector<std::size_t> points;  ///< positions in the caller's arrays, increasing
+  std::vector<std::size_t> head;    ///< usable points before them, excluded as pre-asymptotic
+
+  /// band / |value|; +inf for a value of 0 with a band, 0 for both 0.
+  double relative_band() const;
+  /// "1.0000000000 ± 1.3e-11 (within the values' floors) on n = 10..100" or "3.7690 ± 0.00027
+  /// (0.0072 %) on n = 40..100": the value to the digits its band leaves, the band to 2
+  /// significant digits, labels from `labels` (the n of the trials).
+  std::string text(std::span<const double> labels) const;
+};
+
+/// The relative band within which a series counts as constant unless a study sets its own
+/// (`[rates] constant_within`): 1 % of its value.
+inline constexpr double default_constant_within = 0.01;
+
+/// The constant a series is, or nothing: tested on `points` (at least 3 finite values, any
+/// sign), constant when (max - min) / 2 <= max(within |value|, 4 ulps) or when the intervals
+/// y_i +- floor_i share a point. `floors` as analyse_series takes them (empty: none).
+std::optional<ConstantSeries> detect_constant(std::span<const double> y,
+                                              std::span<const double> floors,
+                                              const std::vector<std::size_t>& points,
+                                              double within = default_constant_within);
+
 /// One rate model applied to a series: its window, its fit on the window, and the pairwise
 /// rates of the whole series under this model.
 struct ModelAnalysis {
@@ -134,6 +170,11 @@ struct SeriesAnalysis {
   }
   /// Set when the user chose the window (FitWindow::text(), e.g. "n_from = 32"), else "".
   std::string set_window;
+  /// Set when the series does not vary with n: on all usable points (of the set window, when
+  /// there is one), or else without the shortest leading part of the power law's automatic
+  /// head that leaves a constant (the head bounds what may be left out). A constant
+  /// series is reported as its value and band; the model fits above stay for reference only.
+  std::optional<ConstantSeries> constant;
 };
 
 /// The asymptotic window of the points (u_i, v_i), i < u.size(), already transformed (u = ln x
@@ -152,10 +193,12 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
 /// `window` restricts the points (h_from and h_to apply to x) and replaces the automatic
 /// window; fewer than 2 points in it leave both models without a fit. `floors` (empty, or one
 /// absolute floor per point: MetricRow::floor) give the fits' FitFloors and the evidence's.
+/// `constant_within` is the relative band of detect_constant.
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,
                               double confidence = 0.95, const FitWindow& window = {},
-                              std::span<const double> floors = {});
+                              std::span<const double> floors = {},
+                              double constant_within = default_constant_within);
 
 /// Pairwise exponential rates ln(y_{i+1} / y_i) / (n_{i+1} - n_i), the counterpart of
 /// pairwise_rates; NaN where a value is non-positive or non-finite or n_{i+1} = n_i.

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/rates/rates.hpp"
 #include "rkhs/report/output.hpp"
 
@@ -43,6 +44,11 @@ struct RateTable {
   std::vector<RateTableRow> rows;
   std::optional<RateFit> fit;       ///< the reported fit, with its own confidence level
   std::string no_fit_reason;        ///< why there is no fit ("" when there is one)
+  /// Set for a series that does not vary with n (SeriesAnalysis::constant): shown as its value
+  /// and band, never as a rate; `fit` is empty then.
+  std::optional<ConstantSeries> constant;
+  /// constant->text() with the table's n: "3.7690 ± 0.00027 (0.0072 %) on n = 40..100".
+  std::string constant_text;
   std::vector<std::size_t> window;  ///< rows of the reported model's asymptotic window
   std::string window_note;          ///< the model choice (SeriesAnalysis::note), "" when none
   std::string note;  ///< what was excluded and why (MetricSeries::note), "" when nothing
@@ -70,9 +76,11 @@ std::string document_rate(const RateTableRow& row, std::string_view missing = "-
 /// The fitted rate: "-1.5 ± 0.03 (95% CI [-1.53, -1.47], R² = 0.999, 10 points)" with the
 /// fit's own confidence level (4 significant digits of the percentage), then
 /// ", exponential in n" for the exponential model; "r (m points, no uncertainty)" without a
-/// standard error; "no fit: <reason>" without a fit.
+/// standard error; "constant <constant_text>" for a constant series; "no fit: <reason>"
+/// without a fit.
 std::string document_fit(const RateTable& table);
-/// The window of the reported model: "n = 10..80, 4 of 4 points", "" when it is empty.
+/// The window of the reported model: "n = 10..80, 4 of 4 points", "" when it is empty or the
+/// series is constant (its constant_text names its points).
 std::string window_text(const RateTable& table);
 /// The fitted rate and its confidence interval rounded to the interval: as many decimals as
 /// show the interval's half-width to two significant digits, between 0 and 3 ("3.94", "[3.72,
@@ -86,7 +94,8 @@ struct FitCell {
 std::optional<FitCell> fit_cell_parts(const RateTable& table);
 /// The fitted rate with its confidence interval in a few characters, for a cell of a table of
 /// fitted rates: "-1.47 [-1.52, -1.43]", "-1.47" without an interval, "-0.287 [-0.363, -0.211]
-/// exp" for the exponential model, "no fit" without a fit (fit_cell_parts).
+/// exp" for the exponential model, "const 3.769" for a constant series (4 significant digits),
+/// "no fit" without a fit (fit_cell_parts).
 std::string fit_cell(const RateTable& table);
 
 /// All metrics of one group of trials side by side: the layout of deal.II's ConvergenceTable,

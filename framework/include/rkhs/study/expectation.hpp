@@ -7,6 +7,7 @@
 //   kernel = "bspline"                # group selector: any axis column of trials.csv
 //   degree = 1                        #   (a list accepts any of its values)
 //   theory = true                     # what is expected: theory = true | rate | model | bound
+//                                     #   | constant
 //   tier = "quick"                    # optional: the tiers this expectation belongs to
 //   xfail = "why"                     # optional: a known deviation (a fail does not fail check)
 //
@@ -35,10 +36,18 @@ struct AxisSelector {
 };
 
 enum class ExpectationKind {
-  rate,    ///< the fitted rate lies in an interval
-  theory,  ///< the rate the kernel's metadata predicts (rkhs/rates/theory.hpp)
-  model,   ///< a rate model describes the series better than the other
-  bound,   ///< metric <= constant * by [* times] at every n
+  rate,      ///< the fitted rate lies in an interval
+  theory,    ///< the rate the kernel's metadata predicts (rkhs/rates/theory.hpp)
+  model,     ///< a rate model describes the series better than the other
+  bound,     ///< metric <= constant * by [* times] at every n
+  constant,  ///< the series does not vary with n (at a given value, or any)
+};
+
+/// constant = true: the series is constant (rkhs/rates/asymptotic.hpp, detect_constant);
+/// constant = { value = v, within = w }: |metric(n) - v| <= w + floor(n) at every usable n.
+struct ConstantSpec {
+  std::optional<double> value;  ///< absent: constant = true (any value)
+  double within = 0.0;          ///< absolute; 0: within the values' floors
 };
 
 /// metric(n) <= constant * by(n) * times(n) at every usable n (by and times optional; without
@@ -68,6 +77,7 @@ struct Expectation {
   std::string rate_reference;
   double tolerance = 0.1;           ///< rate = x and theory: half-width of the accepted interval
   BoundSpec bound;                  ///< bound only
+  ConstantSpec constant;            ///< constant only
   /// n_from, n_to, h_from, h_to, last: the points judged (a rate: the window of the fit,
   /// replacing the automatic one; a bound: the n where it must hold). Empty: the study's.
   FitWindow window;
@@ -89,7 +99,7 @@ struct Expectation {
   std::string id() const;
 };
 
-/// The kind as the study file's key names it: "rate", "theory", "model", "bound".
+/// The kind as the study file's key names it: "rate", "theory", "model", "bound", "constant".
 std::string_view expectation_kind_name(ExpectationKind kind);
 
 /// The default tolerance of rate = x and theory expectations: 0.1 on the slope.

@@ -106,6 +106,9 @@ struct StudyDefinition {
   /// [rates]: the window every series is fitted on (empty: the automatic asymptotic window;
   /// rkhs/rates/asymptotic.hpp).
   FitWindow rates_window;
+  /// [rates] constant_within: the relative band within which a series is reported as constant
+  /// rather than as a rate (rkhs/rates/asymptotic.hpp, detect_constant).
+  double constant_within = default_constant_within;
   SolverOptions solver;
   StudyLimits limits;
   AdaptiveSettings adaptive;  ///< StudyKind::adaptive only

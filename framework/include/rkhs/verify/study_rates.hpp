@@ -32,10 +32,17 @@ struct MetricSeries {
   /// Size trials.size() - 1, NaN where undefined: the pairwise rates of the reported model
   /// (analysis.reported), power-law rates unless the exponential model is reported.
   std::vector<double> pairwise;
-  std::optional<RateFit> fit;           ///< the reported model's fit on its asymptotic window
+  /// The reported model's fit on its asymptotic window; empty for a constant series
+  /// (analysis.constant), which is reported as its value and band instead.
+  std::optional<RateFit> fit;
   SeriesAnalysis analysis;              ///< both models, their windows, the preferred one
   std::string note;                     ///< what was excluded and why ("" when nothing)
   std::string no_fit_reason;            ///< why there is no fit ("" when there is one)
+  /// The relative band of a constant series (StudyDefinition::constant_within).
+  double constant_within = default_constant_within;
+
+  /// The series does not vary with n: reported as analysis.constant, not as a rate.
+  bool constant() const { return analysis.constant.has_value(); }
 };
 
 /// The flag that leaves a value of `metric` (a metric of a `kind` trial) out of rate fits, or ""
@@ -50,7 +57,8 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
                                         const std::vector<TrialResult>& results);
 
 /// (Re)computes a series' analysis, fit, pairwise rates, note and no_fit_reason from its
-/// abscissa, n, values, flagged and failed, on `window` (empty: the automatic window). An
+/// abscissa, n, values, floors, flagged, failed and constant_within, on `window` (empty: the
+/// automatic window). A constant series gets no fit; no_fit_reason then states its constant. An
 /// [[expect]] table with its own window judges the series refitted this way.
 void fit_series(MetricSeries& series, const FitWindow& window);
 
