@@ -162,15 +162,17 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   }
   SECTION("a radius whose track is longer than the largest number") {
     // 2 pi radius was an infinite domain length (found writing fuzz_study_file's checks of what a
-    // parsed study holds).
+    // parsed study holds); a finite one beyond 1e100 overflowed in the kernels (issue 36).
     std::string text = minimal;
     text.replace(text.find("radius = 4.0"), 12, "radius = 1e308");
     CHECK(error_of(text) ==
-          "s.toml:5:10: domain.radius: must be at most 2.861117485757028e+307 (the track's "
-          "length, 2 pi radius, must be a finite number), found 1e+308");
+          "s.toml:5:10: domain.radius: must be between 1.5915494309189535e-101 and "
+          "1.5915494309189535e+99 metres (the track's length, 2 pi radius, between 1e-100 and "
+          "1e+100), found 1e+308 (beyond these the squared distances, volumes and spline knots "
+          "computed on the domain leave the range of double)");
     text = minimal;
-    text.replace(text.find("radius = 4.0"), 12, "radius = 2.8e307");
-    CHECK(parse_study(text, "s.toml").domain.length == 2 * std::numbers::pi * 2.8e307);
+    text.replace(text.find("radius = 4.0"), 12, "radius = 1.5e99");
+    CHECK(parse_study(text, "s.toml").domain.length == 2 * std::numbers::pi * 1.5e99);
   }
   SECTION("unknown metric") {
     std::string text = minimal;
@@ -520,4 +522,52 @@ TEST_CASE("[[expect]] selects groups of a laps axis by laps, as any axis column"
   CHECK_THAT(error_of(adaptive_text("laps = 10\n", "[[expect]]\nmetric = \"l2_error\"\n"
                                                    "rate = { max = 0 }\nlaps = 10\n")),
              Catch::Contains("expect.laps: unknown key"));
+}
+
+// Issue 36: values that validate accepted and run crashed on, or that ended in an exception
+// without a position.
+TEST_CASE("hostile values are refused at their key with the allowed range, or read as documented",
+          "[study][hostile]") {
+  const auto with = [](std::string_view from, const std::string& to) {
+    std::string text = minimal;
+    text.replace(text.find(from), from.size(), to);
+    return text;
+  };
+  SECTION("a domain length beyond 1e100 (a periodic B-spline died with SIGSEGV at 3e307)") {
+    const auto text = with("radius = 4.0", "length = 1e308") + "[[kernel]]\nname = \"bspline\"\n";
+    CHECK(error_of(text) ==
+          "s.toml:5:10: domain.length: must be between 1e-100 and 1e+100 metres, found 1e+308 "
+          "(beyond these the squared distances, volumes and spline knots computed on the domain "
+          "leave the range of double)");
+    CHECK_THAT(error_of(with("radius = 4.0", "length = 3e307")),
+               Catch::StartsWith("s.toml:5:10: domain.length: must be between"));
+    CHECK_THAT(error_of(with("radius = 4.0", "length = 1e-101")),
+               Catch::StartsWith("s.toml:5:10: domain.length: must be between"));
+    CHECK(parse_study(with("radius = 4.0", "length = 1e100"), "s.toml").domain.length == 1e100);
+    CHECK(error_of(with("radius = 4.0", "lengths = [1.0, 2e100]")) ==
+          "s.toml:5:17: domain.lengths: axis 2: must be between 1e-100 and 1e+100 metres, found "
+          "2e+100 (beyond these the squared distances, volumes and spline knots computed on the "
+          "domain leave the range of double)");
+  }
+  SECTION("a periodic Wendland radius of 2^31 periods (undefined behaviour casting the images)") {
+    const auto text = with("radius = 4.0", "length = 1.0") +
+                      "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n";
+    CHECK_THAT(error_of(text),
+               Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
+                   Catch::Contains("parameter 'radius' must be at most 1048575 times the length "
+                                   "of a periodic track (a kernel value sums 2 ceil(radius / L + "
+                                   "1/2) + 1 images), found radius = 3e+09 on a track of length 1"));
+    // On an interval there are no images: any radius is a kernel.
+    CHECK_NOTHROW(parse_study(with("radius = 4.0", "length = 1.0\nperiodic = false") +
+                                  "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n",
+                              "s.toml"));
+    CHECK_NOTHROW(parse_study(with("radius = 4.0", "length = 1.0") +
+                                  "[[kernel]]\nname = \"wendland\"\nradius = 1048575\n",
+                              "s.toml"));
+    // On a torus the lattice sum is bounded by the number of images per kernel value.
+    CHECK_THAT(error_of(with("radius = 4.0", "lengths = [1.0, 1.0]") +
+                        "[[kernel]]\nname = \"wendland\"\nradius = 2000\n"),
+               Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
+                   Catch::Contains("would sum 1.602e+07 images per kernel value on this torus"));
+  }
 }

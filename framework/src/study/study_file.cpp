@@ -763,6 +763,15 @@ void load_study_plugins(const Reporter& report, const toml::table& root) {
   }
 }
 
+// Every extent of the domain (length, 2 pi radius, each of lengths) lies in
+// [Domain::min_extent, Domain::max_extent]; the reason, for messages.
+bool in_extent_range(double extent) {
+  return extent >= Domain::min_extent && extent <= Domain::max_extent;
+}
+constexpr const char* extent_range_reason =
+    "beyond these the squared distances, volumes and spline knots computed on the domain leave "
+    "the range of double";
+
 bool valid_study_name(const std::string& name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
@@ -959,20 +968,32 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
         report.fail(
             item.source(), "domain.lengths",
             fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1, show(item)));
+      if (!in_extent_range(*value))
+        report.fail(item.source(), "domain.lengths",
+                    fmt::format("axis {}: must be between {} and {} metres, found {} ({})", a + 1,
+                                format_real(Domain::min_extent), format_real(Domain::max_extent),
+                                show(item), extent_range_reason));
       (a == 0 ? study.domain.length : a == 1 ? study.domain.width : study.domain.height) = *value;
     }
+  } else if (domain->contains("length")) {
+    study.domain.length = get_number(report, *domain, "length", "domain.", 0, 0);
+    if (!in_extent_range(study.domain.length))
+      report.fail(domain->get("length")->source(), "domain.length",
+                  fmt::format("must be between {} and {} metres, found {} ({})",
+                              format_real(Domain::min_extent), format_real(Domain::max_extent),
+                              show(*domain->get("length")), extent_range_reason));
   } else {
-    study.domain.length =
-        domain->contains("length")
-            ? get_number(report, *domain, "length", "domain.", 0, 0)
-            : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
-    if (!std::isfinite(study.domain.length))  // 2 pi radius beyond the largest double
-      report.fail(
-          domain->get("radius")->source(), "domain.radius",
-          fmt::format("must be at most {} (the track's length, 2 pi radius, must be a "
-                      "finite number), found {}",
-                      format_real(std::numeric_limits<double>::max() / (2 * std::numbers::pi)),
-                      show(*domain->get("radius"))));
+    // The track's length 2 pi radius must lie in the extents' range.
+    const double radius = get_number(report, *domain, "radius", "domain.", 0, 0);
+    study.domain.length = 2 * std::numbers::pi * radius;
+    if (!in_extent_range(study.domain.length))
+      report.fail(domain->get("radius")->source(), "domain.radius",
+                  fmt::format("must be between {} and {} metres (the track's length, 2 pi "
+                              "radius, between {} and {}), found {} ({})",
+                              format_real(Domain::min_extent / (2 * std::numbers::pi)),
+                              format_real(Domain::max_extent / (2 * std::numbers::pi)),
+                              format_real(Domain::min_extent), format_real(Domain::max_extent),
+                              show(*domain->get("radius")), extent_range_reason));
   }
   study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
   // An adaptive study in d > 1 learns f of a plant's read-out of d coordinates: every plant
