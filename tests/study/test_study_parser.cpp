@@ -570,4 +570,65 @@ TEST_CASE("hostile values are refused at their key with the allowed range, or re
                Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
                    Catch::Contains("would sum 1.602e+07 images per kernel value on this torus"));
   }
+  SECTION("integers above 2^53 in real-valued keys are read as the nearest double") {
+    // 9007199254740993 = 2^53 + 1 is no double: toml++ gives no value<double>() for it, and the
+    // parser ended in "bad optional access" without a position.
+    const std::string big = "9007199254740993";
+    const double nearest = 9007199254740992.0;
+    CHECK(parse_study(with("radius = 4.0", "length = " + big), "s.toml").domain.length == nearest);
+    CHECK(parse_study(with("radius = 4.0", "radius = " + big), "s.toml").domain.length ==
+          2 * std::numbers::pi * nearest);
+    CHECK(parse_study(with("radius = 4.0", "lengths = [" + big + "]"), "s.toml").domain.length ==
+          nearest);
+    const auto limits =
+        parse_study(std::string(minimal) + "[limits]\ntrial_seconds = " + big +
+                        "\nmatrix_megabytes = " + big + "\n[solver]\nregularisation = " + big + "\n",
+                    "s.toml");
+    CHECK(limits.limits.trial_seconds == nearest);
+    CHECK(limits.limits.matrix_megabytes == nearest);
+    CHECK(limits.solver.regularisation == nearest);
+    const auto expect = parse_study(std::string(minimal) +
+                                        "[[expect]]\nmetric = \"fill_distance\"\nrate = " + big +
+                                        "\ntolerance = " + big + "\n",
+                                    "s.toml");
+    REQUIRE(expect.expectations.size() == 1);
+    CHECK(expect.expectations[0].expected == nearest);
+    CHECK(expect.expectations[0].tolerance == nearest);
+    // A real-valued kernel parameter (ParameterSet reads integers itself).
+    CHECK(parse_study(with("radius = 4.0", "length = 1.0\nperiodic = false") +
+                          "[[kernel]]\nname = \"wendland\"\nradius = " + big + "\n",
+                      "s.toml")
+              .kernels.size() == 2);
+  }
+  SECTION("whole-number keys name their range") {
+    CHECK(error_of(with("name = \"t\"", "name = \"t\"\nevaluation_points = 9007199254740993")) ==
+          "s.toml:4:21: study.evaluation_points: must be a whole number between 2 and "
+          "100000000, found 9007199254740993");
+    CHECK(error_of(std::string(minimal) + "[limits]\ntrials = 9007199254740993\n") ==
+          "s.toml:11:10: limits.trials: must be a whole number between 1 and 1e15, found "
+          "9007199254740993");
+  }
+  SECTION("adaptive speed and laps above 2^53") {
+    const std::string adaptive = R"(
+[study]
+name = "a"
+kind = "adaptive"
+evaluation_points = 64
+[domain]
+radius = 4.0
+[grid]
+n = [8]
+[[kernel]]
+name = "gaussian"
+[adaptive]
+)";
+    // Read, then judged by the adaptive checks: a refusal with a position, never an exception
+    // without one.
+    for (const auto* key : {"speed = 9007199254740993", "laps = 9007199254740993",
+                            "laps = [1, 9007199254740993]"}) {
+      const auto e = error_of(adaptive + key + "\n");
+      INFO(key << ": " << e);
+      CHECK((e == "no error" || e.rfind("s.toml:", 0) == 0));
+    }
+  }
 }

@@ -483,7 +483,7 @@ double parse_lap_count(const Reporter& report, const toml::node& node, bool in_l
   if (!node.is_number())
     report.fail(node.source(), "adaptive.laps",
                 fmt::format("found {} ({}), expected {}", describe(node), show(node), allowed));
-  const double laps = node.value<double>().value();
+  const double laps = *real_of(node);
   if (!(laps > 0) || !std::isfinite(laps))
     report.fail(node.source(), "adaptive.laps",
                 fmt::format("must be a finite number > 0 or \"limit\", found {}", show(node)));
@@ -714,10 +714,11 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
       report.fail(laps->source(), "adaptive.snapshot_laps",
                   fmt::format("expected an array of lap numbers, found {}", describe(*laps)));
     for (const auto& item : *array) {
-      if (!item.is_number() || item.value<double>().value() < 0)
+      const auto lap_number = real_of(item);
+      if (!lap_number || *lap_number < 0)
         report.fail(item.source(), "adaptive.snapshot_laps",
                     fmt::format("expected a lap number >= 0, found {}", show(item)));
-      const double lap = item.value<double>().value();
+      const double lap = *lap_number;
       if (last_lap && lap > *last_lap * (1 + 1e-12))
         report.fail(item.source(), "adaptive.snapshot_laps",
                     fmt::format("found {}, after the end of the run ({}); snapshot laps must be "
@@ -731,7 +732,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
         get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
     if (value != std::floor(value) || value > 1e7)
       report.fail(table->get(key)->source(), fmt::format("adaptive.{}", key),
-                  fmt::format("must be a whole number >= 1, found {}", format_real(value)));
+                  fmt::format("must be a whole number between 1 and 10000000, found {}",
+                              show(*table->get(key))));
     return static_cast<std::size_t>(value);
   };
   settings.snapshot_points = count("snapshot_points", 0);
@@ -913,7 +915,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   const double points = get_number(report, *header, "evaluation_points", "study.", 4096, 1);
   if (points != std::floor(points) || points > 1e8)
     report.fail(header->get("evaluation_points")->source(), "study.evaluation_points",
-                fmt::format("must be an integer >= 2, found {}", format_real(points)));
+                fmt::format("must be a whole number between 2 and 100000000, found {}",
+                            show(*header->get("evaluation_points"))));
   study.evaluation_points = static_cast<std::size_t>(points);
 
   const auto& all_metrics = metric_names(study.kind);
@@ -963,8 +966,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     study.domain.dimension = static_cast<int>(list->size());
     for (std::size_t a = 0; a < list->size(); ++a) {
       const auto& item = *list->get(a);
-      const auto value = item.value<double>();
-      if (!item.is_number() || !value || !(*value > 0) || !std::isfinite(*value))
+      const auto value = real_of(item);
+      if (!value || !(*value > 0) || !std::isfinite(*value))
         report.fail(
             item.source(), "domain.lengths",
             fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1, show(item)));

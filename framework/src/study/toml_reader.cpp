@@ -73,6 +73,12 @@ std::string get_string(const Reporter& report, const toml::table& table, std::st
   return node->as_string()->get();
 }
 
+std::optional<double> real_of(const toml::node& node) {
+  if (const auto* integer = node.as_integer()) return static_cast<double>(integer->get());
+  if (const auto* real = node.as_floating_point()) return real->get();
+  return std::nullopt;
+}
+
 double get_number(const Reporter& report, const toml::table& table, std::string_view key,
                   std::string_view prefix, double fallback, double min_exclusive) {
   const auto* node = table.get(key);
@@ -80,7 +86,7 @@ double get_number(const Reporter& report, const toml::table& table, std::string_
   if (!node->is_number())
     report.fail(node->source(), fmt::format("{}{}", prefix, key),
                 fmt::format("expected a number, found {} ({})", describe(*node), show(*node)));
-  const double value = node->value<double>().value();
+  const double value = *real_of(*node);
   if (!(value > min_exclusive) || !std::isfinite(value))
     report.fail(node->source(), fmt::format("{}{}", prefix, key),
                 fmt::format("must be a finite number > {}, found {}", format_real(min_exclusive),
@@ -118,8 +124,8 @@ FitWindow read_fit_window(const Reporter& report, const toml::table& table,
   auto number = [&](std::string_view key) -> std::optional<double> {
     const auto* node = table.get(key);
     if (!node) return std::nullopt;
-    if (!node->is_number() || !std::isfinite(node->value<double>().value()) ||
-        !(node->value<double>().value() > 0.0))
+    const auto value = real_of(*node);
+    if (!value || !std::isfinite(*value) || !(*value > 0.0))
       report.fail(node->source(), key_of(key),
                   fmt::format("expected a positive number, found {}", show(*node)));
     if ((key == "h_from" || key == "h_to") && study.abscissa != Abscissa::fill_distance)
@@ -127,7 +133,7 @@ FitWindow read_fit_window(const Reporter& report, const toml::table& table,
                   fmt::format("a window in h needs study.abscissa = \"h\" (this study fits against "
                               "n: use n_{} instead)",
                               key == "h_from" ? "from" : "to"));
-    return node->value<double>().value();
+    return *value;
   };
   window.n_from = number("n_from");
   window.n_to = number("n_to");

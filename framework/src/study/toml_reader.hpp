@@ -72,6 +72,12 @@ const toml::table* optional_table(const Reporter& report, const toml::table& roo
 std::string get_string(const Reporter& report, const toml::table& table, std::string_view key,
                        std::string_view prefix, std::optional<std::string> fallback);
 
+/// A number node as a double: a floating-point value as it is, an integer as the nearest double
+/// (an integer above 2^53, such as 9007199254740993, is rounded like the same digits written
+/// with a decimal point; toml++'s value<double>() gives no value for it). std::nullopt for a
+/// node that is not a number. Every real-valued key of a study file is read through it.
+std::optional<double> real_of(const toml::node& node);
+
 /// `table[key]` as a finite number > `min_exclusive`; `fallback` when absent.
 double get_number(const Reporter& report, const toml::table& table, std::string_view key,
                   std::string_view prefix, double fallback, double min_exclusive);
