@@ -631,4 +631,11 @@ name = "gaussian"
       CHECK((e == "no error" || e.rfind("s.toml:", 0) == 0));
     }
   }
+  SECTION("a study name longer than 100 characters (run failed: File name too long)") {
+    CHECK(error_of(with("name = \"t\"", "name = \"" + std::string(300, 'a') + "\"")) ==
+          "s.toml:3:8: study.name: is 300 characters long, at most 100 are allowed (it names "
+          "the output folder results/<name>/ and the files in it)");
+    CHECK(parse_study(with("name = \"t\"", "name = \"" + std::string(100, 'a') + "\""), "s.toml")
+              .name.size() == 100);
+  }
 }

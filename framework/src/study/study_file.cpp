@@ -39,6 +39,9 @@ namespace {
 // most values of n one grid may list.
 constexpr std::int64_t max_n = 1'000'000'000;
 constexpr std::int64_t max_n_values = 100000;
+// The longest study name (docs/study-files.md): it names the output folder, and file names
+// are at most 255 bytes on common file systems.
+constexpr std::size_t max_study_name = 100;
 // [limits] trials when the file does not give it (docs/study-files.md).
 constexpr std::uint64_t default_max_trials = 1'000'000;
 
@@ -887,6 +890,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   check_keys(report, *header, "study.",
              {"name", "description", "kind", "metrics", "abscissa", "evaluation_points"});
   study.name = get_string(report, *header, "name", "study.", std::nullopt);
+  if (study.name.size() > max_study_name)
+    report.fail(header->get("name")->source(), "study.name",
+                fmt::format("is {} characters long, at most {} are allowed (it names the output "
+                            "folder results/<name>/ and the files in it)",
+                            study.name.size(), max_study_name));
   if (!valid_study_name(study.name))
     report.fail(header->get("name")->source(), "study.name",
                 fmt::format("'{}' is not a valid name (letters, digits, '_', '-', '.'; it names "
