@@ -407,6 +407,29 @@ TEST_CASE("limits.trial_seconds stops a trial as it runs, and it fails with the 
   CHECK(result.seconds < 10);
 }
 
+TEST_CASE("a limits.trial_seconds too long for the clock is no limit, never a deadline in the past",
+          "[run][hostile]") {
+  // From 9.3e9 s on, start + limit overflowed steady_clock and every trial "exceeded
+  // limits.trial_seconds" at 0.0 s (issue 36).
+  for (const char* seconds : {"9.3e9", "1e12", "1e300", "9007199254740993"}) {
+    const auto study = parse_study(std::string(R"([study]
+name = "long_limit"
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [16]
+[[kernel]]
+name = "gaussian"
+[limits]
+trial_seconds = )") + seconds + "\n",
+                                   "s.toml");
+    const auto result = rkhs::run_trial(study, study.trials().front());
+    INFO(seconds << ": " << result.reason);
+    CHECK(result.ok);
+  }
+}
+
 TEST_CASE("a trial of a laps axis runs with its own lap count, as a study with that one count",
           "[run][laps]") {
   const auto study_with = [](const std::string& laps, const std::string& snapshots) {
