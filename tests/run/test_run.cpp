@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/kernel/kernel_algorithms.hpp"
 #include "rkhs/run/run.hpp"
@@ -428,6 +429,27 @@ trial_seconds = )") + seconds + "\n",
     INFO(seconds << ": " << result.reason);
     CHECK(result.ok);
   }
+}
+
+TEST_CASE("GramSolver checks the trial's deadline before each symmetric eigenvalue solve",
+          "[run][hostile]") {
+  // A Gaussian n = 3000 trial with trial_seconds = 2 ran 25 s: two eigenvalue solves of its
+  // singular Gram matrix, neither of which looked at the deadline (issue 36).
+  const Eigen::MatrixXd singular = Eigen::MatrixXd::Ones(40, 40);
+  const Eigen::MatrixXd regular = Eigen::MatrixXd::Identity(40, 40) + 0.1 * singular;
+  const auto past = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  const std::function<bool()> never;
+  {
+    const rkhs::CancellationScope scope(never, past);
+    CHECK_THROWS_AS(rkhs::GramSolver(singular, {}, rkhs::GramSpectrumMode::exact),
+                    rkhs::TrialTimeLimitExceeded);
+    CHECK_THROWS_AS(rkhs::GramSolver(regular, {}, rkhs::GramSpectrumMode::exact),
+                    rkhs::TrialTimeLimitExceeded);
+  }
+  // Outside a trial nothing is checked, and the solves are those of before.
+  const rkhs::GramSolver pseudo(singular, {}, rkhs::GramSpectrumMode::exact);
+  CHECK(pseudo.spectrum().singular);
+  CHECK(rkhs::GramSolver(regular, {}, rkhs::GramSpectrumMode::exact).method() == "cholesky");
 }
 
 TEST_CASE("a trial of a laps axis runs with its own lap count, as a study with that one count",
