@@ -550,13 +550,14 @@ TEST_CASE("hostile values are refused at their key with the allowed range, or re
           "domain leave the range of double)");
   }
   SECTION("a periodic Wendland radius of 2^31 periods (undefined behaviour casting the images)") {
-    const auto text = with("radius = 4.0", "length = 1.0") +
-                      "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n";
-    CHECK_THAT(error_of(text),
-               Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
-                   Catch::Contains("parameter 'radius' must be at most 1048575 times the length "
-                                   "of a periodic track (a kernel value sums 2 ceil(radius / L + "
-                                   "1/2) + 1 images), found radius = 3e+09 on a track of length 1"));
+    const auto text =
+        with("radius = 4.0", "length = 1.0") + "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n";
+    CHECK_THAT(
+        error_of(text),
+        Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
+            Catch::Contains("parameter 'radius' must be at most 1048575 times the length "
+                            "of a periodic track (a kernel value sums 2 ceil(radius / L + "
+                            "1/2) + 1 images), found radius = 3e+09 on a track of length 1"));
     // On an interval there are no images: any radius is a kernel.
     CHECK_NOTHROW(parse_study(with("radius = 4.0", "length = 1.0\nperiodic = false") +
                                   "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n",
@@ -580,17 +581,17 @@ TEST_CASE("hostile values are refused at their key with the allowed range, or re
           2 * std::numbers::pi * nearest);
     CHECK(parse_study(with("radius = 4.0", "lengths = [" + big + "]"), "s.toml").domain.length ==
           nearest);
-    const auto limits =
-        parse_study(std::string(minimal) + "[limits]\ntrial_seconds = " + big +
-                        "\nmatrix_megabytes = " + big + "\n[solver]\nregularisation = " + big + "\n",
-                    "s.toml");
+    const auto limits = parse_study(std::string(minimal) + "[limits]\ntrial_seconds = " + big +
+                                        "\nmatrix_megabytes = " + big +
+                                        "\n[solver]\nregularisation = " + big + "\n",
+                                    "s.toml");
     CHECK(limits.limits.trial_seconds == nearest);
     CHECK(limits.limits.matrix_megabytes == nearest);
     CHECK(limits.solver.regularisation == nearest);
-    const auto expect = parse_study(std::string(minimal) +
-                                        "[[expect]]\nmetric = \"fill_distance\"\nrate = " + big +
-                                        "\ntolerance = " + big + "\n",
-                                    "s.toml");
+    const auto expect =
+        parse_study(std::string(minimal) + "[[expect]]\nmetric = \"fill_distance\"\nrate = " + big +
+                        "\ntolerance = " + big + "\n",
+                    "s.toml");
     REQUIRE(expect.expectations.size() == 1);
     CHECK(expect.expectations[0].expected == nearest);
     CHECK(expect.expectations[0].tolerance == nearest);
@@ -624,8 +625,8 @@ name = "gaussian"
 )";
     // Read, then judged by the adaptive checks: a refusal with a position, never an exception
     // without one.
-    for (const auto* key : {"speed = 9007199254740993", "laps = 9007199254740993",
-                            "laps = [1, 9007199254740993]"}) {
+    for (const auto* key :
+         {"speed = 9007199254740993", "laps = 9007199254740993", "laps = [1, 9007199254740993]"}) {
       const auto e = error_of(adaptive + key + "\n");
       INFO(key << ": " << e);
       CHECK((e == "no error" || e.rfind("s.toml:", 0) == 0));

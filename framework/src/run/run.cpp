@@ -100,10 +100,10 @@ void apply_floors(TrialResult& result) {
 std::optional<std::chrono::steady_clock::time_point> deadline_after(
     std::chrono::steady_clock::time_point start, double seconds) {
   using clock = std::chrono::steady_clock;
-  const double room =
-      std::chrono::duration<double>(clock::time_point::max() - start).count();
+  const double room = std::chrono::duration<double>(clock::time_point::max() - start).count();
   if (!(seconds < 0.5 * room)) return std::nullopt;
-  return start + std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(seconds));
+  return start +
+         std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 }  // namespace
