@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -331,3 +332,50 @@ nu = 2.5
   CHECK(seconds < 2);
   CHECK_THAT(read_text(log), Catch::Contains("2 stopped while running"));
 }
+
+// Issue 50: `validate /dev/zero` grew to 23.8 GB, a FIFO as the study file blocked forever, a
+// 300 MB study file was read whole, and a store that is a directory was "no such result
+// store". Each command runs under `timeout`: a hang fails.
+TEST_CASE(
+    "study files and stores that are not regular files are refused by type, huge ones by size",
+    "[cli][reliability][hostile]") {
+  const auto dir = rkhs::test::scratch_directory("reliable_special_files");
+  const auto fifo = dir / "study.toml";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  const auto refused = [](const std::string& arguments, const std::string& why) {
+    const auto out = rkhs_study(arguments, "timeout 20");
+    INFO(arguments << ": " << out.output);
+    CHECK(out.exit_code == 2);
+    CHECK_THAT(out.output, Catch::Contains(why));
+  };
+  const std::string out = " --no-store --out " + (dir / "out").string();
+  for (const std::string command : {"validate ", "check ", "run "}) {
+    const std::string options = command == "validate " ? "" : out;
+    refused(command + "/dev/zero" + options,
+            "/dev/zero: is a character device, not a study file (a regular file)");
+    refused(command + fifo.string() + options,
+            fifo.string() + ": is a FIFO, not a study file (a regular file)");
+    refused(command + dir.string() + options,
+            dir.string() + ": is a directory, not a study file (a regular file)");
+  }
+  const auto big = dir / "big.toml";
+  std::ofstream(big) << small_study;
+  fs::resize_file(big, std::uintmax_t{300} << 20);  // sparse
+  refused("validate " + big.string(),
+          big.string() +
+              ": is 314572800 bytes, more than the 4194304 bytes (4 MiB) a study file may have");
+
+  std::ofstream(dir / "small.toml") << small_study;
+  const std::string store_fifo = (dir / "store.sqlite").string();
+  REQUIRE(mkfifo(store_fifo.c_str(), 0600) == 0);
+  for (const auto& [store, kind] : {std::pair{store_fifo, std::string("a FIFO")},
+                                    std::pair{dir.string(), std::string("a directory")}}) {
+    const std::string why = store + ": is " + kind + ", not a result store";
+    refused("store check --store " + store, why);
+    refused("run " + (dir / "small.toml").string() + " --store " + store + " --out " +
+                (dir / "out").string(),
+            why);
+    refused("merge " + (dir / "into.sqlite").string() + " " + store, why);
+  }
+}
+

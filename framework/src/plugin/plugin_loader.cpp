@@ -17,6 +17,7 @@
 #include <mutex>
 
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/plugin/build_configuration.hpp"
 #include "rkhs/plugin/module.hpp"
 #include "rkhs/plugin/plugin_kinds.hpp"
@@ -95,18 +96,6 @@ std::vector<Module>& modules() {
 template <class Function>
 Function* symbol(void* handle, const char* name) {
   return reinterpret_cast<Function*>(dlsym(handle, name));
-}
-
-// "a FIFO", "a character device", ...: what a path that is not a regular file is, for messages.
-std::string_view file_kind(fs::file_type type) {
-  switch (type) {
-    case fs::file_type::directory: return "a directory";
-    case fs::file_type::fifo: return "a FIFO";
-    case fs::file_type::socket: return "a socket";
-    case fs::file_type::character: return "a character device";
-    case fs::file_type::block: return "a block device";
-    default: return "a special file";
-  }
 }
 
 // Whether `file` (a regular file) is a complete ELF shared object, read with pread before

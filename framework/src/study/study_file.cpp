@@ -23,6 +23,7 @@
 #include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/data_root.hpp"
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/core/random.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
@@ -44,6 +45,10 @@ constexpr std::int64_t max_n_values = 100000;
 constexpr std::size_t max_study_name = 100;
 // [limits] trials when the file does not give it (docs/study-files.md).
 constexpr std::uint64_t default_max_trials = 1'000'000;
+// The largest [limits] trials: every trial of the grid is held in memory (its plugin choices
+// and keys, about 1.7 KB: 10^6 trials took 1.7 GB), and a grid the count admits must be one
+// that can be built (a 2^31-trial grid under trials = 1e15 ended in std::bad_alloc).
+constexpr std::uint64_t max_max_trials = 10'000'000;
 
 // n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }.
 // Ranges are counted before they are expanded, without overflow: bounds above max_n and more
@@ -873,6 +878,7 @@ void check_evaluation_grid(const Reporter& report, const toml::table& header,
 StudyDefinition parse_study(std::string_view text, const std::string& source_name) {
   const Reporter report(source_name);
   toml::table root;
+  check_toml_nesting(report, text);
   try {
     root = toml::parse(text, source_name);
   } catch (const toml::parse_error& error) {
@@ -1026,10 +1032,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                                                study.limits.matrix_megabytes, 0);
     const double trials =
         get_number(report, *limits, "trials", "limits.", static_cast<double>(max_trials), 0);
-    if (trials != std::floor(trials) || trials > 1e15)
+    if (trials != std::floor(trials) || trials > static_cast<double>(max_max_trials))
       report.fail(limits->get("trials")->source(), "limits.trials",
-                  fmt::format("must be a whole number between 1 and 1e15, found {}",
-                              show(*limits->get("trials"))));
+                  fmt::format("must be a whole number between 1 and {} (every trial of the grid "
+                              "is held in memory, about 1.7 KB each), found {}",
+                              max_max_trials, show(*limits->get("trials"))));
     max_trials = static_cast<std::uint64_t>(trials);
   }
   // Before any plugin choice or trial is built: a short file can ask for billions of trials.
@@ -1239,11 +1246,13 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
 }
 
 StudyDefinition load_study(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw StudyError(fmt::format("{}: cannot open the study file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_study(text.str(), file.string());
+  std::string text;
+  try {
+    text = read_input_file(file, "study file", max_study_file_bytes);
+  } catch (const InputFileError& error) {
+    throw StudyError(error.what());
+  }
+  return parse_study(text, file.string());
 }
 
 }  // namespace rkhs
