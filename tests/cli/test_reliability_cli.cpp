@@ -379,3 +379,88 @@ TEST_CASE(
   }
 }
 
+// Issue 50: while gnuplot hung, `run` ignored SIGTERM and SIGINT (alive after 11 minutes). A
+// gnuplot on PATH that never ends (it waits for a child of its own): SIGTERM ends the run
+// within 2 s, gnuplot's whole process group is killed, and without a signal the plot's time
+// limit ends it.
+TEST_CASE("a hanging gnuplot is killed at SIGTERM and at its time limit",
+          "[cli][reliability][plots][hostile]") {
+  const auto dir = rkhs::test::scratch_directory("reliable_gnuplot_hangs");
+  fs::create_directories(dir / "bin");
+  const auto gnuplot = dir / "bin" / "gnuplot";
+  std::ofstream(gnuplot) << "#!/bin/sh\nsleep 1000 &\necho $! > " << (dir / "sleep.pid").string()
+                         << "\nwait\n";
+  fs::permissions(gnuplot, fs::perms::owner_all);
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "plotted"
+evaluation_points = 512
+metrics = ["gram_condition_number"]
+[domain]
+radius = 4
+[grid]
+n = [8, 16, 32]
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+)";
+  const auto start = [&](const std::string& seconds) {
+    fs::remove(dir / "sleep.pid");
+    const pid_t pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      const int out = ::open((dir / "log.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, 1);
+      dup2(out, 2);
+      setenv("PATH", ((dir / "bin").string() + ":/usr/bin:/bin").c_str(), 1);
+      if (!seconds.empty()) setenv("RKHS_STUDY_GNUPLOT_SECONDS", seconds.c_str(), 1);
+      const std::string study = (dir / "study.toml").string(), out_dir = (dir / "out").string();
+      execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "run", study.c_str(), "--no-store",
+            "--out", out_dir.c_str(), nullptr);
+      _exit(127);
+    }
+    // Until the fake gnuplot runs (its child's pid is written).
+    REQUIRE(rkhs::test::wait_until(
+        [&] {
+          REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
+          return !read_text(dir / "sleep.pid").empty();
+        },
+        30));
+    return pid;
+  };
+  const auto sleep_alive = [&] {
+    const auto pid = std::stoi(read_text(dir / "sleep.pid"));
+    // Reaped by init once killed; a zombie of our own it cannot be (not our child).
+    return kill(pid, 0) == 0 &&
+           read_text("/proc/" + std::to_string(pid) + "/stat").find(") Z") == std::string::npos;
+  };
+
+  {
+    const pid_t pid = start("");
+    const auto signalled = std::chrono::steady_clock::now();
+    kill(pid, SIGTERM);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+    INFO(read_text(dir / "log.txt"));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 130);
+    CHECK(seconds < 2);
+    CHECK_THAT(read_text(dir / "log.txt"),
+               Catch::Contains("gnuplot was killed: the command was interrupted") &&
+                   Catch::Contains("interrupted while rendering plots"));
+    CHECK(rkhs::test::wait_until([&] { return !sleep_alive(); }, 2));
+    CHECK(fs::exists(dir / "out" / "trials.csv"));
+  }
+  {
+    const pid_t pid = start("1");
+    int status = 0;
+    waitpid(pid, &status, 0);
+    INFO(read_text(dir / "log.txt"));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 0);
+    CHECK_THAT(read_text(dir / "log.txt"),
+               Catch::Contains("gnuplot did not finish within 1 s and was killed"));
+    CHECK(rkhs::test::wait_until([&] { return !sleep_alive(); }, 2));
+  }
+}
