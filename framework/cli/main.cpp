@@ -37,7 +37,7 @@ int rkhs_study_main(int argc, char** argv) {
       app.add_subcommand("run", "run a study: trials, rates, trials.csv, rates.csv, summary.json");
   run->add_option("study", run_arguments.study_file, "study definition (TOML)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
   run->add_option("--out", run_arguments.out_dir,
                   "output directory (default: results/<study name>)");
   run->add_option("--threads", run_arguments.threads, "worker threads (default: all cores)")
@@ -66,7 +66,7 @@ int rkhs_study_main(int argc, char** argv) {
   merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
   merge->add_option("from", merge_from, "stores to copy from")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
   std::string merge_prefer;
   merge
       ->add_option("--prefer", merge_prefer,
@@ -129,7 +129,7 @@ int rkhs_study_main(int argc, char** argv) {
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
 
   auto* check = app.add_subcommand(
       "check",
@@ -139,7 +139,7 @@ int rkhs_study_main(int argc, char** argv) {
       ->add_option("studies", check_arguments.study_files,
                    "study definitions (TOML), run and judged in turn")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
   check->add_option("--tier", check_arguments.tier,
                     "run only the entries and expectations of this tier (e.g. quick)");
   check

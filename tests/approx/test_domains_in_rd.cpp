@@ -113,7 +113,11 @@ TEST_CASE("a box's uniform points are the tensor grid and its L2 rule is exact w
   CHECK(torus.difference(1.9, 0.1, 0) == Approx(-0.2));
   CHECK(torus.difference(0.1, 2.8, 1) == Approx(0.3));
   Domain bad = box(1.0, 0.0);
-  CHECK_THROWS_WITH(bad.validate(), "domain width must be > 0 and finite, not 0");
+  CHECK_THROWS_WITH(bad.validate(), "domain width must be between 1e-100 and 1e+100 metres, not 0");
+  // Beyond Domain::max_extent the numerics on the domain overflow: refused like a 0.
+  Domain huge = box(1e101, 1.0);
+  CHECK_THROWS_WITH(huge.validate(),
+                    "domain length must be between 1e-100 and 1e+100 metres, not 1e+101");
 }
 
 TEST_CASE("fill and separation distances in the plane and in space against closed forms",

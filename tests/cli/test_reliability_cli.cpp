@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -330,4 +331,136 @@ nu = 2.5
   CHECK(WEXITSTATUS(status) == 130);
   CHECK(seconds < 2);
   CHECK_THAT(read_text(log), Catch::Contains("2 stopped while running"));
+}
+
+// Issue 50: `validate /dev/zero` grew to 23.8 GB, a FIFO as the study file blocked forever, a
+// 300 MB study file was read whole, and a store that is a directory was "no such result
+// store". Each command runs under `timeout`: a hang fails.
+TEST_CASE(
+    "study files and stores that are not regular files are refused by type, huge ones by size",
+    "[cli][reliability][hostile]") {
+  const auto dir = rkhs::test::scratch_directory("reliable_special_files");
+  const auto fifo = dir / "study.toml";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  const auto refused = [](const std::string& arguments, const std::string& why) {
+    const auto out = rkhs_study(arguments, "timeout 20");
+    INFO(arguments << ": " << out.output);
+    CHECK(out.exit_code == 2);
+    CHECK_THAT(out.output, Catch::Contains(why));
+  };
+  const std::string out = " --no-store --out " + (dir / "out").string();
+  for (const std::string command : {"validate ", "check ", "run "}) {
+    const std::string options = command == "validate " ? "" : out;
+    refused(command + "/dev/zero" + options,
+            "/dev/zero: is a character device, not a study file (a regular file)");
+    refused(command + fifo.string() + options,
+            fifo.string() + ": is a FIFO, not a study file (a regular file)");
+    refused(command + dir.string() + options,
+            dir.string() + ": is a directory, not a study file (a regular file)");
+  }
+  const auto big = dir / "big.toml";
+  std::ofstream(big) << small_study;
+  fs::resize_file(big, std::uintmax_t{300} << 20);  // sparse
+  refused("validate " + big.string(),
+          big.string() +
+              ": is 314572800 bytes, more than the 4194304 bytes (4 MiB) a study file may have");
+
+  std::ofstream(dir / "small.toml") << small_study;
+  const std::string store_fifo = (dir / "store.sqlite").string();
+  REQUIRE(mkfifo(store_fifo.c_str(), 0600) == 0);
+  for (const auto& [store, kind] : {std::pair{store_fifo, std::string("a FIFO")},
+                                    std::pair{dir.string(), std::string("a directory")}}) {
+    const std::string why = store + ": is " + kind + ", not a result store";
+    refused("store check --store " + store, why);
+    refused("run " + (dir / "small.toml").string() + " --store " + store + " --out " +
+                (dir / "out").string(),
+            why);
+    refused("merge " + (dir / "into.sqlite").string() + " " + store, why);
+  }
+}
+
+// Issue 50: while gnuplot hung, `run` ignored SIGTERM and SIGINT (alive after 11 minutes). A
+// gnuplot on PATH that never ends (it waits for a child of its own): SIGTERM ends the run
+// within 2 s, gnuplot's whole process group is killed, and without a signal the plot's time
+// limit ends it.
+TEST_CASE("a hanging gnuplot is killed at SIGTERM and at its time limit",
+          "[cli][reliability][plots][hostile]") {
+  const auto dir = rkhs::test::scratch_directory("reliable_gnuplot_hangs");
+  fs::create_directories(dir / "bin");
+  const auto gnuplot = dir / "bin" / "gnuplot";
+  std::ofstream(gnuplot) << "#!/bin/sh\nsleep 1000 &\necho $! > " << (dir / "sleep.pid").string()
+                         << "\nwait\n";
+  fs::permissions(gnuplot, fs::perms::owner_all);
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "plotted"
+evaluation_points = 512
+metrics = ["gram_condition_number"]
+[domain]
+radius = 4
+[grid]
+n = [8, 16, 32]
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+)";
+  const auto start = [&](const std::string& seconds) {
+    fs::remove(dir / "sleep.pid");
+    const pid_t pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      const int out = ::open((dir / "log.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, 1);
+      dup2(out, 2);
+      setenv("PATH", ((dir / "bin").string() + ":/usr/bin:/bin").c_str(), 1);
+      if (!seconds.empty()) setenv("RKHS_STUDY_GNUPLOT_SECONDS", seconds.c_str(), 1);
+      const std::string study = (dir / "study.toml").string(), out_dir = (dir / "out").string();
+      execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "run", study.c_str(), "--no-store",
+            "--out", out_dir.c_str(), nullptr);
+      _exit(127);
+    }
+    // Until the fake gnuplot runs (its child's pid is written).
+    REQUIRE(rkhs::test::wait_until(
+        [&] {
+          REQUIRE(waitpid(pid, nullptr, WNOHANG) == 0);
+          return !read_text(dir / "sleep.pid").empty();
+        },
+        30));
+    return pid;
+  };
+  const auto sleep_alive = [&] {
+    const auto pid = std::stoi(read_text(dir / "sleep.pid"));
+    // Reaped by init once killed; a zombie of our own it cannot be (not our child).
+    return kill(pid, 0) == 0 &&
+           read_text("/proc/" + std::to_string(pid) + "/stat").find(") Z") == std::string::npos;
+  };
+
+  {
+    const pid_t pid = start("");
+    const auto signalled = std::chrono::steady_clock::now();
+    kill(pid, SIGTERM);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+    INFO(read_text(dir / "log.txt"));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 130);
+    CHECK(seconds < 2);
+    CHECK_THAT(read_text(dir / "log.txt"),
+               Catch::Contains("gnuplot was killed: the command was interrupted") &&
+                   Catch::Contains("interrupted while rendering plots"));
+    CHECK(rkhs::test::wait_until([&] { return !sleep_alive(); }, 2));
+    CHECK(fs::exists(dir / "out" / "trials.csv"));
+  }
+  {
+    const pid_t pid = start("1");
+    int status = 0;
+    waitpid(pid, &status, 0);
+    INFO(read_text(dir / "log.txt"));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 0);
+    CHECK_THAT(read_text(dir / "log.txt"),
+               Catch::Contains("gnuplot did not finish within 1 s and was killed"));
+    CHECK(rkhs::test::wait_until([&] { return !sleep_alive(); }, 2));
+  }
 }

@@ -1,5 +1,6 @@
 // Measured roads through the command: --data-dir and RKHS_STUDY_DATA, CSV errors reaching the
 // user with both positions (study file and CSV file), the data's SHA-256 in summary.json.
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
@@ -129,4 +130,37 @@ TEST_CASE("the data file's SHA-256 is recorded with every trial in summary.json"
   INFO(closed_form.output);
   REQUIRE(closed_form.exit_code == 0);
   CHECK_THAT(read(dir / "sine" / "summary.json"), Catch::Contains("\"n\": 8, \"data\": null,"));
+}
+
+// Issue 50: /dev/zero, /dev/stdin or a FIFO as a CSV road was "not found" (and a FIFO below
+// the data root would have blocked the reader); a CSV file above its limit was read whole.
+// Each command runs under `timeout`: a hang fails.
+TEST_CASE("a data file that is not a regular file is named as what it is, a huge one refused",
+          "[cli][csv_road][hostile]") {
+  const auto dir = scratch("special");
+  REQUIRE(mkfifo((dir / "data" / "roads" / "profile.csv").c_str(), 0600) == 0);
+  fs::create_directories(dir / "data" / "folder.csv");
+  const std::string data = " --data-dir " + (dir / "data").string() + " ";
+  const auto refused = [&](const std::string& file, const std::string& why) {
+    std::string study = road_study;
+    study.replace(study.find("roads/profile.csv"), 17, file);
+    std::ofstream(dir / "study.toml") << study;
+    const auto out = rkhs_study("validate" + data + (dir / "study.toml").string(), "timeout 20");
+    INFO(out.output);
+    CHECK(out.exit_code == 2);
+    CHECK_THAT(out.output, Catch::Contains(why));
+  };
+  refused("/dev/zero",
+          "data file '/dev/zero' is a character device, not a data file (a regular file; looked "
+          "at /dev/zero)");
+  refused("/dev/stdin", "data file '/dev/stdin' is a ");
+  refused("roads/profile.csv", "data file 'roads/profile.csv' is a FIFO, not a data file");
+  refused("folder.csv", "data file 'folder.csv' is a directory, not a data file");
+  // 300 MiB, sparse: refused by its size before a byte of it is read.
+  const auto huge = dir / "data" / "huge.csv";
+  std::ofstream(huge) << "u,z\n";
+  fs::resize_file(huge, std::uintmax_t{300} << 20);
+  refused("huge.csv", huge.string() +
+                          ": is 314572800 bytes, more than the 268435456 bytes (256 MiB) a CSV "
+                          "data file may have");
 }

@@ -161,6 +161,23 @@ TEST_CASE("a mistake in an expression names its position, what was found and wha
   CHECK_NOTHROW(Expression("(s == 1) + (s <= 1) + (s >= 1) + (s != 1)", {"s"}, {}));
 }
 
+// Issue 50: a 10 MB expression was echoed whole, twice, in an 20 MB message.
+TEST_CASE("a long expression is quoted around the mistake, with its length", "[expression]") {
+  std::string huge;
+  for (int i = 0; i < 5'000'000; ++i) huge += "s+";
+  huge += "s";
+  const std::string message = error_of(huge).what();
+  CHECK(message.size() < 300);
+  CHECK_THAT(message, Catch::StartsWith("at character 1 of \"s+s+s+") &&
+                          Catch::Contains("...\" (10000001 characters): found an expression of "
+                                          "10000001 characters, expected fewer than 20000"));
+  // Within muparser's length: the part around the position.
+  const std::string deep = error_of(std::string(9000, '(') + "s" + std::string(8999, ')')).what();
+  CHECK(deep.size() < 300);
+  CHECK_THAT(deep, Catch::StartsWith("at the end of \"...))))") &&
+                       Catch::Contains("\" (18000 characters): found the end of the expression"));
+}
+
 TEST_CASE("threads evaluating one expression at once get the values one thread gets",
           "[expression][threads]") {
   const Expression f("a * sin(k * s) + cos(s / 3) * s^2 / (1 + s)", {"s"},

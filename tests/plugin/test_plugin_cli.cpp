@@ -1,5 +1,6 @@
 // Plugins from the command line and from study files: --plugin (repeatable) on run, validate and
 // list, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]` relative to the study file, verify-plugin.
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
@@ -148,4 +149,49 @@ TEST_CASE("verify-plugin prints the report, exits 0 when it passes and 2 when it
   CHECK_THAT(wrong.output,
              Catch::StartsWith("rkhs-study: " + (plugin_dir / "wrong_abi.so").string() +
                                ": built against plugin ABI 999"));
+}
+
+// Issue 36: a truncated library was a SIGBUS inside dlopen, and a FIFO named x.so blocked
+// forever, on every way a plugin is named. Each command runs under `timeout`: a hang fails.
+TEST_CASE("a truncated plugin and a FIFO named .so are refused on every way a plugin is named",
+          "[plugin][cli][hostile]") {
+  const auto dir = scratch("hostile");
+  fs::create_directories(dir / "truncated" / "plugins");
+  fs::create_directories(dir / "fifo");
+  const auto truncated = dir / "truncated" / "plugins" / "bad.so";
+  {
+    std::ifstream in(imq, std::ios::binary);
+    std::string head(3000, '\0');
+    in.read(head.data(), 3000);
+    std::ofstream(truncated, std::ios::binary) << head;
+  }
+  const auto fifo = dir / "fifo" / "x.so";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+
+  const auto refused = [](const Outcome& out, const std::string& why) {
+    INFO(out.output);
+    CHECK(out.exit_code == 2);
+    CHECK_THAT(out.output, Catch::Contains(why));
+  };
+  const std::string incomplete = truncated.string() +
+                                 ": not an rkhs-study plugin (not a complete shared library: "
+                                 "3000 bytes, its ";
+  const std::string special = fifo.string() + ": is a FIFO, not a plugin file (a shared library)";
+  const std::string limit = "timeout 20";
+  for (const auto& [file, why] : {std::pair{truncated, incomplete}, std::pair{fifo, special}}) {
+    refused(run("verify-plugin " + file.string(), limit), why);
+    refused(run("list --plugin " + file.string(), limit), why);
+    write(dir / "study.toml", study_using("plugins = [\"" + file.string() + "\"]"));
+    refused(run("validate " + (dir / "study.toml").string(), limit),
+            (dir / "study.toml").string() + ":1:12: plugins: " + why);
+    refused(run("list", "RKHS_STUDY_PLUGIN_PATH=" + file.string() + " " + limit),
+            "RKHS_STUDY_PLUGIN_PATH: " + why);
+    refused(run("list", "RKHS_STUDY_PLUGIN_PATH=" + file.parent_path().string() + " " + limit),
+            "RKHS_STUDY_PLUGIN_PATH: " + why);
+  }
+  // The whole library, copied, still loads: the check reads headers, it does not refuse ELF.
+  fs::copy_file(imq, dir / "whole.so");
+  const auto whole = run("list --plugin " + (dir / "whole.so").string(), limit);
+  INFO(whole.output);
+  CHECK(whole.exit_code == 0);
 }

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/kernel/kernel_algorithms.hpp"
 #include "rkhs/run/run.hpp"
@@ -405,6 +406,50 @@ TEST_CASE("limits.trial_seconds stops a trial as it runs, and it fails with the 
   CHECK_THAT(result.reason, Catch::StartsWith("exceeded limits.trial_seconds = 0.3 ("));
   // It was stopped near its limit, not left to end (it takes tens of seconds unlimited).
   CHECK(result.seconds < 10);
+}
+
+TEST_CASE("a limits.trial_seconds too long for the clock is no limit, never a deadline in the past",
+          "[run][hostile]") {
+  // From 9.3e9 s on, start + limit overflowed steady_clock and every trial "exceeded
+  // limits.trial_seconds" at 0.0 s (issue 36).
+  for (const char* seconds : {"9.3e9", "1e12", "1e300", "9007199254740993"}) {
+    const auto study = parse_study(std::string(R"([study]
+name = "long_limit"
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [16]
+[[kernel]]
+name = "gaussian"
+[limits]
+trial_seconds = )") + seconds + "\n",
+                                   "s.toml");
+    const auto result = rkhs::run_trial(study, study.trials().front());
+    INFO(seconds << ": " << result.reason);
+    CHECK(result.ok);
+  }
+}
+
+TEST_CASE("GramSolver checks the trial's deadline before each symmetric eigenvalue solve",
+          "[run][hostile]") {
+  // A Gaussian n = 3000 trial with trial_seconds = 2 ran 25 s: two eigenvalue solves of its
+  // singular Gram matrix, neither of which looked at the deadline (issue 36).
+  const Eigen::MatrixXd singular = Eigen::MatrixXd::Ones(40, 40);
+  const Eigen::MatrixXd regular = Eigen::MatrixXd::Identity(40, 40) + 0.1 * singular;
+  const auto past = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  const std::function<bool()> never;
+  {
+    const rkhs::CancellationScope scope(never, past);
+    CHECK_THROWS_AS(rkhs::GramSolver(singular, {}, rkhs::GramSpectrumMode::exact),
+                    rkhs::TrialTimeLimitExceeded);
+    CHECK_THROWS_AS(rkhs::GramSolver(regular, {}, rkhs::GramSpectrumMode::exact),
+                    rkhs::TrialTimeLimitExceeded);
+  }
+  // Outside a trial nothing is checked, and the solves are those of before.
+  const rkhs::GramSolver pseudo(singular, {}, rkhs::GramSpectrumMode::exact);
+  CHECK(pseudo.spectrum().singular);
+  CHECK(rkhs::GramSolver(regular, {}, rkhs::GramSpectrumMode::exact).method() == "cholesky");
 }
 
 TEST_CASE("a trial of a laps axis runs with its own lap count, as a study with that one count",

@@ -90,11 +90,50 @@ seed = [1, 2]
         "J 2 x degree 2) x 1 target (the default) x 2 centre placements ([[centres]] 'random' "
         "at line 14: seed 2) x 3 values of n; shorten these lists, or raise [limits] trials");
   CHECK(error_of(small + "[limits]\ntrials = 2.5\n") ==
-        "s.toml:18:10: limits.trials: must be a whole number between 1 and 1e15, found 2.5");
+        "s.toml:18:10: limits.trials: must be a whole number between 1 and 10000000 (every "
+        "trial of the grid is held in memory, about 1.7 KB each), found 2.5");
   CHECK(error_of(small + "[limits]\ntrials = 0\n") ==
         "s.toml:18:10: limits.trials: must be a finite number > 0, found 0");
-  // Raised, the 21.6 million trials of the huge grid parse (they are not built: only counted).
-  CHECK(parse_study(huge_grid("[limits]\ntrials = 30000000\n"), "s.toml").n_values.size() == 360);
+  // Raised to its largest, 10^7, the 21.6 million trials of the huge grid are still refused
+  // by their count; a limit above that is refused itself (issue 50: under trials = 1e15 a grid
+  // of 2^31 trials was valid, and run ended in std::bad_alloc at 6.6 GB).
+  CHECK_THAT(error_of(huge_grid("[limits]\ntrials = 10000000\n")),
+             Catch::StartsWith("s.toml:7:5: grid.n: the grid has 21600000 trials, more than "
+                               "[limits] trials = 10000000: "));
+  CHECK(error_of(huge_grid("[limits]\ntrials = 30000000\n")) ==
+        "s.toml:15:10: limits.trials: must be a whole number between 1 and 10000000 (every "
+        "trial of the grid is held in memory, about 1.7 KB each), found 30000000");
+  CHECK_THAT(error_of(huge_grid("[limits]\ntrials = 1e15\n")),
+             Catch::StartsWith("s.toml:15:10: limits.trials: must be a whole number between 1 "
+                               "and 10000000"));
+}
+
+// Issue 50: a dotted key of 100,000 parts ("[a.a.a...]", "a.a.a... = 1") was a SIGSEGV
+// (toml++ builds and destroys its tables by recursion); toml++ bounds arrays and inline
+// tables itself.
+TEST_CASE("TOML nesting is bounded before toml++ parses it", "[study][limits][hostile]") {
+  const auto dotted = [](std::size_t parts) {
+    std::string key = "a";
+    for (std::size_t i = 1; i < parts; ++i) key += ".a";
+    return key;
+  };
+  const std::string deep = "invalid TOML: keys, arrays and inline tables nested more than 256 deep";
+  CHECK(error_of("[" + dotted(100000) + "]\n") == "s.toml:1:515: " + deep);
+  CHECK(error_of("[[" + dotted(100000) + "]]\n") == "s.toml:1:516: " + deep);
+  CHECK(error_of("x = 1\n" + dotted(100000) + " = 1\n") == "s.toml:2:514: " + deep);
+  // Dotted keys inside nested inline tables add up.
+  CHECK_THAT(error_of("x = { " + dotted(200) + " = { " + dotted(200) + " = 1 } }\n"),
+             Catch::StartsWith("s.toml:1:") && Catch::EndsWith(deep));
+  CHECK(error_of("x = " + std::string(100000, '[') + std::string(100000, ']') + "\n") ==
+        "s.toml:1:261: " + deep);
+  // Within the bound: toml++ parses, and the study parser names the unknown key.
+  CHECK_THAT(error_of("[" + dotted(250) + "]\n"), Catch::StartsWith("s.toml:1:2: a: unknown key"));
+  // Dots in strings, comments and values are no keys.
+  const std::string dots(100000, '.');
+  CHECK_THAT(error_of("[study] # " + dots + "\nname = \"x\"\ndescription = \"" + dots +
+                      "\"\nother = '''" + dots + "'''\n"),
+             Catch::StartsWith("s.toml:4:1: study.other: unknown key"));
+  CHECK_THAT(error_of(huge_grid()), Catch::Contains("the grid has 21600000 trials"));
 }
 
 TEST_CASE("n ranges with huge bounds are errors, not overflows", "[study][limits]") {

@@ -162,15 +162,17 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   }
   SECTION("a radius whose track is longer than the largest number") {
     // 2 pi radius was an infinite domain length (found writing fuzz_study_file's checks of what a
-    // parsed study holds).
+    // parsed study holds); a finite one beyond 1e100 overflowed in the kernels (issue 36).
     std::string text = minimal;
     text.replace(text.find("radius = 4.0"), 12, "radius = 1e308");
     CHECK(error_of(text) ==
-          "s.toml:5:10: domain.radius: must be at most 2.861117485757028e+307 (the track's "
-          "length, 2 pi radius, must be a finite number), found 1e+308");
+          "s.toml:5:10: domain.radius: must be between 1.5915494309189535e-101 and "
+          "1.5915494309189535e+99 metres (the track's length, 2 pi radius, between 1e-100 and "
+          "1e+100), found 1e+308 (beyond these the squared distances, volumes and spline knots "
+          "computed on the domain leave the range of double)");
     text = minimal;
-    text.replace(text.find("radius = 4.0"), 12, "radius = 2.8e307");
-    CHECK(parse_study(text, "s.toml").domain.length == 2 * std::numbers::pi * 2.8e307);
+    text.replace(text.find("radius = 4.0"), 12, "radius = 1.5e99");
+    CHECK(parse_study(text, "s.toml").domain.length == 2 * std::numbers::pi * 1.5e99);
   }
   SECTION("unknown metric") {
     std::string text = minimal;
@@ -200,7 +202,7 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   }
   SECTION("missing file") {
     CHECK_THROWS_WITH(rkhs::load_study("no/such/study.toml"),
-                      "no/such/study.toml: cannot open the study file");
+                      "no/such/study.toml: cannot read the study file: No such file or directory");
   }
 }
 
@@ -520,4 +522,121 @@ TEST_CASE("[[expect]] selects groups of a laps axis by laps, as any axis column"
   CHECK_THAT(error_of(adaptive_text("laps = 10\n", "[[expect]]\nmetric = \"l2_error\"\n"
                                                    "rate = { max = 0 }\nlaps = 10\n")),
              Catch::Contains("expect.laps: unknown key"));
+}
+
+// Issue 36: values that validate accepted and run crashed on, or that ended in an exception
+// without a position.
+TEST_CASE("hostile values are refused at their key with the allowed range, or read as documented",
+          "[study][hostile]") {
+  const auto with = [](std::string_view from, const std::string& to) {
+    std::string text = minimal;
+    text.replace(text.find(from), from.size(), to);
+    return text;
+  };
+  SECTION("a domain length beyond 1e100 (a periodic B-spline died with SIGSEGV at 3e307)") {
+    const auto text = with("radius = 4.0", "length = 1e308") + "[[kernel]]\nname = \"bspline\"\n";
+    CHECK(error_of(text) ==
+          "s.toml:5:10: domain.length: must be between 1e-100 and 1e+100 metres, found 1e+308 "
+          "(beyond these the squared distances, volumes and spline knots computed on the domain "
+          "leave the range of double)");
+    CHECK_THAT(error_of(with("radius = 4.0", "length = 3e307")),
+               Catch::StartsWith("s.toml:5:10: domain.length: must be between"));
+    CHECK_THAT(error_of(with("radius = 4.0", "length = 1e-101")),
+               Catch::StartsWith("s.toml:5:10: domain.length: must be between"));
+    CHECK(parse_study(with("radius = 4.0", "length = 1e100"), "s.toml").domain.length == 1e100);
+    CHECK(error_of(with("radius = 4.0", "lengths = [1.0, 2e100]")) ==
+          "s.toml:5:17: domain.lengths: axis 2: must be between 1e-100 and 1e+100 metres, found "
+          "2e+100 (beyond these the squared distances, volumes and spline knots computed on the "
+          "domain leave the range of double)");
+  }
+  SECTION("a periodic Wendland radius of 2^31 periods (undefined behaviour casting the images)") {
+    const auto text =
+        with("radius = 4.0", "length = 1.0") + "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n";
+    CHECK_THAT(
+        error_of(text),
+        Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
+            Catch::Contains("parameter 'radius' must be at most 1048575 times the length "
+                            "of a periodic track (a kernel value sums 2 ceil(radius / L + "
+                            "1/2) + 1 images), found radius = 3e+09 on a track of length 1"));
+    // On an interval there are no images: any radius is a kernel.
+    CHECK_NOTHROW(parse_study(with("radius = 4.0", "length = 1.0\nperiodic = false") +
+                                  "[[kernel]]\nname = \"wendland\"\nradius = 3e9\n",
+                              "s.toml"));
+    CHECK_NOTHROW(parse_study(with("radius = 4.0", "length = 1.0") +
+                                  "[[kernel]]\nname = \"wendland\"\nradius = 1048575\n",
+                              "s.toml"));
+    // On a torus the lattice sum is bounded by the number of images per kernel value.
+    CHECK_THAT(error_of(with("radius = 4.0", "lengths = [1.0, 1.0]") +
+                        "[[kernel]]\nname = \"wendland\"\nradius = 2000\n"),
+               Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
+                   Catch::Contains("would sum 1.602e+07 images per kernel value on this torus"));
+  }
+  SECTION("integers above 2^53 in real-valued keys are read as the nearest double") {
+    // 9007199254740993 = 2^53 + 1 is no double: toml++ gives no value<double>() for it, and the
+    // parser ended in "bad optional access" without a position.
+    const std::string big = "9007199254740993";
+    const double nearest = 9007199254740992.0;
+    CHECK(parse_study(with("radius = 4.0", "length = " + big), "s.toml").domain.length == nearest);
+    CHECK(parse_study(with("radius = 4.0", "radius = " + big), "s.toml").domain.length ==
+          2 * std::numbers::pi * nearest);
+    CHECK(parse_study(with("radius = 4.0", "lengths = [" + big + "]"), "s.toml").domain.length ==
+          nearest);
+    const auto limits = parse_study(std::string(minimal) + "[limits]\ntrial_seconds = " + big +
+                                        "\nmatrix_megabytes = " + big +
+                                        "\n[solver]\nregularisation = " + big + "\n",
+                                    "s.toml");
+    CHECK(limits.limits.trial_seconds == nearest);
+    CHECK(limits.limits.matrix_megabytes == nearest);
+    CHECK(limits.solver.regularisation == nearest);
+    const auto expect =
+        parse_study(std::string(minimal) + "[[expect]]\nmetric = \"fill_distance\"\nrate = " + big +
+                        "\ntolerance = " + big + "\n",
+                    "s.toml");
+    REQUIRE(expect.expectations.size() == 1);
+    CHECK(expect.expectations[0].expected == nearest);
+    CHECK(expect.expectations[0].tolerance == nearest);
+    // A real-valued kernel parameter (ParameterSet reads integers itself).
+    CHECK(parse_study(with("radius = 4.0", "length = 1.0\nperiodic = false") +
+                          "[[kernel]]\nname = \"wendland\"\nradius = " + big + "\n",
+                      "s.toml")
+              .kernels.size() == 2);
+  }
+  SECTION("whole-number keys name their range") {
+    CHECK(error_of(with("name = \"t\"", "name = \"t\"\nevaluation_points = 9007199254740993")) ==
+          "s.toml:4:21: study.evaluation_points: must be a whole number between 2 and "
+          "100000000, found 9007199254740993");
+    CHECK(error_of(std::string(minimal) + "[limits]\ntrials = 9007199254740993\n") ==
+          "s.toml:11:10: limits.trials: must be a whole number between 1 and 10000000 (every "
+          "trial of the grid is held in memory, about 1.7 KB each), found 9007199254740993");
+  }
+  SECTION("adaptive speed and laps above 2^53") {
+    const std::string adaptive = R"(
+[study]
+name = "a"
+kind = "adaptive"
+evaluation_points = 64
+[domain]
+radius = 4.0
+[grid]
+n = [8]
+[[kernel]]
+name = "gaussian"
+[adaptive]
+)";
+    // Read, then judged by the adaptive checks: a refusal with a position, never an exception
+    // without one.
+    for (const auto* key :
+         {"speed = 9007199254740993", "laps = 9007199254740993", "laps = [1, 9007199254740993]"}) {
+      const auto e = error_of(adaptive + key + "\n");
+      INFO(key << ": " << e);
+      CHECK((e == "no error" || e.rfind("s.toml:", 0) == 0));
+    }
+  }
+  SECTION("a study name longer than 100 characters (run failed: File name too long)") {
+    CHECK(error_of(with("name = \"t\"", "name = \"" + std::string(300, 'a') + "\"")) ==
+          "s.toml:3:8: study.name: is 300 characters long, at most 100 are allowed (it names "
+          "the output folder results/<name>/ and the files in it)");
+    CHECK(parse_study(with("name = \"t\"", "name = \"" + std::string(100, 'a') + "\""), "s.toml")
+              .name.size() == 100);
+  }
 }

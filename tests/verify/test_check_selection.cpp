@@ -161,6 +161,41 @@ TEST_CASE("check -k: a malformed expression names the column and what was expect
   CHECK_THAT(parse_error("\"power\""), Catch::Contains("at column 1: unexpected character '\"'"));
 }
 
+// Issue 50: 30,000 nested parentheses were a SIGSEGV (the recursion of the parser), and a
+// chain of terms as long recursed as deep when matched.
+TEST_CASE("check -k: nesting is bounded, long chains are matched without deep recursion",
+          "[verification][check][hostile]") {
+  const auto nested = [](const std::string& open, std::size_t depth) {
+    std::string text;
+    for (std::size_t i = 0; i < depth; ++i) text += open;
+    text += "power";
+    if (open == "(") text += std::string(depth, ')');
+    return text;
+  };
+  const std::vector<std::string> power{"power_function_sup"};
+  CHECK(KeywordExpression::parse(nested("(", KeywordExpression::max_depth)).matches(power));
+  CHECK(KeywordExpression::parse(nested("not ", KeywordExpression::max_depth)).matches(power));
+  const auto deep = parse_error(nested("(", 30000));
+  CHECK_THAT(deep,
+             Catch::StartsWith("-k '...((((") &&
+                 Catch::EndsWith("...': at column 201: 'not' and '(' nested more than 200 deep"));
+  CHECK(deep.size() < 250);
+  CHECK_THAT(parse_error(nested("not ", 30000)),
+             Catch::EndsWith(": at column 801: 'not' and '(' nested more than 200 deep"));
+  // 100,000 terms: a left spine as long, walked in a loop.
+  std::string chain_or, chain_and;
+  for (int i = 0; i < 100000; ++i) {
+    chain_or += "gram or ";
+    chain_and += "power and ";
+  }
+  CHECK(KeywordExpression::parse(chain_or + "power").matches(power));
+  CHECK_FALSE(KeywordExpression::parse(chain_or + "gram").matches(power));
+  CHECK(KeywordExpression::parse(chain_and + "function").matches(power));
+  CHECK_FALSE(KeywordExpression::parse(chain_and + "gram").matches(power));
+  // A long expression is quoted around the column the message names.
+  CHECK(parse_error(chain_or + "power )").size() < 300);
+}
+
 TEST_CASE("test cases: stable names from name, metric and selectors, not positions",
           "[verification][check]") {
   const std::string theory = R"([[expect]]

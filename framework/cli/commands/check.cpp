@@ -161,6 +161,11 @@ class Check {
     checked.seconds = run.seconds;
     checked.started = run.started;
     if (!arguments_.out_dir.empty()) write_outputs_of(checked, run);
+    if (stop_was_requested()) {  // while the plots were rendered: gnuplot was killed
+      std::cerr << "rkhs-study: interrupted while rendering plots; every other output is "
+                   "complete\n";
+      return exit_interrupted;
+    }
     std::cout << fmt::format("{}{}: {}, {} ok, {} failed in {:.2f} s\n", study.name, tier_text_,
                              counted(checked.trials.size(), "trial", "trials"),
                              checked.trials.size() - run.failed, run.failed, run.seconds);

@@ -109,7 +109,8 @@ void print_run_sources(const pipeline::PipelineOutcome& outcome,
 
 std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bool quiet) {
   try {
-    const auto outcome = write_plots(record, out_dir);
+    // A hanging gnuplot is killed at its time limit, or at SIGINT / SIGTERM.
+    const auto outcome = write_plots(record, out_dir, plot_options(stop_was_requested));
     if (!quiet) {
       std::cerr << fmt::format("  {} in {}/plots (SVG, PNG and PDF)\n",
                                counted(outcome.rendered.size(), "plot", "plots"), out_dir);

@@ -144,6 +144,12 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
         e.what(), out_dir, (std::filesystem::path(out_dir) / incomplete_marker).string()));
   }
   mark_outputs_complete(out_dir);
+  if (stop_was_requested()) {  // while the plots were rendered: gnuplot was killed
+    std::cerr << fmt::format(
+        "rkhs-study: interrupted while rendering plots; every other output in {} is complete\n",
+        out_dir);
+    return exit_interrupted;
+  }
 
   if (!quiet) std::cout << console_tables(record);
   std::cout << fmt::format(

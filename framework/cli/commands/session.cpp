@@ -17,6 +17,10 @@ namespace rkhs::cli {
 
 namespace {
 
+// A message that ends the command quotes at most this much (shortened): an error that echoes
+// a huge input (a 10 MB expression) stays readable.
+constexpr std::size_t max_message_bytes = 4000;
+
 // Registration errors of the built-ins and built-in plugins a linker dropped: the build is
 // broken, nothing can be trusted.
 bool registries_sound() {
@@ -75,10 +79,10 @@ int run_command(const SessionOptions& options, int& argc, char**& argv,
   } catch (const distributed::QuietExit& e) {
     return e.code;
   } catch (const StudyError& e) {
-    std::cerr << printable(e.what(), true) << "\n";
+    std::cerr << printable(shortened(e.what(), max_message_bytes), true) << "\n";
     return exit_bad_input;
   } catch (const std::exception& e) {
-    std::cerr << "rkhs-study: " << printable(e.what(), true) << "\n";
+    std::cerr << "rkhs-study: " << printable(shortened(e.what(), max_message_bytes), true) << "\n";
     return exit_bad_input;
   }
 }

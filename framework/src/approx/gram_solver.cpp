@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "rkhs/approx/dense_kernels.hpp"
+#include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
 #include "rkhs/core/work_counters.hpp"
 
@@ -127,7 +128,9 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
                                          const SolverOptions& options) {
   // The eigenvalues alone (the same values as with the eigenvectors: the tridiagonal QR
   // iteration does not depend on whether they are accumulated); the vectors only when the
-  // pseudo-inverse needs them.
+  // pseudo-inverse needs them. Each solve is one call into Eigen that no deadline interrupts
+  // (seconds at n = 3000): the trial's deadline and stop request are checked before each.
+  check_cancelled();
   count_factorisation();  // a symmetric eigenvalue solve
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram, Eigen::EigenvaluesOnly);
   if (eigen.info() != Eigen::Success)
@@ -141,6 +144,7 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
   spectrum_.condition_number = spectrum_.singular ? std::numeric_limits<double>::infinity()
                                                   : spectrum_.lambda_max / spectrum_.lambda_min;
 
+  check_cancelled();
   if (!spectrum_.singular) {
     if (!factored_) factorise(gram);
     if (factored_) {

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/core/printable.hpp"
 
 namespace rkhs {
@@ -63,13 +64,22 @@ std::filesystem::path resolve_data_file(const std::string& name) {
   if (leaves_data_root(name)) throw std::invalid_argument(data_root_escape_message(name));
   const std::filesystem::path given(name);
   std::error_code error;
+  // By type first: a FIFO, a device or a directory is named as what it is, not "not found".
+  const auto not_regular = [&](const std::filesystem::path& path) {
+    if (const auto kind = not_regular_file_kind(path); !kind.empty())
+      throw std::invalid_argument(
+          fmt::format("data file '{}' is {}, not a data file (a regular file; looked at {})",
+                      printable(name), kind, printable(path.string())));
+  };
   if (given.is_absolute()) {
+    not_regular(given);
     if (std::filesystem::is_regular_file(given, error)) return given;
     throw std::invalid_argument(fmt::format("data file '{}' not found (looked at {})",
                                             printable(name), printable(given.string())));
   }
   const auto root = data_root();
   const auto path = (root.directory / given).lexically_normal();
+  not_regular(path);
   if (std::filesystem::is_regular_file(path, error)) return path;
   const std::string origin = root.origin == "default"
                                  ? "the default data root studies/data/ below the current directory"

@@ -52,9 +52,9 @@ void Domain::validate() const {
         fmt::format("domain dimension {} is not supported (1 to {})", dimension, max_dimension));
   static constexpr const char* names[] = {"length", "width", "height"};
   for (int a = 0; a < dimension; ++a)
-    if (!(extent(a) > 0) || !std::isfinite(extent(a)))
-      throw std::invalid_argument(
-          fmt::format("domain {} must be > 0 and finite, not {}", names[a], extent(a)));
+    if (!(extent(a) >= min_extent && extent(a) <= max_extent))
+      throw std::invalid_argument(fmt::format("domain {} must be between {} and {} metres, not {}",
+                                              names[a], min_extent, max_extent, extent(a)));
 }
 
 std::size_t Domain::points_per_axis(std::size_t count) const {

@@ -12,17 +12,31 @@
 #include <cctype>
 #include <map>
 
-#include "rkhs/core/registry.hpp"  // closest_name
+#include "rkhs/core/printable.hpp"  // excerpt, shortened
+#include "rkhs/core/registry.hpp"   // closest_name
 
 namespace rkhs {
+
+namespace {
+
+// The expression as a message quotes it: whole up to 2 x 60 bytes, else the part around
+// `position` and the length ("...s+s+s..." (10000001 characters)).
+std::string quoted_text(std::string_view text, std::size_t position) {
+  constexpr std::size_t radius = 60;
+  if (text.size() <= 2 * radius) return fmt::format("\"{}\"", text);
+  return fmt::format("\"{}\" ({} characters)", excerpt(text, position, radius), text.size());
+}
+
+}  // namespace
 
 ExpressionError::ExpressionError(std::string text, std::size_t position, std::string found,
                                  std::string expected, std::string unknown_name)
     : std::invalid_argument(
           position >= text.size()
-              ? fmt::format("at the end of \"{}\": found {}, expected {}", text, found, expected)
-              : fmt::format("at character {} of \"{}\": found {}, expected {}", position + 1, text,
-                            found, expected)),
+              ? fmt::format("at the end of {}: found {}, expected {}",
+                            quoted_text(text, text.size()), shortened(found, 200), expected)
+              : fmt::format("at character {} of {}: found {}, expected {}", position + 1,
+                            quoted_text(text, position), shortened(found, 200), expected)),
       text_(std::move(text)),
       position_(position),
       found_(std::move(found)),

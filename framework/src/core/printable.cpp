@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace rkhs {
 
 std::size_t utf8_sequence_length(std::string_view text) noexcept {
@@ -63,6 +65,35 @@ std::string printable(std::string_view text, bool keep_line_breaks) {
     i += length;
   }
   return out;
+}
+
+namespace {
+
+// `at`, moved back to the start of a UTF-8 sequence (never before 0).
+std::size_t sequence_start(std::string_view text, std::size_t at) {
+  at = std::min(at, text.size());
+  while (at > 0 && at < text.size() && (static_cast<unsigned char>(text[at]) & 0xc0) == 0x80) --at;
+  return at;
+}
+
+}  // namespace
+
+std::string shortened(std::string_view text, std::size_t max_bytes) {
+  max_bytes = std::max<std::size_t>(max_bytes, 16);
+  if (text.size() <= max_bytes) return std::string(text);
+  const std::size_t head = sequence_start(text, max_bytes / 2);
+  const std::size_t tail = sequence_start(text, text.size() - max_bytes / 2);
+  return fmt::format("{} ... [{} bytes left out] ... {}", text.substr(0, head), tail - head,
+                     text.substr(tail));
+}
+
+std::string excerpt(std::string_view text, std::size_t position, std::size_t radius) {
+  if (text.size() <= 2 * radius) return std::string(text);
+  position = std::min(position, text.size());
+  const std::size_t from = sequence_start(text, position > radius ? position - radius : 0);
+  const std::size_t to = sequence_start(text, std::min(text.size(), position + radius));
+  return fmt::format("{}{}{}", from > 0 ? "..." : "", text.substr(from, to - from),
+                     to < text.size() ? "..." : "");
 }
 
 }  // namespace rkhs

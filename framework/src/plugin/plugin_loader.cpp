@@ -1,15 +1,23 @@
 #include "rkhs/plugin/plugin_loader.hpp"
 
 #include <dlfcn.h>
+#include <elf.h>
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <mutex>
 
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/plugin/build_configuration.hpp"
 #include "rkhs/plugin/module.hpp"
 #include "rkhs/plugin/plugin_kinds.hpp"
@@ -90,6 +98,67 @@ Function* symbol(void* handle, const char* name) {
   return reinterpret_cast<Function*>(dlsym(handle, name));
 }
 
+// Whether `file` (a regular file) is a complete ELF shared object, read with pread before
+// dlopen maps it: the dynamic loader maps its segments and reads them, and a segment that lies
+// beyond the end of the file is a SIGBUS in dlopen (a truncated .so). Returns an empty string
+// when it is, or when it is no ELF file of this machine's class and byte order at all (dlopen
+// then refuses it with its own reason, "invalid ELF header", "wrong ELF class"); otherwise why
+// not: the headers, the section headers and every segment must lie within the file.
+std::string incomplete_elf(const fs::path& file) {
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return fmt::format("cannot be opened: {}", std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) return "not a regular file";
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  auto read_at = [&](void* into, std::size_t bytes, std::uint64_t offset) {
+    return offset <= size && bytes <= size - offset &&
+           ::pread(fd, into, bytes, static_cast<off_t>(offset)) == static_cast<ssize_t>(bytes);
+  };
+  unsigned char ident[EI_NIDENT] = {};
+  if (!read_at(ident, sizeof ident, 0) || std::memcmp(ident, ELFMAG, SELFMAG) != 0 ||
+      ident[EI_CLASS] != ELFCLASS64)
+    return {};
+#if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  if (ident[EI_DATA] != ELFDATA2LSB) return {};
+#else
+  if (ident[EI_DATA] != ELFDATA2MSB) return {};
+#endif
+  const auto need = [&](std::uint64_t bytes, std::string_view what) {
+    return fmt::format("not a complete shared library: {} bytes, its {} need{} {}", size, what,
+                       what.back() == 's' ? "" : "s", bytes);
+  };
+  Elf64_Ehdr header{};
+  if (!read_at(&header, sizeof header, 0)) return need(sizeof header, "ELF header");
+  if (header.e_type != ET_DYN) return {};  // dlopen: "cannot dynamically load executable"
+  // Sums of 64-bit offsets and counts below 2^16 times sizes below 2^16: no overflow unless an
+  // offset is within 2^32 of 2^64, which no file size reaches either.
+  const auto table_end = [](std::uint64_t offset, std::uint64_t count, std::uint64_t entry) {
+    const std::uint64_t bytes = count * entry;
+    return offset > UINT64_MAX - bytes ? UINT64_MAX : offset + bytes;
+  };
+  if (header.e_phnum == 0 || header.e_phentsize != sizeof(Elf64_Phdr)) return {};
+  const std::uint64_t headers_end = table_end(header.e_phoff, header.e_phnum, header.e_phentsize);
+  if (headers_end > size) return need(headers_end, "program headers");
+  if (header.e_shoff != 0) {
+    const std::uint64_t sections_end =
+        table_end(header.e_shoff, header.e_shnum, header.e_shentsize);
+    if (sections_end > size) return need(sections_end, "section headers");
+  }
+  std::uint64_t segments_end = 0;
+  for (std::uint16_t i = 0; i < header.e_phnum; ++i) {
+    Elf64_Phdr segment{};
+    if (!read_at(&segment, sizeof segment, header.e_phoff + i * std::uint64_t{sizeof segment}))
+      return need(headers_end, "program headers");
+    if (segment.p_type == PT_NULL) continue;
+    segments_end = std::max(segments_end, table_end(segment.p_offset, 1, segment.p_filesz));
+  }
+  if (segments_end > size) return need(segments_end, "program headers");
+  return {};
+}
 
 }  // namespace
 
@@ -105,6 +174,13 @@ LoadedPlugin load_plugin(const fs::path& file) {
     throw PluginError(fmt::format("{}: cannot resolve the path: {}", shown, error.message()));
   for (const auto& module : modules())
     if (module.plugin.file == canonical) return module.plugin;
+  // By type, before anything opens it (opening a FIFO waits for a writer), then by its ELF
+  // headers (a truncated library is a SIGBUS inside dlopen).
+  if (const auto type = fs::status(canonical, error).type(); type != fs::file_type::regular)
+    throw PluginError(
+        fmt::format("{}: is {}, not a plugin file (a shared library)", shown, file_kind(type)));
+  if (const auto why = incomplete_elf(canonical); !why.empty())
+    throw PluginError(fmt::format("{}: not an rkhs-study plugin ({})", shown, why));
 
   const auto before = RegistryState::take();
   dlerror();

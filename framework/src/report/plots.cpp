@@ -2,11 +2,13 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -1068,15 +1070,22 @@ std::optional<std::filesystem::path> find_gnuplot() {
   }
 }
 
+// How a gnuplot process ended.
+enum class GnuplotEnd { success, failed, timed_out, stopped };
+
 // Runs `gnuplot <script>` in `folder` with its standard error to `log` (standard input and
-// output /dev/null), directly (fork and exec: no shell sees a name); true when it exits with 0.
-bool run_gnuplot(const std::filesystem::path& gnuplot, const std::filesystem::path& folder,
-                 const std::string& script, const std::string& log) {
+// output /dev/null), directly (fork and exec: no shell sees a name), in a process group of its
+// own. Polls it every 20 ms: past `options.gnuplot_seconds`, or once options.stop_requested
+// returns true, the whole group is killed (gnuplot and anything it started).
+GnuplotEnd run_gnuplot(const std::filesystem::path& gnuplot, const std::filesystem::path& folder,
+                       const std::string& script, const std::string& log,
+                       const PlotOptions& options) {
   const std::string program = gnuplot.string();
   const pid_t child = ::fork();
-  if (child < 0) return false;
+  if (child < 0) return GnuplotEnd::failed;
   if (child == 0) {
     // Only async-signal-safe calls from here on.
+    ::setpgid(0, 0);
     if (::chdir(folder.c_str()) != 0) ::_exit(127);
     const int null = ::open("/dev/null", O_RDWR);
     const int err = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -1088,10 +1097,26 @@ bool run_gnuplot(const std::filesystem::path& gnuplot, const std::filesystem::pa
     ::execv(program.c_str(), argv);
     ::_exit(127);
   }
+  ::setpgid(child, child);  // as the child does: whichever runs first, the group exists
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(std::min(options.gnuplot_seconds, 1e9)));
   int status = 0;
-  while (::waitpid(child, &status, 0) < 0)
-    if (errno != EINTR) return false;
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  while (true) {
+    const pid_t done = ::waitpid(child, &status, WNOHANG);
+    if (done == child) break;
+    if (done < 0 && errno != EINTR) return GnuplotEnd::failed;
+    const bool stop = options.stop_requested && options.stop_requested();
+    if (stop || std::chrono::steady_clock::now() >= deadline) {
+      ::kill(-child, SIGKILL);
+      ::kill(child, SIGKILL);  // should it not have reached setpgid yet
+      while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+      }
+      return stop ? GnuplotEnd::stopped : GnuplotEnd::timed_out;
+    }
+    ::usleep(20'000);  // a signal (SIGTERM) ends the sleep early
+  }
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? GnuplotEnd::success : GnuplotEnd::failed;
 }
 
 constexpr const char* plot_extensions[] = {".svg", ".png", ".pdf"};
@@ -1117,7 +1142,20 @@ std::vector<std::string> manifest_entries(const std::filesystem::path& folder) {
 }
 }  // namespace
 
-PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory) {
+PlotOptions plot_options(std::function<bool()> stop_requested) {
+  PlotOptions options;
+  options.stop_requested = std::move(stop_requested);
+  if (const char* text = std::getenv("RKHS_STUDY_GNUPLOT_SECONDS"); text && *text) {
+    char* end = nullptr;
+    const double seconds = std::strtod(text, &end);
+    if (end && *end == '\0' && std::isfinite(seconds) && seconds > 0)
+      options.gnuplot_seconds = seconds;
+  }
+  return options;
+}
+
+PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory,
+                        const PlotOptions& options) {
   const auto folder = directory / "plots";
   std::filesystem::create_directories(folder);
   // The folder shows this run only: plots of an earlier run into the same directory (a metric
@@ -1158,10 +1196,21 @@ PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& direc
     }
     // In the plots folder: the script names its outputs without a path, so it is the same
     // wherever the run wrote it.
-    if (!run_gnuplot(*gnuplot, folder, stem + ".gp", stem + ".log")) {
-      outcome.failures.push_back(fmt::format("{}: {}", gp.string(), gnuplot_message(log)));
+    const auto end = run_gnuplot(*gnuplot, folder, stem + ".gp", stem + ".log", options);
+    if (end != GnuplotEnd::success) {
+      outcome.failures.push_back(
+          end == GnuplotEnd::timed_out
+              ? fmt::format("{}: gnuplot did not finish within {} s and was killed", gp.string(),
+                            options.gnuplot_seconds)
+          : end == GnuplotEnd::stopped
+              ? fmt::format("{}: gnuplot was killed: the command was interrupted", gp.string())
+              : fmt::format("{}: {}", gp.string(), gnuplot_message(log)));
       for (const char* extension : plot_extensions)  // half-written images are not plots
         std::filesystem::remove(folder / (stem + extension));
+      if (end == GnuplotEnd::stopped) {
+        outcome.interrupted = true;
+        break;
+      }
       continue;
     }
     std::filesystem::remove(log);

@@ -20,6 +20,7 @@
 
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/core/sha256.hpp"
 #include "rkhs/run/trial_identity.hpp"
 
@@ -489,11 +490,20 @@ std::optional<int> pragma_int(sqlite3* db, const char* sql) {
   return value;
 }
 
+// A store path that exists and is not a regular file (a directory, a FIFO, a device) is
+// refused by its type before SQLite opens it (opening a FIFO waits for a writer).
+void refuse_special_file(const std::filesystem::path& file) {
+  if (const auto kind = not_regular_file_kind(file); !kind.empty())
+    throw std::runtime_error(fmt::format("{}: is {}, not a result store (an SQLite database file)",
+                                         file.string(), kind));
+}
+
 }  // namespace
 
 ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
     : file_(file), access_(access) {
   if (access == StoreAccess::read_only) {
+    refuse_special_file(file);
     if (!std::filesystem::is_regular_file(file))
       throw std::runtime_error(fmt::format("{}: no such result store", file.string()));
     // Without a -wal file the database file holds every committed trial: it is read as an
@@ -501,6 +511,7 @@ ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
     // for a read-only connection to a WAL database, and cannot on a read-only mount).
     open(!std::filesystem::exists(wal_of(file)));
   } else {
+    refuse_special_file(file);
     if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
     open(false);
   }

@@ -94,6 +94,18 @@ void apply_floors(TrialResult& result) {
   }
 }
 
+// The deadline `seconds` (> 0) after `start`, or none when it lies beyond what the clock can
+// represent: a limit of 1e10 s or 1e300 s is no limit, never a time point that overflowed
+// into the past (every trial then "exceeded" it at 0.0 s).
+std::optional<std::chrono::steady_clock::time_point> deadline_after(
+    std::chrono::steady_clock::time_point start, double seconds) {
+  using clock = std::chrono::steady_clock;
+  const double room = std::chrono::duration<double>(clock::time_point::max() - start).count();
+  if (!(seconds < 0.5 * room)) return std::nullopt;
+  return start +
+         std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(seconds));
+}
+
 }  // namespace
 
 TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
@@ -109,9 +121,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   double reference_seconds = 0;  // the reference integration's share (adaptive, with one)
   const auto start = std::chrono::steady_clock::now();
   std::optional<std::chrono::steady_clock::time_point> deadline;
-  if (study.limits.trial_seconds > 0)
-    deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                           std::chrono::duration<double>(study.limits.trial_seconds));
+  if (study.limits.trial_seconds > 0) deadline = deadline_after(start, study.limits.trial_seconds);
   const auto time_limit_reason = [&](double seconds) {
     return fmt::format("exceeded limits.trial_seconds = {} ({:.1f} s)",
                        format_real(study.limits.trial_seconds), seconds);

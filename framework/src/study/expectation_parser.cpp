@@ -71,9 +71,10 @@ class ExpectationReader {
   }
 
   double number_at(const toml::node& node, std::string_view key) const {
-    if (!node.is_number() || !std::isfinite(node.value<double>().value()))
+    const auto value = real_of(node);
+    if (!value || !std::isfinite(*value))
       fail(study_.source, node.source(), key, fmt::format("expected a finite number, found {}", show(node)));
-    return node.value<double>().value();
+    return *value;
   }
 
   // A metric the study measures, for `metric`, `bound.by` and `bound.times`.

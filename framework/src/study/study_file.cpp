@@ -23,6 +23,7 @@
 #include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/data_root.hpp"
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/core/random.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
@@ -39,8 +40,15 @@ namespace {
 // most values of n one grid may list.
 constexpr std::int64_t max_n = 1'000'000'000;
 constexpr std::int64_t max_n_values = 100000;
+// The longest study name (docs/study-files.md): it names the output folder, and file names
+// are at most 255 bytes on common file systems.
+constexpr std::size_t max_study_name = 100;
 // [limits] trials when the file does not give it (docs/study-files.md).
 constexpr std::uint64_t default_max_trials = 1'000'000;
+// The largest [limits] trials: every trial of the grid is held in memory (its plugin choices
+// and keys, about 1.7 KB: 10^6 trials took 1.7 GB), and a grid the count admits must be one
+// that can be built (a 2^31-trial grid under trials = 1e15 ended in std::bad_alloc).
+constexpr std::uint64_t max_max_trials = 10'000'000;
 
 // n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }.
 // Ranges are counted before they are expanded, without overflow: bounds above max_n and more
@@ -483,7 +491,7 @@ double parse_lap_count(const Reporter& report, const toml::node& node, bool in_l
   if (!node.is_number())
     report.fail(node.source(), "adaptive.laps",
                 fmt::format("found {} ({}), expected {}", describe(node), show(node), allowed));
-  const double laps = node.value<double>().value();
+  const double laps = *real_of(node);
   if (!(laps > 0) || !std::isfinite(laps))
     report.fail(node.source(), "adaptive.laps",
                 fmt::format("must be a finite number > 0 or \"limit\", found {}", show(node)));
@@ -714,10 +722,11 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
       report.fail(laps->source(), "adaptive.snapshot_laps",
                   fmt::format("expected an array of lap numbers, found {}", describe(*laps)));
     for (const auto& item : *array) {
-      if (!item.is_number() || item.value<double>().value() < 0)
+      const auto lap_number = real_of(item);
+      if (!lap_number || *lap_number < 0)
         report.fail(item.source(), "adaptive.snapshot_laps",
                     fmt::format("expected a lap number >= 0, found {}", show(item)));
-      const double lap = item.value<double>().value();
+      const double lap = *lap_number;
       if (last_lap && lap > *last_lap * (1 + 1e-12))
         report.fail(item.source(), "adaptive.snapshot_laps",
                     fmt::format("found {}, after the end of the run ({}); snapshot laps must be "
@@ -731,7 +740,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
         get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
     if (value != std::floor(value) || value > 1e7)
       report.fail(table->get(key)->source(), fmt::format("adaptive.{}", key),
-                  fmt::format("must be a whole number >= 1, found {}", format_real(value)));
+                  fmt::format("must be a whole number between 1 and 10000000, found {}",
+                              show(*table->get(key))));
     return static_cast<std::size_t>(value);
   };
   settings.snapshot_points = count("snapshot_points", 0);
@@ -762,6 +772,15 @@ void load_study_plugins(const Reporter& report, const toml::table& root) {
     }
   }
 }
+
+// Every extent of the domain (length, 2 pi radius, each of lengths) lies in
+// [Domain::min_extent, Domain::max_extent]; the reason, for messages.
+bool in_extent_range(double extent) {
+  return extent >= Domain::min_extent && extent <= Domain::max_extent;
+}
+constexpr const char* extent_range_reason =
+    "beyond these the squared distances, volumes and spline knots computed on the domain leave "
+    "the range of double";
 
 bool valid_study_name(const std::string& name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
@@ -859,6 +878,7 @@ void check_evaluation_grid(const Reporter& report, const toml::table& header,
 StudyDefinition parse_study(std::string_view text, const std::string& source_name) {
   const Reporter report(source_name);
   toml::table root;
+  check_toml_nesting(report, text);
   try {
     root = toml::parse(text, source_name);
   } catch (const toml::parse_error& error) {
@@ -876,6 +896,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   check_keys(report, *header, "study.",
              {"name", "description", "kind", "metrics", "abscissa", "evaluation_points"});
   study.name = get_string(report, *header, "name", "study.", std::nullopt);
+  if (study.name.size() > max_study_name)
+    report.fail(header->get("name")->source(), "study.name",
+                fmt::format("is {} characters long, at most {} are allowed (it names the output "
+                            "folder results/<name>/ and the files in it)",
+                            study.name.size(), max_study_name));
   if (!valid_study_name(study.name))
     report.fail(header->get("name")->source(), "study.name",
                 fmt::format("'{}' is not a valid name (letters, digits, '_', '-', '.'; it names "
@@ -904,7 +929,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   const double points = get_number(report, *header, "evaluation_points", "study.", 4096, 1);
   if (points != std::floor(points) || points > 1e8)
     report.fail(header->get("evaluation_points")->source(), "study.evaluation_points",
-                fmt::format("must be an integer >= 2, found {}", format_real(points)));
+                fmt::format("must be a whole number between 2 and 100000000, found {}",
+                            show(*header->get("evaluation_points"))));
   study.evaluation_points = static_cast<std::size_t>(points);
 
   const auto& all_metrics = metric_names(study.kind);
@@ -954,25 +980,37 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     study.domain.dimension = static_cast<int>(list->size());
     for (std::size_t a = 0; a < list->size(); ++a) {
       const auto& item = *list->get(a);
-      const auto value = item.value<double>();
-      if (!item.is_number() || !value || !(*value > 0) || !std::isfinite(*value))
+      const auto value = real_of(item);
+      if (!value || !(*value > 0) || !std::isfinite(*value))
         report.fail(
             item.source(), "domain.lengths",
             fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1, show(item)));
+      if (!in_extent_range(*value))
+        report.fail(item.source(), "domain.lengths",
+                    fmt::format("axis {}: must be between {} and {} metres, found {} ({})", a + 1,
+                                format_real(Domain::min_extent), format_real(Domain::max_extent),
+                                show(item), extent_range_reason));
       (a == 0 ? study.domain.length : a == 1 ? study.domain.width : study.domain.height) = *value;
     }
+  } else if (domain->contains("length")) {
+    study.domain.length = get_number(report, *domain, "length", "domain.", 0, 0);
+    if (!in_extent_range(study.domain.length))
+      report.fail(domain->get("length")->source(), "domain.length",
+                  fmt::format("must be between {} and {} metres, found {} ({})",
+                              format_real(Domain::min_extent), format_real(Domain::max_extent),
+                              show(*domain->get("length")), extent_range_reason));
   } else {
-    study.domain.length =
-        domain->contains("length")
-            ? get_number(report, *domain, "length", "domain.", 0, 0)
-            : 2 * std::numbers::pi * get_number(report, *domain, "radius", "domain.", 0, 0);
-    if (!std::isfinite(study.domain.length))  // 2 pi radius beyond the largest double
-      report.fail(
-          domain->get("radius")->source(), "domain.radius",
-          fmt::format("must be at most {} (the track's length, 2 pi radius, must be a "
-                      "finite number), found {}",
-                      format_real(std::numeric_limits<double>::max() / (2 * std::numbers::pi)),
-                      show(*domain->get("radius"))));
+    // The track's length 2 pi radius must lie in the extents' range.
+    const double radius = get_number(report, *domain, "radius", "domain.", 0, 0);
+    study.domain.length = 2 * std::numbers::pi * radius;
+    if (!in_extent_range(study.domain.length))
+      report.fail(domain->get("radius")->source(), "domain.radius",
+                  fmt::format("must be between {} and {} metres (the track's length, 2 pi "
+                              "radius, between {} and {}), found {} ({})",
+                              format_real(Domain::min_extent / (2 * std::numbers::pi)),
+                              format_real(Domain::max_extent / (2 * std::numbers::pi)),
+                              format_real(Domain::min_extent), format_real(Domain::max_extent),
+                              show(*domain->get("radius")), extent_range_reason));
   }
   study.domain.periodic = get_bool(report, *domain, "periodic", "domain.", true);
   // An adaptive study in d > 1 learns f of a plant's read-out of d coordinates: every plant
@@ -994,10 +1032,11 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                                                study.limits.matrix_megabytes, 0);
     const double trials =
         get_number(report, *limits, "trials", "limits.", static_cast<double>(max_trials), 0);
-    if (trials != std::floor(trials) || trials > 1e15)
+    if (trials != std::floor(trials) || trials > static_cast<double>(max_max_trials))
       report.fail(limits->get("trials")->source(), "limits.trials",
-                  fmt::format("must be a whole number between 1 and 1e15, found {}",
-                              show(*limits->get("trials"))));
+                  fmt::format("must be a whole number between 1 and {} (every trial of the grid "
+                              "is held in memory, about 1.7 KB each), found {}",
+                              max_max_trials, show(*limits->get("trials"))));
     max_trials = static_cast<std::uint64_t>(trials);
   }
   // Before any plugin choice or trial is built: a short file can ask for billions of trials.
@@ -1215,11 +1254,13 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
 }
 
 StudyDefinition load_study(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw StudyError(fmt::format("{}: cannot open the study file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_study(text.str(), file.string());
+  std::string text;
+  try {
+    text = read_input_file(file, "study file", max_study_file_bytes);
+  } catch (const InputFileError& error) {
+    throw StudyError(error.what());
+  }
+  return parse_study(text, file.string());
 }
 
 }  // namespace rkhs

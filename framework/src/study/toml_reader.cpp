@@ -9,11 +9,122 @@
 #include <cmath>
 #include <sstream>
 #include <tuple>
+#include <vector>
 
 #include "rkhs/core/registry.hpp"
 
 namespace rkhs::detail {
 
+void check_toml_nesting(const Reporter& report, std::string_view text) {
+  // One open array or inline table: whether it holds keys (an inline table) and the dots of
+  // the key being read in it.
+  struct Level {
+    bool table;  // an inline table (else an array)
+    bool key;    // reading a key (inline tables only)
+    std::size_t key_dots = 0;
+  };
+  std::vector<Level> open;
+  std::size_t header_dots = 0, top_key_dots = 0, depth = 0;  // depth: every level counted
+  bool top_key = true;                                       // at top level, reading a key
+  std::uint32_t line = 1, column = 0;
+  const auto deeper = [&] {
+    if (++depth <= max_toml_nesting) return;
+    const toml::source_position at{line, column};
+    report.fail({at, at, nullptr}, "",
+                fmt::format("invalid TOML: keys, arrays and inline tables nested more than {} deep",
+                            max_toml_nesting));
+  };
+  const auto in_key = [&] { return open.empty() ? top_key : open.back().key; };
+  std::size_t i = 0;
+  const auto next = [&] {
+    const char c = text[i++];
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    } else {
+      ++column;
+    }
+    return c;
+  };
+  const auto skip_string = [&](char quote) {
+    const bool multi = text.substr(i, 2) == std::string_view(quote == '"' ? "\"\"" : "''");
+    if (multi) {
+      next();
+      next();
+    }
+    while (i < text.size()) {
+      const char c = next();
+      if (c == '\\' && quote == '"' && i < text.size()) {
+        next();
+      } else if (c == quote &&
+                 (!multi || text.substr(i, 2) == std::string_view(quote == '"' ? "\"\"" : "''"))) {
+        if (multi) {
+          next();
+          next();
+        }
+        return;
+      } else if (c == '\n' && !multi) {
+        return;
+      }
+    }
+  };
+  bool line_start = true;
+  while (i < text.size()) {
+    const char c = next();
+    if (c == ' ' || c == '\t' || c == '\r') continue;
+    const bool was_line_start = line_start;
+    line_start = false;
+    if (c == '#') {
+      while (i < text.size() && text[i] != '\n') next();
+    } else if (c == '"' || c == '\'') {
+      skip_string(c);
+    } else if (c == '\n') {
+      line_start = true;
+      if (open.empty()) {
+        depth -= top_key_dots;
+        top_key_dots = 0;
+        top_key = true;
+      }
+    } else if (c == '[' && open.empty() && top_key && was_line_start) {
+      // A table header [a.b.c] or [[a.b.c]]: its dots are the depth of the keys below it.
+      depth -= header_dots + top_key_dots;
+      header_dots = top_key_dots = 0;
+      while (i < text.size() && text[i] != ']' && text[i] != '\n' && text[i] != '#') {
+        const char h = next();
+        if (h == '"' || h == '\'') {
+          skip_string(h);
+        } else if (h == '.') {
+          ++header_dots;
+          deeper();
+        }
+      }
+      while (i < text.size() && text[i] != '\n') next();  // ] or ]] and what follows
+    } else if (c == '.' && in_key()) {
+      ++(open.empty() ? top_key_dots : open.back().key_dots);
+      deeper();
+    } else if (c == '=' && in_key()) {
+      if (open.empty())
+        top_key = false;
+      else
+        open.back().key = false;  // its value now; ',' returns to a key
+    } else if (c == '{' && !in_key()) {
+      open.push_back({true, true});
+      deeper();
+    } else if (c == '[' && !in_key()) {
+      open.push_back({false, false});
+      deeper();
+    } else if ((c == '}' || c == ']') && !open.empty()) {
+      depth -= open.back().key_dots + 1;
+      open.pop_back();
+    } else if (c == ',' && !open.empty()) {
+      // The next key of an inline table (an array stays with values).
+      auto& level = open.back();
+      depth -= level.key_dots;
+      level.key_dots = 0;
+      level.key = level.table;
+    }
+  }
+}
 
 std::string with_suggestion(const std::string& found, const std::vector<std::string>& known) {
   std::string out = fmt::format("(known: {}", fmt::join(known, ", "));
@@ -37,7 +148,7 @@ std::string_view describe(const toml::node& node) {
 std::string show(const toml::node& node) {
   std::ostringstream out;
   node.visit([&](auto&& v) { out << v; });
-  return out.str();
+  return shortened(out.str(), 200);
 }
 
 // Rejects keys of `table` that are not in `allowed`.
@@ -73,6 +184,12 @@ std::string get_string(const Reporter& report, const toml::table& table, std::st
   return node->as_string()->get();
 }
 
+std::optional<double> real_of(const toml::node& node) {
+  if (const auto* integer = node.as_integer()) return static_cast<double>(integer->get());
+  if (const auto* real = node.as_floating_point()) return real->get();
+  return std::nullopt;
+}
+
 double get_number(const Reporter& report, const toml::table& table, std::string_view key,
                   std::string_view prefix, double fallback, double min_exclusive) {
   const auto* node = table.get(key);
@@ -80,7 +197,7 @@ double get_number(const Reporter& report, const toml::table& table, std::string_
   if (!node->is_number())
     report.fail(node->source(), fmt::format("{}{}", prefix, key),
                 fmt::format("expected a number, found {} ({})", describe(*node), show(*node)));
-  const double value = node->value<double>().value();
+  const double value = *real_of(*node);
   if (!(value > min_exclusive) || !std::isfinite(value))
     report.fail(node->source(), fmt::format("{}{}", prefix, key),
                 fmt::format("must be a finite number > {}, found {}", format_real(min_exclusive),
@@ -118,8 +235,8 @@ FitWindow read_fit_window(const Reporter& report, const toml::table& table,
   auto number = [&](std::string_view key) -> std::optional<double> {
     const auto* node = table.get(key);
     if (!node) return std::nullopt;
-    if (!node->is_number() || !std::isfinite(node->value<double>().value()) ||
-        !(node->value<double>().value() > 0.0))
+    const auto value = real_of(*node);
+    if (!value || !std::isfinite(*value) || !(*value > 0.0))
       report.fail(node->source(), key_of(key),
                   fmt::format("expected a positive number, found {}", show(*node)));
     if ((key == "h_from" || key == "h_to") && study.abscissa != Abscissa::fill_distance)
@@ -127,7 +244,7 @@ FitWindow read_fit_window(const Reporter& report, const toml::table& table,
                   fmt::format("a window in h needs study.abscissa = \"h\" (this study fits against "
                               "n: use n_{} instead)",
                               key == "h_from" ? "from" : "to"));
-    return node->value<double>().value();
+    return *value;
   };
   window.n_from = number("n_from");
   window.n_to = number("n_to");

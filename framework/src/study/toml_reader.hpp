@@ -31,15 +31,17 @@ class Reporter {
   /// The same position and form as fail(), for a warning.
   /// Control characters and bytes that are not UTF-8 in the key and the message (which quote
   /// the study file's text) are shown as escapes ("\x1b"): a message is one line, and carries
-  /// no terminal escape sequences.
+  /// no terminal escape sequences. A message longer than max_message_bytes is shortened
+  /// (rkhs/core/printable.hpp): one that quotes a huge value stays readable.
   std::string locate(const toml::source_region& where, std::string_view key,
                      std::string_view message) const {
     std::string out = printable(source_);
     if (where.begin.line > 0) out += fmt::format(":{}:{}", where.begin.line, where.begin.column);
     out += ": ";
-    if (!key.empty()) out += printable(key) + ": ";
-    return out + printable(message);
+    if (!key.empty()) out += printable(shortened(key, 200)) + ": ";
+    return out + printable(shortened(message, max_message_bytes));
   }
+  static constexpr std::size_t max_message_bytes = 2000;
 
  private:
   std::string source_;
@@ -49,13 +51,26 @@ class Reporter {
 [[noreturn]] void fail(const std::string& source, const toml::source_region& where,
                        std::string_view key, std::string_view message);
 
+/// How deep the tables of a study file's TOML may nest, counting every level a dotted key
+/// ("a.b.c = 1", "[a.b.c]") opens as well as arrays and inline tables: toml++ bounds arrays and
+/// inline tables (TOML_MAX_NESTED_VALUES, 256) but not dotted keys, and a key of 100,000 parts
+/// overflows the stack when its tables are built or destroyed.
+inline constexpr std::size_t max_toml_nesting = 256;
+
+/// Fails (StudyError "file:line:column: invalid TOML: ... nested more than 256 deep") at the
+/// first place where `text` nests deeper than max_toml_nesting, found by a scan of its keys,
+/// brackets, strings and comments before toml++ parses it. Text that is not TOML passes as far
+/// as the scan can tell: toml++ reports its errors.
+void check_toml_nesting(const Reporter& report, std::string_view text);
+
 /// "(known: a, b, c; did you mean 'b'?)" for a name `found` that is not among `known`.
 std::string with_suggestion(const std::string& found, const std::vector<std::string>& known);
 
 /// "a string", "an integer", "a number", "a boolean", "an array", "a table", "a date or time".
 std::string_view describe(const toml::node& node);
 
-/// The node as TOML text, for "found ..." in messages.
+/// The node as TOML text, for "found ..." in messages; at most 200 bytes (shortened,
+/// rkhs/core/printable.hpp).
 std::string show(const toml::node& node);
 
 /// Fails at the first key of `table` not in `allowed` ("unknown key", with a suggestion);
@@ -71,6 +86,12 @@ const toml::table* optional_table(const Reporter& report, const toml::table& roo
 /// not a string).
 std::string get_string(const Reporter& report, const toml::table& table, std::string_view key,
                        std::string_view prefix, std::optional<std::string> fallback);
+
+/// A number node as a double: a floating-point value as it is, an integer as the nearest double
+/// (an integer above 2^53, such as 9007199254740993, is rounded like the same digits written
+/// with a decimal point; toml++'s value<double>() gives no value for it). std::nullopt for a
+/// node that is not a number. Every real-valued key of a study file is read through it.
+std::optional<double> real_of(const toml::node& node);
 
 /// `table[key]` as a finite number > `min_exclusive`; `fallback` when absent.
 double get_number(const Reporter& report, const toml::table& table, std::string_view key,

@@ -6,6 +6,8 @@
 #include <cctype>
 #include <stdexcept>
 
+#include "rkhs/core/printable.hpp"
+
 namespace rkhs {
 
 namespace {
@@ -56,11 +58,20 @@ class KeywordExpression::Parser {
   }
 
   int not_expression() {
-    if (token_ == Token::not_) {
-      advance();
-      return add({Op::not_, {}, not_expression(), -1});
-    }
-    if (token_ == Token::left) {
+    if (token_ == Token::not_ || token_ == Token::left) {
+      // The recursion's only way deeper: bounded, so that no expression overflows the stack.
+      if (++depth_ > KeywordExpression::max_depth)
+        throw std::invalid_argument(
+            fmt::format("-k '{}': at column {}: 'not' and '(' nested more than {} deep", shown(),
+                        start_ + 1, KeywordExpression::max_depth));
+      struct Leave {
+        int& depth;
+        ~Leave() { --depth; }
+      } leave{depth_};
+      if (token_ == Token::not_) {
+        advance();
+        return add({Op::not_, {}, not_expression(), -1});
+      }
       advance();
       const int inner = or_expression();
       if (token_ != Token::right) error("')'");
@@ -97,7 +108,7 @@ class KeywordExpression::Parser {
       throw std::invalid_argument(fmt::format(
           "-k '{}': at column {}: unexpected character '{}' (an identifier has letters, digits "
           "and _ : + - . [ ] \\ / =; the operators are and, or, not and parentheses)",
-          text_, start_ + 1, c));
+          shown(), start_ + 1, printable(std::string_view(&c, 1))));
     }
     while (position_ < text_.size() && identifier_char(text_[position_])) ++position_;
     word_ = std::string(text_.substr(start_, position_ - start_));
@@ -112,13 +123,17 @@ class KeywordExpression::Parser {
                               : token_ == Token::left || token_ == Token::right
                                   ? fmt::format("'{}'", text_[start_])
                                   : fmt::format("'{}'", word_);
-    throw std::invalid_argument(fmt::format("-k '{}': at column {}: expected {}, found {}", text_,
-                                            start_ + 1, expected, found));
+    throw std::invalid_argument(fmt::format("-k '{}': at column {}: expected {}, found {}", shown(),
+                                            start_ + 1, expected, shortened(found, 80)));
   }
+
+  // The expression as messages quote it: around the column they name when it is long.
+  std::string shown() const { return printable(excerpt(text_, start_, 60)); }
 
   std::string_view text_;
   KeywordExpression& out_;
   std::size_t position_ = 0, start_ = 0;
+  int depth_ = 0;
   Token token_ = Token::end;
   std::string word_;
 };
@@ -148,9 +163,17 @@ bool KeywordExpression::evaluate(int index, const std::vector<std::string>& keyw
     case Op::not_:
       return !evaluate(node.left, keywords);
     case Op::and_:
-      return evaluate(node.left, keywords) && evaluate(node.right, keywords);
-    case Op::or_:
-      return evaluate(node.left, keywords) || evaluate(node.right, keywords);
+    case Op::or_: {
+      // A chain "a or b or c ..." is a left spine as long as the chain: walked in a loop, so
+      // that recursion goes only as deep as 'not' and parentheses nest (at most max_depth).
+      const bool is_or = node.op == Op::or_;
+      const Node* link = &node;
+      while (link->op == node.op) {
+        if (evaluate(link->right, keywords) == is_or) return is_or;
+        link = &nodes_[static_cast<std::size_t>(link->left)];
+      }
+      return evaluate(static_cast<int>(link - nodes_.data()), keywords);
+    }
   }
   return false;
 }

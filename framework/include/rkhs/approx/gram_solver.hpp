@@ -16,6 +16,11 @@
 // the Cholesky factor (O(n^2) each), only to decide singularity. The estimate of lambda_min
 // is never below the true one; when it is within a factor 100 of the threshold, or the
 // factorisation fails, the exact solve decides, so both modes take the same decision.
+//
+// Between its O(n^3) steps (before each symmetric eigenvalue solve and before the factorisation
+// or pseudo-inverse that follows one) it calls check_cancelled() (core/cancellation.hpp): inside
+// a trial a passed deadline or a stop request ends it there (TrialTimeLimitExceeded,
+// TrialCancelled). One step is not interrupted: a trial overruns its limit by at most that step.
 
 #include <Eigen/Dense>
 #include <optional>

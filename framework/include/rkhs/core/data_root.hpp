@@ -36,7 +36,9 @@ bool leaves_data_root(std::string_view name);
 std::string data_root_escape_message(std::string_view name);
 
 /// The file `name` names: an absolute `name` as it is, a relative one below data_root().
-/// Throws std::invalid_argument when no such regular file exists, and for a relative `name`
+/// Throws std::invalid_argument when no such regular file exists (a path that exists and is not
+/// a regular file, a FIFO or a device such as /dev/stdin, is named as what it is: "data file
+/// 'x' is a FIFO, not a data file (a regular file; ...)"), and for a relative `name`
 /// that leaves the root through ".." (leaves_data_root); the message names `name` (control
 /// characters escaped), the full path looked at, where the root came from and how to change it.
 std::filesystem::path resolve_data_file(const std::string& name);

@@ -21,6 +21,12 @@ namespace rkhs {
 struct Domain {
   /// The largest dimension a domain may have.
   static constexpr int max_dimension = 3;
+  /// The range of every extent, metres: beyond it the squared distances, volumes and spline
+  /// knots the kernels and metrics compute (L^3, L^2 d, n0 2^J L / L) leave the range of double
+  /// (a B-spline on a track of length 3e307 indexed its features with an infinite knot
+  /// position). Study files are refused outside it (docs/study-files.md).
+  static constexpr double min_extent = 1e-100;
+  static constexpr double max_extent = 1e100;
 
   double length = 1.0;   ///< L > 0: extent of axis 1 (the track's length in d = 1), metres
   bool periodic = true;  ///< true: every axis is periodic (a circle, a torus)
@@ -40,7 +46,8 @@ struct Domain {
   std::size_t point_count(std::span<const double> coordinates) const noexcept {
     return coordinates.size() / static_cast<std::size_t>(dimension);
   }
-  /// Throws std::invalid_argument unless d is in 1..3 and every extent is > 0 and finite.
+  /// Throws std::invalid_argument unless d is in 1..3 and every extent is in
+  /// [min_extent, max_extent].
   void validate() const;
 
   /// Coordinate x of axis `axis` mapped into [0, extent) on a periodic domain; unchanged

@@ -37,7 +37,8 @@ namespace rkhs {
 /// A mistake in an expression's text. what() reads
 ///   at character 23 of "2 * sin(2 * pi * s / L": found the end of the expression, expected ")"
 /// position() is the offset (from 0) of the first character that is wrong, text().size() for
-/// the end of the text.
+/// the end of the text. A text longer than 120 bytes is quoted in what() by its part around
+/// position() and its length ("...s+s+s..." (10000001 characters)); text() is the whole.
 class ExpressionError : public std::invalid_argument {
  public:
   ExpressionError(std::string text, std::size_t position, std::string found, std::string expected,

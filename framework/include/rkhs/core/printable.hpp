@@ -19,4 +19,16 @@ std::size_t utf8_sequence_length(std::string_view text) noexcept;
 /// '\t' stay as they are (a whole message of several lines).
 std::string printable(std::string_view text, bool keep_line_breaks = false);
 
+/// `text` as it is when it has at most `max_bytes` bytes; otherwise cut with an ellipsis, so
+/// that a message that echoes input (a 10 MB expression) stays readable: its first and last
+/// max_bytes / 2 bytes (cuts moved back to the start of a UTF-8 sequence) joined by
+/// " ... [N bytes left out] ... ", keeping both what a message says first and its end ("found
+/// ..., expected ..."). `max_bytes` below 16 is taken as 16.
+std::string shortened(std::string_view text, std::size_t max_bytes);
+
+/// The part of `text` within `radius` bytes of byte `position` (clamped to the text), with
+/// "..." where the text goes on: "...s+s+s+s+s+s..." (cuts at the start of a UTF-8 sequence).
+/// The whole text when it has at most 2 x `radius` bytes.
+std::string excerpt(std::string_view text, std::size_t position, std::size_t radius);
+
 }  // namespace rkhs

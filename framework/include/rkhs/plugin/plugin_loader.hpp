@@ -22,6 +22,11 @@ namespace rkhs {
 
 /// A plugin module that could not be loaded. what() starts with the file's path and says why:
 ///   "<path>: plugin file not found"
+///   "<path>: is a FIFO, not a plugin file (a shared library)"  (any file that is not regular,
+///   refused by its type before it is opened: opening a FIFO would wait for a writer)
+///   "<path>: not an rkhs-study plugin (not a complete shared library: 3000 bytes, its program
+///   headers need 15736)"  (an ELF file whose headers or segments lie beyond its end, checked
+///   before dlopen maps it: a truncated library was a SIGBUS inside dlopen)
 ///   "<path>: not an rkhs-study plugin (not a loadable shared library: <dlerror>)"
 ///   "<path>: not an rkhs-study plugin (it exports no rkhs_plugin_abi_version; ...)"
 ///   "<path>: built against plugin ABI 7 (rkhs-study 0.0.1), this rkhs-study 0.1.0 has plugin ABI

@@ -34,6 +34,7 @@
 // (work_precision_steps_panelK), one line per integrator, points ordered by tolerance.
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -60,7 +61,23 @@ struct PlotOutcome {
   std::vector<std::string> notes;     ///< plots left out, and why (PlotPlan::notes)
   std::vector<std::string> failures;  ///< "<stem>.gp: <gnuplot's own message>"; or that
                                       ///< gnuplot is not installed (then nothing is rendered)
+  bool interrupted = false;  ///< stop_requested returned true: gnuplot killed, the rest not run
 };
+
+/// How long gnuplot may take, and when to stop it.
+struct PlotOptions {
+  /// One gnuplot process (one plot: SVG, PNG and PDF) may run this long; then it is killed and
+  /// that plot fails ("did not finish within 120 s"). RKHS_STUDY_GNUPLOT_SECONDS, a positive
+  /// number, replaces the default.
+  double gnuplot_seconds = 120;
+  /// Polled while gnuplot runs (every 20 ms); once it returns true gnuplot is killed and no
+  /// further plot is rendered (PlotOutcome::interrupted). May be empty: never.
+  std::function<bool()> stop_requested;
+};
+
+/// PlotOptions with gnuplot_seconds from RKHS_STUDY_GNUPLOT_SECONDS when that is a positive
+/// number (else the default) and `stop_requested`.
+PlotOptions plot_options(std::function<bool()> stop_requested);
 
 /// Writes plots/<stem>.gp and renders plots/<stem>.svg, .png and .pdf with `gnuplot` (found on
 /// PATH, run in plots/ by fork and exec, never through a shell), each plot on its own. First it
@@ -69,7 +86,10 @@ struct PlotOutcome {
 /// Text from the study (names, labels, parameter values, file names) reaches the scripts only as
 /// single-quoted gnuplot strings (no backquote substitution, no macros, no escapes), control
 /// characters replaced. A failed plot keeps its script and its log (plots/<stem>.log). Throws
-/// only when the plots folder cannot be written.
-PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory);
+/// only when the plots folder cannot be written. gnuplot runs in a process group of its own,
+/// which is killed (SIGKILL) when it runs past options.gnuplot_seconds or when
+/// options.stop_requested returns true: a hanging gnuplot never keeps the command from ending.
+PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& directory,
+                        const PlotOptions& options = {});
 
 }  // namespace rkhs

@@ -131,7 +131,9 @@ class ResultStore {
   /// nothing is created beside it either). Either way a database that is not an rkhs-study
   /// store (no `trials` table of the store's columns, another application id, a newer schema)
   /// is refused before anything is written: std::runtime_error "FILE: not an rkhs-study result
-  /// store: why".
+  /// store: why". A `file` that exists and is not a regular file (a directory, a FIFO, a
+  /// device) is refused by its type before it is opened: "FILE: is a FIFO, not a result store
+  /// (an SQLite database file)".
   explicit ResultStore(const std::filesystem::path& file,
                        StoreAccess access = StoreAccess::read_write);
   ~ResultStore();

@@ -23,7 +23,13 @@ class KeywordExpression {
   /// Parses `text`. Throws std::invalid_argument naming the expression, the 1-based column,
   /// what was expected and what was found ("-k 'power and': at column 10: expected an
   /// identifier, 'not' or '(', found the end of the expression").
+  /// 'not' and parentheses nest at most max_depth deep ("-k '((((a': at column 201: 'not' and '('
+  /// nested more than 200 deep"), so that parsing and matching never overflow the stack; a
+  /// long expression is quoted in messages by its part around the column.
   static KeywordExpression parse(std::string_view text);
+
+  /// How deep 'not' and '(' may nest.
+  static constexpr int max_depth = 200;
 
   /// Whether a test case with these keywords is selected.
   bool matches(const std::vector<std::string>& keywords) const;

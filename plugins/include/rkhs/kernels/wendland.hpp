@@ -34,7 +34,9 @@
 // H^tau with tau = k + (d + 1)/2 (Wendland, Theorem 10.35: d/2 + k + 1/2; phi_{3,k} restricted
 // to R^2 loses 1/2, the trace theorem), support radius rho (k(x, y) = 0 when the domain
 // distance is >= rho), stationary, dimension d of the domain.
-// Fails: nothing beyond the parameter declarations.
+// Fails: ParameterError naming "radius" on a periodic domain when a kernel value would sum
+// more than max_image_terms images (prod_a (2 M_a + 1)): in d = 1, radius > max_periods L.
+// The kernel is then all but constant and each of its values costs millions of terms.
 
 #include <cmath>
 
@@ -48,6 +50,12 @@ namespace rkhs::kernels {
 
 class Wendland {
  public:
+  /// The most images one kernel value sums on a periodic domain, 2 M + 1 with M = 2^20 (the
+  /// bound of image_count for the other stationary kernels), and the largest radius / L on a
+  /// track it allows (ceil(radius / L + 1/2) <= 2^20).
+  static constexpr double max_image_terms = 2.0 * (1 << 20) + 1.0;
+  static constexpr double max_periods = (1 << 20) - 1.0;
+
   static PluginInfo info();
 
   Wendland(const ParameterSet& parameters, const Domain& domain);

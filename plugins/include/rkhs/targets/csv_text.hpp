@@ -3,7 +3,8 @@
 // splitter and field splitter shared by the CSV targets (`csv`, `surface_csv`), reading a file
 // a block at a time with the line limit applied as it is read (its SHA-256, computed on the
 // way, is the target's provenance), and fields quoted in messages (control characters
-// escaped).
+// escaped). A file is refused by type and size before it is read (open_file), and never more
+// than max_csv_file_bytes (256 MiB) of it are read.
 
 #include <fmt/format.h>
 
@@ -21,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "rkhs/core/input_file.hpp"
 #include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
 
@@ -125,6 +127,9 @@ class Lines {
       if (in_->bad()) throw std::invalid_argument(fmt::format("{}: cannot read the file", file_));
       return false;
     }
+    if (bytes_read_ + got > max_csv_file_bytes)  // a file that grew after open_file's check
+      throw std::invalid_argument(fmt::format(
+          "{}: is more than the {} bytes a CSV data file may have", file_, max_csv_file_bytes));
     if (digest_) digest_->update(buffer_.data(), got);
     rest_ = std::string_view(buffer_.data(), got);
     if (bytes_read_ == 0 && rest_.starts_with("\xEF\xBB\xBF")) rest_.remove_prefix(3);
@@ -160,9 +165,14 @@ inline std::optional<double> parse_number(std::string_view text) {
   return value;
 }
 
-/// `path` opened for reading in binary; std::invalid_argument "<file>: cannot open the file:
-/// <why>" otherwise (`file` names it in messages).
+/// `path` opened for reading in binary, once check_input_file (rkhs/core/input_file.hpp) has
+/// found it a regular file of at most max_csv_file_bytes: InputFileError (a
+/// std::invalid_argument) "<path>: is a FIFO, not a CSV data file (a regular file)" or "<path>:
+/// is N bytes, more than the 268435456 bytes (256 MiB) a CSV data file may have" before it is
+/// opened; std::invalid_argument "<file>: cannot open the file: <why>" when it cannot be opened
+/// (`file` names it in messages).
 inline std::ifstream open_file(const std::filesystem::path& path, const std::string& file) {
+  check_input_file(path, "CSV data file", max_csv_file_bytes);
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw std::invalid_argument(
