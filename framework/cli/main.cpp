@@ -43,7 +43,6 @@ int rkhs_study_main(int argc, char** argv) {
   run->add_option("--threads", run_arguments.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   run->add_flag("--quiet,-q", run_arguments.quiet, "print only the final summary line");
-  rkhs::pipeline::StoreOptions report_store;
   auto add_store_options = [&](CLI::App* command, rkhs::pipeline::StoreOptions& store_options) {
     command->add_option(
         "--store", store_options.file,
@@ -115,7 +114,9 @@ int rkhs_study_main(int argc, char** argv) {
 
   std::string report_dir, report_format = "html";
   auto* report = app.add_subcommand(
-      "report", "the rate tables of a run again: text, Markdown, LaTeX or report.html");
+      "report",
+      "the rate tables of a run again, from the folder's summary.json alone (runs nothing, "
+      "loads no plugin, opens no store): text, Markdown, LaTeX or report.html");
   report->add_option("directory", report_dir, "a results directory (with summary.json)")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -124,7 +125,6 @@ int rkhs_study_main(int argc, char** argv) {
                    "text (the console's tables, every group's), md, tex or html (default html: "
                    "writes DIR/report.html)")
       ->check(CLI::IsMember({"text", "md", "tex", "html"}));
-  add_store_options(report, report_store);
 
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")
@@ -198,6 +198,7 @@ int rkhs_study_main(int argc, char** argv) {
   }
 
   session.runs_trials = *run || *check;
+  session.loads_plugins = !*report;
   session.shard = !run_arguments.shard.empty();
   run_arguments.plots = !no_plots;
   check_arguments.plots = !no_check_plots;
@@ -208,7 +209,7 @@ int rkhs_study_main(int argc, char** argv) {
     if (*merge) return command_merge(merge_into, merge_from, merge_prefer);
     if (*store) return command_store(store_arguments);
     if (*list) return command_list(kind);
-    if (*report) return command_report(report_dir, report_format, report_store);
+    if (*report) return command_report(report_dir, report_format);
     if (*validate) return command_validate(study_file);
     return exit_ok;
   });

@@ -67,8 +67,10 @@ int run_command(const SessionOptions& options, int& argc, char**& argv,
   pipeline::Executor& executor = mpi ? static_cast<pipeline::Executor&>(*mpi) : local;
   try {
     executor.on_every_process([&] {
-      load_plugins_from_environment();
-      for (const auto& file : options.plugin_files) load_plugin(file);
+      if (options.loads_plugins) {
+        load_plugins_from_environment();
+        for (const auto& file : options.plugin_files) load_plugin(file);
+      }
       if (!options.data_dir.empty()) set_data_root(options.data_dir);
     });
     return command(executor);
