@@ -2,11 +2,15 @@
 // names (commands/<command>.cpp; commands/session.cpp sets up what every command shares).
 #include <fmt/format.h>
 #include <malloc.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
+#include <streambuf>
 
 #include "commands/commands.hpp"
 #include "commands/session.hpp"
@@ -215,6 +219,56 @@ int rkhs_study_main(int argc, char** argv) {
   });
 }
 
+// Standard output for std::cout: buffered, written with write(2), and the first failure kept
+// with its errno (stdio forgets the reason of a failed write once its buffer moved on).
+class StandardOutput : public std::streambuf {
+ public:
+  StandardOutput() { setp(buffer_, buffer_ + sizeof buffer_); }
+  /// The errno of the first write that failed; 0 while every write succeeded.
+  int error() const noexcept { return error_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!drain()) return traits_type::eof();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override { return drain() ? 0 : -1; }
+
+ private:
+  // Writes what is buffered; false once a write failed (what follows is dropped).
+  bool drain() {
+    const char* next = pbase();
+    while (error_ == 0 && next < pptr()) {
+      const auto written = ::write(STDOUT_FILENO, next, static_cast<std::size_t>(pptr() - next));
+      if (written < 0 && errno == EINTR) continue;
+      if (written < 0)
+        error_ = errno;
+      else
+        next += written;
+    }
+    setp(buffer_, buffer_ + sizeof buffer_);
+    return error_ == 0;
+  }
+  char buffer_[1 << 16];
+  int error_ = 0;
+};
+
+// Standard output flushed and checked once, for every command: a write that failed (a full disk,
+// `> /dev/full`, a closed descriptor) turns a success into exit 1 with the reason; an exit code
+// that already says failure is kept.
+int checked_standard_output(int code, const StandardOutput& output) {
+  std::cout.flush();
+  if (output.error() == 0 && std::cout.good()) return code;
+  std::cerr << "rkhs-study: cannot write to standard output"
+            << (output.error() ? std::string(": ") + std::strerror(output.error()) : std::string())
+            << "\n";
+  return code == 0 ? 1 : code;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -226,10 +280,13 @@ int main(int argc, char** argv) {
   // 32 MiB is the largest mmap threshold glibc accepts.
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
-  const int code = rkhs_study_main(argc, argv);
+  static StandardOutput output;  // static: an abandoned trial's thread may outlive main's frame
+  std::streambuf* const standard = std::cout.rdbuf(&output);
+  if (::isatty(STDOUT_FILENO)) std::cout << std::unitbuf;  // a terminal sees each line at once
+  const int code = checked_standard_output(rkhs_study_main(argc, argv), output);
+  std::cout.rdbuf(standard);  // before `output` is destroyed at exit
   if (rkhs::trials_abandoned()) {
     // Abandoned trials still compute on their threads: end now, without static destructors.
-    std::cout.flush();
     std::cerr.flush();
     std::fflush(nullptr);
     std::_Exit(code);
