@@ -57,8 +57,10 @@ int rkhs_study_main(int argc, char** argv) {
                       "neither read nor write a result store");
   };
   add_store_options(run, run_arguments.store);
-  run->add_option("--shard", run_arguments.shard,
-                  "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
+  run->add_option(
+      "--shard", run_arguments.shard,
+      "K/N (digits only, 1 <= K <= N): run only the K-th of N deterministic subsets into "
+      "the store (job arrays)");
   std::string merge_into;
   std::vector<std::string> merge_from;
   auto* merge = app.add_subcommand(

@@ -306,6 +306,47 @@ TEST_CASE("no command writes over what it reads, nor calls a failed write a succ
             .exit_code == 0);
 }
 
+TEST_CASE("a store that is a directory or truncated is named as such", "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_store_kinds");
+  const auto store = make_store(dir);
+  const auto study = (dir / "study.toml").string();
+  // A directory: refused by its type, exit 2, by every command that takes a store.
+  fs::create_directories(dir / "folder.sqlite");
+  const auto folder = (dir / "folder.sqlite").string();
+  for (const auto& command : {"store check --store " + folder, "store export --store " + folder,
+                              "run " + study + " --quiet --no-plots --store " + folder,
+                              "merge " + folder + " " + store.string()}) {
+    const auto refused = rkhs_study(command);
+    INFO(command << ": " << refused.output);
+    CHECK(refused.exit_code == 2);
+    CHECK_THAT(refused.output, Catch::Contains(folder + ": a directory, not a result store file"));
+  }
+  // Truncated anywhere: damaged (exit 1, with the size its header gives), not "not a store".
+  const auto whole = bytes_of(store);
+  REQUIRE(whole.size() > 8192);
+  for (const std::size_t size : {std::size_t{50}, std::size_t{100}, std::size_t{4096},
+                                 whole.size() / 2, whole.size() - 1}) {
+    const auto cut = dir / ("cut" + std::to_string(size) + ".sqlite");
+    std::ofstream(cut, std::ios::binary) << whole.substr(0, size);
+    for (const auto& command :
+         {"store check --store " + cut.string(), "store export --store " + cut.string(),
+          "run " + study + " --quiet --no-plots --store " + cut.string(),
+          "merge " + (dir / "into.sqlite").string() + " " + cut.string()}) {
+      const auto damaged = rkhs_study(command);
+      INFO(command << ": " << damaged.output);
+      CHECK(damaged.exit_code == 1);
+      CHECK_THAT(damaged.output, Catch::Contains(cut.string() + ": damaged result store: truncated: " +
+                                                 std::to_string(size) + " bytes"));
+      CHECK_THAT(damaged.output, !Catch::Contains("not an rkhs-study result store"));
+    }
+    CHECK(bytes_of(cut) == whole.substr(0, size));
+  }
+  // A file that is not SQLite's stays "not a store" (exit 2).
+  const auto text = rkhs_study("store check --store " + study);
+  CHECK(text.exit_code == 2);
+  CHECK_THAT(text.output, Catch::Contains("not an rkhs-study result store"));
+}
+
 TEST_CASE("read-only store commands open the store read-only and leave it as it was",
           "[cli][store][proof]") {
   const auto dir = rkhs::test::scratch_directory("proof_read_only");

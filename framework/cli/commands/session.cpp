@@ -11,6 +11,7 @@
 #include "rkhs/distributed.hpp"
 #include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
+#include "rkhs/run/result_store.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs::cli {
@@ -76,6 +77,10 @@ int run_command(const SessionOptions& options, int& argc, char**& argv,
     return command(executor);
   } catch (const distributed::QuietExit& e) {
     return e.code;
+  } catch (const DamagedStore& e) {
+    // Damaged, not bad input: the file was a store (`store check` says the same with exit 1).
+    std::cerr << "rkhs-study: " << printable(e.what(), true) << "\n";
+    return exit_failed_trials;
   } catch (const StudyError& e) {
     std::cerr << printable(e.what(), true) << "\n";
     return exit_bad_input;

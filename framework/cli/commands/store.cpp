@@ -23,7 +23,7 @@ namespace {
 
 // An existing store: `store` commands never create one; check and export open it read-only.
 ResultStore open_existing(const std::string& file, StoreAccess access) {
-  if (!std::filesystem::is_regular_file(file))
+  if (!std::filesystem::exists(file))
     throw std::runtime_error(fmt::format("{}: no such result store", file));
   return ResultStore(file, access);
 }

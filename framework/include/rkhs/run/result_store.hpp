@@ -101,6 +101,14 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
                          const TrialExecutor& execute = run_trials,
                          const std::vector<std::string>& known_hashes = {});
 
+/// A result store whose file is an SQLite database that is damaged (truncated, or pages SQLite
+/// finds malformed) rather than another kind of file: its records may be lost. Commands exit 1
+/// for it ("damaged"), 2 for a file that is not a store at all.
+class DamagedStore : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// How a ResultStore opens its database.
 enum class StoreAccess {
   read_write,  ///< opened or created; WAL mode
@@ -131,6 +139,9 @@ class ResultStore {
   /// nothing is created beside it either). Either way a database that is not an rkhs-study
   /// store (no `trials` table of the store's columns, another application id, a newer schema)
   /// is refused before anything is written: std::runtime_error "FILE: not an rkhs-study result
+  /// store: why". A path that is a directory, FIFO or device is refused by its type ("FILE: a
+  /// directory, not a result store file"). An SQLite file shorter than its header says
+  /// (truncated) or one SQLite reports malformed throws DamagedStore "FILE: damaged result
   /// store: why".
   explicit ResultStore(const std::filesystem::path& file,
                        StoreAccess access = StoreAccess::read_write);
