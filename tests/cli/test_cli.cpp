@@ -1,4 +1,5 @@
 // The rkhs-study command as a user runs it: outputs, exit codes, error messages.
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
@@ -171,6 +172,21 @@ TEST_CASE("report reads a results folder and runs, loads and stores nothing it n
   }
   // No result store in the current directory, nor anywhere in the folder.
   CHECK_FALSE(fs::exists(dir / "results"));
+  // Plots that are links to other files of this machine, or FIFOs, are not embedded in
+  // report.html (nor waited on): only the folder's own regular files are.
+  {
+    std::ofstream(dir / "secret.txt") << "SECRET-NOT-FOR-THE-PAGE\n";
+  }
+  fs::create_directories(dir / "out" / "plots");
+  fs::create_symlink(dir / "secret.txt", dir / "out" / "plots" / "convergence_power_function_sup.svg");
+  fs::create_symlink(dir / "secret.txt", dir / "out" / "plots" / "estimates_link.svg");
+  REQUIRE(mkfifo((dir / "out" / "plots" / "estimates_fifo.svg").c_str(), 0600) == 0);
+  const auto page = rkhs::test::run_command("timeout 60 " + std::string(RKHS_STUDY_EXECUTABLE) +
+                                            " report " + (dir / "out").string());
+  INFO(page.output);
+  CHECK(page.exit_code == 0);
+  CHECK(read(dir / "out" / "report.html").find("<img") == std::string::npos);
+  fs::remove_all(dir / "out" / "plots");
   // A study file that cannot be parsed is not read either.
   {
     std::ofstream(dir / "hostile.toml", std::ios::trunc) << "[[[ not toml\n";
