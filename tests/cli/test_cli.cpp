@@ -197,8 +197,9 @@ TEST_CASE("report reads a results folder and runs, loads and stores nothing it n
   CHECK(run("report " + (dir / "out").string() + " --store x.sqlite").exit_code == 2);
 
   // A summary.json that is not what a run writes is refused, naming where.
+  // `content` "": the file as it is.
   const auto refused = [&](const std::string& content, const std::string& message) {
-    std::ofstream(dir / "out" / "summary.json", std::ios::trunc) << content;
+    if (!content.empty()) std::ofstream(dir / "out" / "summary.json", std::ios::trunc) << content;
     const auto report = run("report " + (dir / "out").string() + " --format md");
     INFO(report.output);
     CHECK(report.exit_code == 2);
@@ -213,6 +214,9 @@ TEST_CASE("report reads a results folder and runs, loads and stores nothing it n
   refused("{\n  \"study\": \"x\",\n  oops\n}\n", "summary.json:3:3: not JSON");
   refused("[]", "summary.json: (top level): expected an object; found an array");
   refused("{\"study\": \"x\"}", "summary.json: kind: missing");
+  // Larger than read_results_folder reads: refused by its size, unread (a sparse file).
+  fs::resize_file(dir / "out" / "summary.json", std::uintmax_t{300} << 20);
+  refused("", "summary.json: 314572800 bytes; at most 268435456 bytes are read");
   fs::remove(dir / "out" / "summary.json");
   fs::create_directory(dir / "out" / "summary.json");
   const auto directory = run("report " + (dir / "out").string() + " --format md");

@@ -136,7 +136,9 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   if (progress) progress->stop();
   print_store_problems(outcome);
   if (outcome.interrupted)
-    return report_interruption(*outcome.interrupted, arguments.store, journal->file().string());
+    // A journal whose writing failed is not offered as holding the finished trials.
+    return report_interruption(*outcome.interrupted, arguments.store,
+                               journal && journal->complete() ? journal->file().string() : "");
 
   const auto& run = *outcome.completed;
   // The expectations' verdicts, judged once here, go into summary.json and report.html.

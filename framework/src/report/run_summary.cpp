@@ -488,7 +488,9 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
   }
 
   // Rates: one series per group and metric, its trials those of the group in increasing n.
-  std::vector<std::string> groups;
+  std::map<std::string, std::vector<std::size_t>> group_trials;
+  for (const auto& trial : folder.trials) group_trials[trial.group_key].push_back(trial.index);
+  std::map<std::string, std::size_t> groups;
   const auto& rates = reader.array(json, "", "rates");
   for (std::size_t s = 0; s < rates.size(); ++s) {
     const auto path = Reader::at("rates", s);
@@ -499,11 +501,11 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
     if (std::find(study.metrics.begin(), study.metrics.end(), series.metric) == study.metrics.end())
       reader.fail(Reader::join(path, "metric"),
                   fmt::format("\"{}\" is not a metric of the trials", series.metric));
-    const auto position = std::find(groups.begin(), groups.end(), group);
-    series.group = static_cast<std::size_t>(position - groups.begin());
-    if (position == groups.end()) groups.push_back(group);
-    for (const auto& trial : folder.trials)
-      if (trial.group_key == group) series.trials.push_back(trial.index);
+    // The group's number, in order of first appearance.
+    const auto [position, added] = groups.emplace(group, groups.size());
+    series.group = position->second;
+    if (const auto members = group_trials.find(group); members != group_trials.end())
+      series.trials = members->second;
     if (series.trials.empty()) reader.fail(Reader::join(path, "group"), "no trial of this group");
     std::stable_sort(series.trials.begin(), series.trials.end(),
                      [&](auto a, auto b) { return folder.trials[a].n < folder.trials[b].n; });
@@ -560,6 +562,11 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
     folder.deselected = reader.count(reader.member(expectations, "expectations", "counts"),
                                      "expectations.counts", "deselected");
     const auto& outcomes = reader.array(expectations, "expectations", "outcomes");
+    std::map<std::pair<std::string, std::string>, std::size_t> series_of;  // (group, metric)
+    for (std::size_t s = 0; s < folder.rates.size(); ++s)
+      series_of.emplace(std::pair{folder.trials[folder.rates[s].trials.front()].group_key,
+                                  folder.rates[s].metric},
+                        s);
     std::vector<std::string> locations;
     for (std::size_t k = 0; k < outcomes.size(); ++k) {
       const auto path = Reader::at("expectations.outcomes", k);
@@ -626,10 +633,8 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
       o.found = reader.text(entry, path, "found");
       o.reason = reader.text(entry, path, "reason");
       o.seconds = reader.number(entry, path, "seconds");
-      for (std::size_t s = 0; s < folder.rates.size(); ++s)
-        if (folder.rates[s].metric == o.expectation->metric &&
-            folder.trials[folder.rates[s].trials.front()].group_key == o.group)
-          o.series = s;
+      if (const auto s = series_of.find({o.group, o.expectation->metric}); s != series_of.end())
+        o.series = s->second;
       folder.verdicts.push_back(std::move(o));
     }
   }
