@@ -2,11 +2,15 @@
 // names (commands/<command>.cpp; commands/session.cpp sets up what every command shares).
 #include <fmt/format.h>
 #include <malloc.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
+#include <streambuf>
 
 #include "commands/commands.hpp"
 #include "commands/session.hpp"
@@ -43,7 +47,6 @@ int rkhs_study_main(int argc, char** argv) {
   run->add_option("--threads", run_arguments.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   run->add_flag("--quiet,-q", run_arguments.quiet, "print only the final summary line");
-  rkhs::pipeline::StoreOptions report_store;
   auto add_store_options = [&](CLI::App* command, rkhs::pipeline::StoreOptions& store_options) {
     command->add_option(
         "--store", store_options.file,
@@ -54,8 +57,10 @@ int rkhs_study_main(int argc, char** argv) {
                       "neither read nor write a result store");
   };
   add_store_options(run, run_arguments.store);
-  run->add_option("--shard", run_arguments.shard,
-                  "K/N: run only the K-th of N deterministic subsets into the store (job arrays)");
+  run->add_option(
+      "--shard", run_arguments.shard,
+      "K/N (digits only, 1 <= K <= N): run only the K-th of N deterministic subsets into "
+      "the store (job arrays)");
   std::string merge_into;
   std::vector<std::string> merge_from;
   auto* merge = app.add_subcommand(
@@ -115,7 +120,9 @@ int rkhs_study_main(int argc, char** argv) {
 
   std::string report_dir, report_format = "html";
   auto* report = app.add_subcommand(
-      "report", "the rate tables of a run again: text, Markdown, LaTeX or report.html");
+      "report",
+      "the rate tables of a run again, from the folder's summary.json alone (runs nothing, "
+      "loads no plugin, opens no store): text, Markdown, LaTeX or report.html");
   report->add_option("directory", report_dir, "a results directory (with summary.json)")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -124,7 +131,6 @@ int rkhs_study_main(int argc, char** argv) {
                    "text (the console's tables, every group's), md, tex or html (default html: "
                    "writes DIR/report.html)")
       ->check(CLI::IsMember({"text", "md", "tex", "html"}));
-  add_store_options(report, report_store);
 
   auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
   validate->add_option("study", study_file, "study definition (TOML)")
@@ -198,6 +204,7 @@ int rkhs_study_main(int argc, char** argv) {
   }
 
   session.runs_trials = *run || *check;
+  session.loads_plugins = !*report;
   session.shard = !run_arguments.shard.empty();
   run_arguments.plots = !no_plots;
   check_arguments.plots = !no_check_plots;
@@ -208,10 +215,60 @@ int rkhs_study_main(int argc, char** argv) {
     if (*merge) return command_merge(merge_into, merge_from, merge_prefer);
     if (*store) return command_store(store_arguments);
     if (*list) return command_list(kind);
-    if (*report) return command_report(report_dir, report_format, report_store);
+    if (*report) return command_report(report_dir, report_format);
     if (*validate) return command_validate(study_file);
     return exit_ok;
   });
+}
+
+// Standard output for std::cout: buffered, written with write(2), and the first failure kept
+// with its errno (stdio forgets the reason of a failed write once its buffer moved on).
+class StandardOutput : public std::streambuf {
+ public:
+  StandardOutput() { setp(buffer_, buffer_ + sizeof buffer_); }
+  /// The errno of the first write that failed; 0 while every write succeeded.
+  int error() const noexcept { return error_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!drain()) return traits_type::eof();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override { return drain() ? 0 : -1; }
+
+ private:
+  // Writes what is buffered; false once a write failed (what follows is dropped).
+  bool drain() {
+    const char* next = pbase();
+    while (error_ == 0 && next < pptr()) {
+      const auto written = ::write(STDOUT_FILENO, next, static_cast<std::size_t>(pptr() - next));
+      if (written < 0 && errno == EINTR) continue;
+      if (written < 0)
+        error_ = errno;
+      else
+        next += written;
+    }
+    setp(buffer_, buffer_ + sizeof buffer_);
+    return error_ == 0;
+  }
+  char buffer_[1 << 16];
+  int error_ = 0;
+};
+
+// Standard output flushed and checked once, for every command: a write that failed (a full disk,
+// `> /dev/full`, a closed descriptor) turns a success into exit 1 with the reason; an exit code
+// that already says failure is kept.
+int checked_standard_output(int code, const StandardOutput& output) {
+  std::cout.flush();
+  if (output.error() == 0 && std::cout.good()) return code;
+  std::cerr << "rkhs-study: cannot write to standard output"
+            << (output.error() ? std::string(": ") + std::strerror(output.error()) : std::string())
+            << "\n";
+  return code == 0 ? 1 : code;
 }
 
 }  // namespace
@@ -225,10 +282,13 @@ int main(int argc, char** argv) {
   // 32 MiB is the largest mmap threshold glibc accepts.
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
-  const int code = rkhs_study_main(argc, argv);
+  static StandardOutput output;  // static: an abandoned trial's thread may outlive main's frame
+  std::streambuf* const standard = std::cout.rdbuf(&output);
+  if (::isatty(STDOUT_FILENO)) std::cout << std::unitbuf;  // a terminal sees each line at once
+  const int code = checked_standard_output(rkhs_study_main(argc, argv), output);
+  std::cout.rdbuf(standard);  // before `output` is destroyed at exit
   if (rkhs::trials_abandoned()) {
     // Abandoned trials still compute on their threads: end now, without static destructors.
-    std::cout.flush();
     std::cerr.flush();
     std::fflush(nullptr);
     std::_Exit(code);

@@ -513,8 +513,9 @@ assert close(x["accepted_low"], 4.9) and close(x["accepted_high"], 5.1), x
 assert x["reason"].startswith("the 95% CI lies entirely below 4.90"), x["reason"]
 )",
                out / "summary.json") == 0);
-  // `report` on the directory re-reads the tier: the quick tier's 12 trials, not the study's 18.
-  const auto report = rkhs_study("report " + out.string() + " --format md --no-store");
+  // `report` on the directory reports what the folder holds: the quick tier's 12 trials, not the
+  // study's 18.
+  const auto report = rkhs_study("report " + out.string() + " --format md");
   INFO(report.output);
   CHECK(report.exit_code == 0);
   CHECK(report.output.find("gaussian") == std::string::npos);

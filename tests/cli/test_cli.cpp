@@ -1,4 +1,5 @@
 // The rkhs-study command as a user runs it: outputs, exit codes, error messages.
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
@@ -101,7 +102,7 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
                        stem.string() + ".svg").c_str()) == 0);
   }
   CHECK(read(dir / "out" / "rates.md").find(" power_function_sup | rate |") != std::string::npos);
-  // `report DIR` gives the tables of the run again, from the store.
+  // `report DIR` gives the tables of the run again, from DIR/summary.json.
   const auto markdown = run("report " + (dir / "out").string() + " --format md");
   CHECK(markdown.exit_code == 0);
   CHECK(markdown.output == read(dir / "out" / "rates.md"));
@@ -124,6 +125,103 @@ TEST_CASE("run writes trials.csv, rates.csv and a valid summary.json", "[cli]") 
               .exit_code == 0);
   CHECK(read(dir / "one" / "trials.csv") == trials);
   CHECK(read(dir / "one" / "rates.csv") == rates);
+}
+
+TEST_CASE("report reads a results folder and runs, loads and stores nothing it names",
+          "[cli][report]") {
+  const auto dir = scratch("report_reads_only");
+  {
+    std::ofstream(dir / "study.toml") << small_study;
+  }
+  REQUIRE(run("run " + (dir / "study.toml").string() + " --out " + (dir / "out").string() +
+              " --no-store --no-plots --quiet")
+              .exit_code == 0);
+  const auto markdown_of_run = read(dir / "out" / "rates.md");
+  // The folder now names a study that loads a plugin, a library whose loading creates a marker
+  // file (tests/plugin/modules/writes_marker.cpp), and the plugin path holds it too.
+  const auto library = fs::path(RKHS_TEST_PLUGIN_DIR) / "writes_marker.so";
+  REQUIRE(fs::exists(library));
+  fs::create_directories(dir / "plugins");
+  fs::copy_file(library, dir / "plugins" / "writes_marker.so");
+  {
+    std::ofstream(dir / "hostile.toml") << "plugins = [\"" << library.string() << "\"]\n"
+                                        << small_study;
+  }
+  auto summary = read(dir / "out" / "summary.json");
+  const auto source = "\"source\": \"" + (dir / "study.toml").string() + "\"";
+  REQUIRE(summary.find(source) != std::string::npos);
+  summary.replace(summary.find(source), source.size(),
+                  "\"source\": \"" + (dir / "hostile.toml").string() + "\"");
+  {
+    std::ofstream(dir / "out" / "summary.json", std::ios::trunc) << summary;
+  }
+  const auto marker = dir / "loaded";
+  const auto environment = "cd " + dir.string() + " && RKHS_TEST_LOAD_MARKER=" + marker.string() +
+                           " RKHS_STUDY_PLUGIN_PATH=" + (dir / "plugins").string();
+  // The marker works: loading the library (verify-plugin, then refused) creates it.
+  CHECK(rkhs::test::rkhs_study("verify-plugin " + library.string(), environment).exit_code == 2);
+  CHECK(fs::exists(marker));
+  fs::remove(marker);
+  for (const char* format : {"md", "tex", "text", "html"}) {
+    const auto report = rkhs::test::rkhs_study(
+        "report " + (dir / "out").string() + " --format " + format, environment);
+    INFO(format << ": " << report.output);
+    CHECK(report.exit_code == 0);
+    CHECK_FALSE(fs::exists(marker));
+    if (std::string(format) == "md") CHECK(report.output == markdown_of_run);
+  }
+  // No result store in the current directory, nor anywhere in the folder.
+  CHECK_FALSE(fs::exists(dir / "results"));
+  // Plots that are links to other files of this machine, or FIFOs, are not embedded in
+  // report.html (nor waited on): only the folder's own regular files are.
+  {
+    std::ofstream(dir / "secret.txt") << "SECRET-NOT-FOR-THE-PAGE\n";
+  }
+  fs::create_directories(dir / "out" / "plots");
+  fs::create_symlink(dir / "secret.txt", dir / "out" / "plots" / "convergence_power_function_sup.svg");
+  fs::create_symlink(dir / "secret.txt", dir / "out" / "plots" / "estimates_link.svg");
+  REQUIRE(mkfifo((dir / "out" / "plots" / "estimates_fifo.svg").c_str(), 0600) == 0);
+  const auto page = rkhs::test::run_command("timeout 60 " + std::string(RKHS_STUDY_EXECUTABLE) +
+                                            " report " + (dir / "out").string());
+  INFO(page.output);
+  CHECK(page.exit_code == 0);
+  CHECK(read(dir / "out" / "report.html").find("<img") == std::string::npos);
+  fs::remove_all(dir / "out" / "plots");
+  // A study file that cannot be parsed is not read either.
+  {
+    std::ofstream(dir / "hostile.toml", std::ios::trunc) << "[[[ not toml\n";
+  }
+  CHECK(rkhs::test::rkhs_study("report " + (dir / "out").string() + " --format md", environment)
+            .output == markdown_of_run);
+  // --store and --fresh are gone: there is no store to name.
+  CHECK(run("report " + (dir / "out").string() + " --store x.sqlite").exit_code == 2);
+
+  // A summary.json that is not what a run writes is refused, naming where.
+  // `content` "": the file as it is.
+  const auto refused = [&](const std::string& content, const std::string& message) {
+    if (!content.empty()) std::ofstream(dir / "out" / "summary.json", std::ios::trunc) << content;
+    const auto report = run("report " + (dir / "out").string() + " --format md");
+    INFO(report.output);
+    CHECK(report.exit_code == 2);
+    CHECK_THAT(report.output, Catch::Contains(message));
+  };
+  auto wrong_type = summary;
+  const auto metric = wrong_type.find("\"power_function_sup\": ");
+  REQUIRE(metric != std::string::npos);
+  wrong_type.insert(metric + std::string("\"power_function_sup\": ").size(), "\"fast\", \"x\": ");
+  refused(wrong_type, "summary.json: trials[0].metrics.power_function_sup: expected a number, "
+                      "\"inf\", \"-inf\" or null; found a string");
+  refused("{\n  \"study\": \"x\",\n  oops\n}\n", "summary.json:3:3: not JSON");
+  refused("[]", "summary.json: (top level): expected an object; found an array");
+  refused("{\"study\": \"x\"}", "summary.json: kind: missing");
+  // Larger than read_results_folder reads: refused by its size, unread (a sparse file).
+  fs::resize_file(dir / "out" / "summary.json", std::uintmax_t{300} << 20);
+  refused("", "summary.json: 314572800 bytes; at most 268435456 bytes are read");
+  fs::remove(dir / "out" / "summary.json");
+  fs::create_directory(dir / "out" / "summary.json");
+  const auto directory = run("report " + (dir / "out").string() + " --format md");
+  CHECK(directory.exit_code == 2);
+  CHECK_THAT(directory.output, Catch::Contains("summary.json: not a regular file (a directory)"));
 }
 
 TEST_CASE("bad input exits with code 2 and says where", "[cli]") {

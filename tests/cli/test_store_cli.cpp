@@ -175,6 +175,29 @@ J = 5
   CHECK(read_text(dir / "from_shards" / "trials.csv") == read_text(dir / "single" / "trials.csv"));
   CHECK(rkhs_study("run " + study + " --shard 4/3").exit_code == 2);
   CHECK(rkhs_study("merge " + (dir / "x.sqlite").string() + " " + study).exit_code == 2);
+  // K/N parsed strictly: digits only, one '/', 1 <= K <= N, nothing before or after; the
+  // refusal names what was found and what is allowed, and nothing runs or is stored.
+  const std::pair<const char*, const char*> refused[] = {
+      {"1/-2", "N is '-2', not a whole number of digits"},
+      {"1/2/3", "more than one '/'"},
+      {"0/2", "K is 0"},
+      {"3/2", "K = 3 is greater than N = 2"},
+      {" 1/2", "K is ' 1', not a whole number of digits"},
+      {"1/2 ", "N is '2 ', not a whole number of digits"},
+      {"+1/2", "K is '+1'"},
+      {"1/0", "N is 0"},
+      {"2", "no '/'"},
+      {"1/", "N is empty"},
+      {"1/99999999999999999999", "N is larger than 4294967295"}};
+  for (const auto& [shard, why] : refused) {
+    const auto run = rkhs_study("run " + study + " --quiet --shard '" + shard + "' --store " +
+                                (dir / "refused.sqlite").string());
+    INFO(shard << ": " << run.output);
+    CHECK(run.exit_code == 2);
+    CHECK_THAT(run.output, Catch::Contains(std::string("--shard '") + shard + "': " + why));
+    CHECK_THAT(run.output, Catch::Contains("two whole numbers (digits only) with 1 <= K <= N"));
+  }
+  CHECK_FALSE(fs::exists(dir / "refused.sqlite"));
 }
 
 namespace {

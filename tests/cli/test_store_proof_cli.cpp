@@ -245,6 +245,108 @@ TEST_CASE("store merge refuses two different records of one trial unless told wh
   CHECK(rkhs_study("store check --store " + into.string()).exit_code == 0);
 }
 
+TEST_CASE("no command writes over what it reads, nor calls a failed write a success",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_own_input");
+  const auto store = make_store(dir);
+  const auto before = bytes_of(store);
+  fs::create_symlink(store, dir / "link.sqlite");
+  // --out onto the store, by its own path, another spelling of it, or a link to it: refused
+  // before anything is read or written; the store is as it was and verifies.
+  for (const auto& out :
+       {store.string(), (dir / "." / "store.sqlite").string(), (dir / "link.sqlite").string()}) {
+    for (const char* format : {"csv", "json"}) {
+      const auto refused = rkhs_study("store export --format " + std::string(format) +
+                                      " --store " + store.string() + " --out " + out);
+      INFO(refused.output);
+      CHECK(refused.exit_code == 2);
+      CHECK_THAT(refused.output, Catch::Contains("--out " + out + " is the store " +
+                                                 store.string() + ": writing it would replace"));
+    }
+  }
+  CHECK(fs::is_symlink(dir / "link.sqlite"));
+  CHECK(bytes_of(store) == before);
+  CHECK(rkhs_study("store check --store " + store.string()).exit_code == 0);
+  // --junit onto a study file being checked.
+  const auto study = dir / "study.toml";
+  const auto study_text = bytes_of(study);
+  const auto junit = rkhs_study("check " + study.string() + " --no-store -q --junit " +
+                                (dir / "." / "study.toml").string());
+  INFO(junit.output);
+  CHECK(junit.exit_code == 2);
+  CHECK_THAT(junit.output, Catch::Contains("is the study file " + study.string()));
+  CHECK(bytes_of(study) == study_text);
+
+  // A standard output that cannot be written: exit 1 with the reason, for every command that
+  // writes there (/dev/full: every write fails with ENOSPC).
+  if (!fs::exists("/dev/full")) return;
+  for (const auto& command :
+       {"store export --store " + store.string(),
+        "store export --format json --store " + store.string(),
+        "store check --store " + store.string(), "validate " + study.string(),
+        "report " + (dir / "out").string() + " --format md",
+        "report " + (dir / "out").string() + " --format text", std::string("list kernels"),
+        std::string("--help")}) {
+    // Grouped, so that only standard output goes to /dev/full (run_command adds 2>&1).
+    const auto full = rkhs::test::run_command("{ " + std::string(RKHS_STUDY_EXECUTABLE) + " " +
+                                              command + " > /dev/full; }");
+    INFO(command << ": " << full.output);
+    CHECK(full.exit_code == 1);
+    CHECK_THAT(full.output,
+               Catch::Contains("cannot write to standard output: No space left on device"));
+  }
+  // A closed standard output too.
+  const auto closed = rkhs::test::run_command("{ " + std::string(RKHS_STUDY_EXECUTABLE) +
+                                              " validate " + study.string() + " >&-; }");
+  CHECK(closed.exit_code == 1);
+  CHECK_THAT(closed.output, Catch::Contains("cannot write to standard output: Bad file descriptor"));
+  // A writable one still exits 0.
+  CHECK(rkhs::test::run_command(std::string(RKHS_STUDY_EXECUTABLE) + " validate " +
+                                study.string() + " > /dev/null")
+            .exit_code == 0);
+}
+
+TEST_CASE("a store that is a directory or truncated is named as such", "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_store_kinds");
+  const auto store = make_store(dir);
+  const auto study = (dir / "study.toml").string();
+  // A directory: refused by its type, exit 2, by every command that takes a store.
+  fs::create_directories(dir / "folder.sqlite");
+  const auto folder = (dir / "folder.sqlite").string();
+  for (const auto& command : {"store check --store " + folder, "store export --store " + folder,
+                              "run " + study + " --quiet --no-plots --store " + folder,
+                              "merge " + folder + " " + store.string()}) {
+    const auto refused = rkhs_study(command);
+    INFO(command << ": " << refused.output);
+    CHECK(refused.exit_code == 2);
+    CHECK_THAT(refused.output, Catch::Contains(folder + ": is a directory, not a result store (an SQLite database file"));
+  }
+  // Truncated anywhere: damaged (exit 1, with the size its header gives), not "not a store".
+  const auto whole = bytes_of(store);
+  REQUIRE(whole.size() > 8192);
+  for (const std::size_t size : {std::size_t{50}, std::size_t{100}, std::size_t{4096},
+                                 whole.size() / 2, whole.size() - 1}) {
+    const auto cut = dir / ("cut" + std::to_string(size) + ".sqlite");
+    std::ofstream(cut, std::ios::binary) << whole.substr(0, size);
+    for (const auto& command :
+         {"store check --store " + cut.string(), "store export --store " + cut.string(),
+          "run " + study + " --quiet --no-plots --store " + cut.string(),
+          "merge " + (dir / "into.sqlite").string() + " " + cut.string()}) {
+      const auto damaged = rkhs_study(command);
+      INFO(command << ": " << damaged.output);
+      CHECK(damaged.exit_code == 1);
+      CHECK_THAT(damaged.output, Catch::Contains(cut.string() + ": damaged result store: truncated: " +
+                                                 std::to_string(size) + " bytes"));
+      CHECK_THAT(damaged.output, !Catch::Contains("not an rkhs-study result store"));
+    }
+    CHECK(bytes_of(cut) == whole.substr(0, size));
+  }
+  // A file that is not SQLite's stays "not a store" (exit 2).
+  const auto text = rkhs_study("store check --store " + study);
+  CHECK(text.exit_code == 2);
+  CHECK_THAT(text.output, Catch::Contains("not an rkhs-study result store"));
+}
+
 TEST_CASE("read-only store commands open the store read-only and leave it as it was",
           "[cli][store][proof]") {
   const auto dir = rkhs::test::scratch_directory("proof_read_only");
@@ -271,8 +373,8 @@ TEST_CASE("read-only store commands open the store read-only and leave it as it 
   INFO(csv.output);
   CHECK(csv.exit_code == 0);
   CHECK_THAT(csv.output, Catch::StartsWith("hash,study,key,"));
-  const auto report = as_reader(
-      "report " + (dir / "out").string() + " --format md --store " + store.string(), store);
+  // `report` opens no store at all (it reads the folder's summary.json).
+  const auto report = as_reader("report " + (dir / "out").string() + " --format md", store);
   INFO(report.output);
   CHECK(report.exit_code == 0);
   CHECK_THAT(report.output, Catch::Contains("gaussian"));

@@ -99,6 +99,10 @@ class Check {
   // Every study loaded, restricted to the tier and split by -k before any trial runs: a bad file
   // or expression is exit 2, naming it, with nothing run.
   void collect() {
+    // --junit onto a study file would replace the study with its report.
+    if (!arguments_.junit_file.empty())
+      for (const auto& file : arguments_.study_files)
+        refuse_output_onto_input("--junit", arguments_.junit_file, "the study file", file);
     executor_.on_every_process([&] {
       if (!arguments_.keyword_expression.empty())
         selection_ = KeywordExpression::parse(arguments_.keyword_expression);

@@ -41,8 +41,9 @@ struct CheckCommand : RunArguments {
 };
 int command_check(const CheckCommand& arguments, pipeline::Executor& executor);
 
-int command_report(const std::string& directory, const std::string& format,
-                   const pipeline::StoreOptions& store);
+/// `report DIR`: DIR's tables (text, md, tex on stdout; html into DIR/report.html) from
+/// DIR/summary.json alone: runs nothing, loads no plugin, opens no store.
+int command_report(const std::string& directory, const std::string& format);
 int command_validate(const std::string& study_file);
 /// `kind`: a plugin kind (singular or plural), "metric(s)", or "" for everything.
 int command_list(const std::string& kind);

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <atomic>
 #include <csignal>
+#include <filesystem>
 #include <iostream>
+#include <stdexcept>
 
 #include "commands/commands.hpp"
 #include "rkhs/core/printable.hpp"
@@ -26,6 +28,15 @@ extern "C" void request_stop(int) {
 }
 
 }  // namespace
+
+void refuse_output_onto_input(const std::string& option, const std::string& output,
+                              const std::string& what, const std::string& input) {
+  std::error_code error;
+  if (std::filesystem::equivalent(output, input, error) && !error)
+    throw std::invalid_argument(fmt::format(
+        "{} {} is {} {}: writing it would replace what this command reads; write to another file",
+        option, output, what, input));
+}
 
 std::string counted(std::size_t count, const char* singular, const char* plural) {
   return fmt::format("{} {}", count, count == 1 ? singular : plural);

@@ -12,6 +12,13 @@
 
 namespace rkhs::cli {
 
+/// Refuses (std::invalid_argument) an output file that is `input` by any path or link
+/// (std::filesystem::equivalent; nothing is refused when either does not exist): "<option>
+/// <output> is <what> <input>: writing it would replace what this command reads; write to
+/// another file".
+void refuse_output_onto_input(const std::string& option, const std::string& output,
+                              const std::string& what, const std::string& input);
+
 /// "1 trial", "3 trials".
 std::string counted(std::size_t count, const char* singular, const char* plural);
 

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -21,19 +22,36 @@ namespace rkhs::cli {
 
 namespace {
 
-// "K/N" -> (K, N) with 1 <= K <= N; throws std::invalid_argument otherwise.
+// "K/N" -> (K, N): two whole numbers of digits only (at most 4294967295) around one '/', with
+// 1 <= K <= N, nothing before or after. Throws std::invalid_argument naming what was found and
+// what is allowed otherwise.
 std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
+  constexpr std::uint64_t most = 4294967295;
+  const auto refuse = [&](const std::string& why) {
+    throw std::invalid_argument(
+        fmt::format("--shard '{}': {}; --shard takes K/N, two whole numbers (digits only) with 1 "
+                    "<= K <= N, e.g. 2/4",
+                    printable(text), why));
+  };
   const auto slash = text.find('/');
-  std::size_t k = 0, n = 0;
-  try {
-    if (slash != std::string::npos) {
-      k = std::stoul(text.substr(0, slash));
-      n = std::stoul(text.substr(slash + 1));
+  if (slash == std::string::npos) refuse("no '/'");
+  if (text.find('/', slash + 1) != std::string::npos) refuse("more than one '/'");
+  const auto number = [&](std::string_view digits, const char* name) -> std::size_t {
+    if (digits.empty()) refuse(fmt::format("{} is empty", name));
+    if (digits.find_first_not_of("0123456789") != std::string_view::npos)
+      refuse(fmt::format("{} is '{}', not a whole number of digits", name, printable(digits)));
+    std::uint64_t value = 0;
+    for (const char c : digits) {
+      value = value * 10 + static_cast<std::uint64_t>(c - '0');
+      if (value > most) refuse(fmt::format("{} is larger than {}", name, most));
     }
-  } catch (const std::exception&) {
-  }
-  if (n == 0 || k == 0 || k > n)
-    throw std::invalid_argument("--shard must be K/N with 1 <= K <= N, found '" + text + "'");
+    return static_cast<std::size_t>(value);
+  };
+  const auto k = number(std::string_view(text).substr(0, slash), "K");
+  const auto n = number(std::string_view(text).substr(slash + 1), "N");
+  if (n == 0) refuse("N is 0");
+  if (k == 0) refuse("K is 0 (shards count from 1)");
+  if (k > n) refuse(fmt::format("K = {} is greater than N = {}", k, n));
   return {k, n};
 }
 
@@ -41,7 +59,7 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
 // combines the stores and a run over the merged store writes the outputs.
 int run_shard(const RunCommand& arguments, const StudyDefinition& study,
               const std::vector<TrialSpec>& trials, pipeline::Executor& executor) {
-  const auto [k, n] = parse_shard(arguments.shard);
+  const auto [k, n] = parse_shard(arguments.shard);  // checked before the study was read
   if (arguments.store.disabled)
     throw std::invalid_argument("--shard needs a result store (not --no-store)");
   std::vector<TrialSpec> mine;
@@ -67,6 +85,7 @@ int run_shard(const RunCommand& arguments, const StudyDefinition& study,
 }  // namespace
 
 int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
+  if (!arguments.shard.empty()) parse_shard(arguments.shard);  // a bad --shard reads nothing
   const auto study =
       pipeline::load_everywhere(executor, [&] { return load_study(arguments.study_file); });
   if (executor.is_root()) print_warnings(study);
@@ -117,7 +136,9 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   if (progress) progress->stop();
   print_store_problems(outcome);
   if (outcome.interrupted)
-    return report_interruption(*outcome.interrupted, arguments.store, journal->file().string());
+    // A journal whose writing failed is not offered as holding the finished trials.
+    return report_interruption(*outcome.interrupted, arguments.store,
+                               journal && journal->complete() ? journal->file().string() : "");
 
   const auto& run = *outcome.completed;
   // The expectations' verdicts, judged once here, go into summary.json and report.html.

@@ -11,6 +11,7 @@
 #include "rkhs/distributed.hpp"
 #include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
+#include "rkhs/run/result_store.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs::cli {
@@ -71,13 +72,19 @@ int run_command(const SessionOptions& options, int& argc, char**& argv,
   pipeline::Executor& executor = mpi ? static_cast<pipeline::Executor&>(*mpi) : local;
   try {
     executor.on_every_process([&] {
-      load_plugins_from_environment();
-      for (const auto& file : options.plugin_files) load_plugin(file);
+      if (options.loads_plugins) {
+        load_plugins_from_environment();
+        for (const auto& file : options.plugin_files) load_plugin(file);
+      }
       if (!options.data_dir.empty()) set_data_root(options.data_dir);
     });
     return command(executor);
   } catch (const distributed::QuietExit& e) {
     return e.code;
+  } catch (const DamagedStore& e) {
+    // Damaged, not bad input: the file was a store (`store check` says the same with exit 1).
+    std::cerr << "rkhs-study: " << printable(e.what(), true) << "\n";
+    return exit_failed_trials;
   } catch (const StudyError& e) {
     std::cerr << printable(shortened(e.what(), max_message_bytes), true) << "\n";
     return exit_bad_input;

@@ -12,10 +12,13 @@
 namespace rkhs::cli {
 
 struct SessionOptions {
-  bool runs_trials = false;     ///< run or check: refused when started as several processes
-  bool use_mpi = false;         ///< --mpi
-  bool shard = false;           ///< --shard given (excludes --mpi)
-  double rank_timeout_seconds = 60;  ///< --rank-timeout
+  bool runs_trials = false;  ///< run or check: refused when started as several processes
+  bool use_mpi = false;      ///< --mpi
+  bool shard = false;        ///< --shard given (excludes --mpi)
+  /// Load plugin modules (RKHS_STUDY_PLUGIN_PATH, --plugin) before the command; false for
+  /// commands that only read data (`report`), which must never run code a file names.
+  bool loads_plugins = true;
+  double rank_timeout_seconds = 60;       ///< --rank-timeout
   std::vector<std::string> plugin_files;  ///< --plugin
   std::string data_dir;                   ///< --data-dir ("" : the default data root)
 };

@@ -233,6 +233,12 @@ std::string export_json(const std::vector<ResultStore::Entry>& entries) {
 }
 
 int store_export(const std::string& file, const std::string& format, const std::string& out) {
+  // The store itself, or its -wal, -shm or -journal file, by any path or link: the export
+  // would replace the store with its own records as text. Refused before anything is read.
+  if (!out.empty() && out != "-")
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"})
+      refuse_output_onto_input("--out", out, suffix[0] ? "a file of the store," : "the store",
+                               file + suffix);
   const auto entries = read_store(file, [](const ResultStore& store) {
     std::vector<ResultStore::Entry> all;
     store.for_each([&](const ResultStore::Entry& entry) { all.push_back(entry); });

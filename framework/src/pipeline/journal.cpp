@@ -19,6 +19,7 @@ Journal::Journal(const std::filesystem::path& file, const StudyDefinition& study
   out_ << "index,key,status,reason";
   for (const auto& metric : study.metrics) out_ << "," << metric;
   out_ << "\n" << std::flush;
+  if (!out_) throw std::runtime_error(fmt::format("cannot write the journal {}", file.string()));
 }
 
 void Journal::record(const TrialSpec& trial, const TrialResult& result) {
@@ -27,6 +28,7 @@ void Journal::record(const TrialSpec& trial, const TrialResult& result) {
   for (const auto& metric : study_.metrics)
     out_ << "," << csv_number(result.metrics[study_.metric_index(metric)]);
   out_ << "\n" << std::flush;
+  if (!out_) failed_ = true;
 }
 
 void Journal::remove() {

@@ -60,7 +60,15 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
+// A plot to embed: "" unless `file` is a regular file itself (not a link: a results folder from
+// elsewhere must not put another file of this machine into the page, nor a FIFO hang it) of at
+// most 64 MiB. An empty result is left out of the page.
 std::string read_file(const std::filesystem::path& file) {
+  std::error_code error;
+  const auto status = std::filesystem::symlink_status(file, error);
+  if (error || !std::filesystem::is_regular_file(status)) return {};
+  const auto size = std::filesystem::file_size(file, error);
+  if (error || size > (std::uintmax_t{64} << 20)) return {};
   std::ifstream in(file, std::ios::binary);
   std::stringstream text;
   text << in.rdbuf();
@@ -299,13 +307,17 @@ tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
   page += "<h2>Convergence plots</h2>\n";
   for (const auto& metric : study.metrics) {
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
-    const auto svgs = convergence_plots(plots, metric);
-    for (const auto& svg : svgs)
+    bool shown = false;
+    for (const auto& svg : convergence_plots(plots, metric)) {
+      const auto content = read_file(svg);
+      if (content.empty()) continue;
       page += fmt::format(
           "<p><img class=\"plot\" alt=\"convergence of {}\" "
           "src=\"data:image/svg+xml;base64,{}\"></p>\n",
-          escape_html(metric), base64(read_file(svg)));
-    if (svgs.empty()) page += "<p>No plot.</p>\n";
+          escape_html(metric), base64(content));
+      shown = true;
+    }
+    if (!shown) page += "<p>No plot.</p>\n";
   }
   page += "<h2>Convergence tables</h2>\n";
   for (std::size_t g = 0; g < groups.size(); ++g) page += group_table(groups[g], tables, g + 1);
@@ -320,9 +332,11 @@ tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
   for (const auto& svg : svgs) {
     const auto name = svg.filename().string();
     if (name.starts_with("convergence_")) continue;
+    const auto content = read_file(svg);
+    if (content.empty()) continue;
     (name.starts_with("work_precision_") ? work_precision : others) += fmt::format(
         "<p><img class=\"plot\" alt=\"{0}\" src=\"data:image/svg+xml;base64,{1}\"></p>\n",
-        escape_html(name), base64(read_file(svg)));
+        escape_html(name), base64(content));
   }
   if (!work_precision.empty())
     page +=

@@ -1188,11 +1188,13 @@ PlotOutcome write_plots(const RunRecord& run, const std::filesystem::path& direc
   for (const auto& [stem, script] : plan.scripts) {
     const auto gp = folder / (stem + ".gp");
     const auto log = folder / (stem + ".log");
-    {
-      std::ofstream out(gp);
-      out << "# " << stem << ": run gnuplot " << stem << ".gp in this folder (writes " << stem
-          << ".svg, .png and .pdf)\n"
-          << script;
+    try {
+      write_file_atomically(gp, "# " + stem + ": run gnuplot " + stem +
+                                    ".gp in this folder (writes " + stem +
+                                    ".svg, .png and .pdf)\n" + script);
+    } catch (const std::exception& e) {  // a full disk: this plot is not rendered
+      outcome.failures.push_back(e.what());
+      continue;
     }
     // In the plots folder: the script names its outputs without a path, so it is the same
     // wherever the run wrote it.

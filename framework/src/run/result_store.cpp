@@ -10,6 +10,8 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <map>
 #include <mutex>
@@ -400,8 +402,8 @@ RecordCheck read_record(const std::string& hash, const std::string& study, const
     return check;
   }
   if (!result.floors.empty() && result.floors.size() != result.metrics.size()) {
-    check.problem = fmt::format("{} floors for {} metric values", result.floors.size(),
-                                result.metrics.size());
+    check.problem =
+        fmt::format("{} floors for {} metric values", result.floors.size(), result.metrics.size());
     return check;
   }
   if (expected_metrics && check.metric_names != *expected_metrics) {
@@ -490,20 +492,61 @@ std::optional<int> pragma_int(sqlite3* db, const char* sql) {
   return value;
 }
 
-// A store path that exists and is not a regular file (a directory, a FIFO, a device) is
-// refused by its type before SQLite opens it (opening a FIFO waits for a writer).
-void refuse_special_file(const std::filesystem::path& file) {
-  if (const auto kind = not_regular_file_kind(file); !kind.empty())
-    throw std::runtime_error(fmt::format("{}: is {}, not a result store (an SQLite database file)",
-                                         file.string(), kind));
+// A store path that exists and is not a regular file (a directory, a FIFO, a device, after
+// links) is refused by its type before SQLite opens it (opening a FIFO waits for a writer).
+void refuse_by_type(const std::filesystem::path& file) {
+  const auto kind = not_regular_file_kind(file);
+  if (kind.empty()) return;
+  throw std::runtime_error(fmt::format(
+      "{}: is {}, not a result store (an SQLite database file{})", file.string(), kind,
+      kind == "a directory"
+          ? fmt::format("; a store in a folder is a file in it, e.g. {}",
+                        (file / "rkhs-study.sqlite").string())
+          : std::string()));
+}
+
+// An SQLite file shorter than its header says: "truncated: N bytes of the M its header gives
+// (P pages of S bytes)"; nothing for a file that is not SQLite's or is whole. Not judged while
+// a -wal file is beside it: a writer's checkpoint may then be extending the file (SQLite reads
+// it consistently through the WAL), and the header's page count is trusted only when its
+// version-valid-for number equals its change counter (SQLite's own rule).
+std::optional<std::string> truncation(const std::filesystem::path& file) {
+  if (std::filesystem::exists(wal_of(file))) return std::nullopt;
+  std::error_code error;
+  const auto size = std::filesystem::file_size(file, error);
+  if (error || size == 0) return std::nullopt;
+  std::array<unsigned char, 100> header{};
+  std::FILE* in = std::fopen(file.c_str(), "rb");
+  if (!in) return std::nullopt;
+  const auto got = std::fread(header.data(), 1, header.size(), in);
+  std::fclose(in);
+  static constexpr char magic[] = "SQLite format 3";  // with its NUL: 16 bytes
+  if (got < sizeof magic || std::memcmp(header.data(), magic, sizeof magic) != 0)
+    return std::nullopt;
+  if (got < header.size())
+    return fmt::format("truncated: {} bytes, shorter than SQLite's 100-byte header", size);
+  const std::uint64_t page_size =
+      header[16] == 0 && header[17] == 1 ? 65536 : (std::uint64_t{header[16]} << 8 | header[17]);
+  const std::uint64_t pages = std::uint64_t{header[28]} << 24 | std::uint64_t{header[29]} << 16 |
+                              std::uint64_t{header[30]} << 8 | header[31];
+  const bool count_valid = std::memcmp(header.data() + 24, header.data() + 92, 4) == 0;
+  if (!count_valid || page_size < 512 || pages == 0 || size >= page_size * pages)
+    return std::nullopt;
+  return fmt::format("truncated: {} bytes of the {} its header gives ({} pages of {} bytes)", size,
+                     page_size * pages, pages, page_size);
 }
 
 }  // namespace
 
 ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
     : file_(file), access_(access) {
+  refuse_by_type(file);
+  if (const auto why = truncation(file))
+    throw DamagedStore(
+        fmt::format("{}: damaged result store: {}; restore it from a copy or "
+                    "remove it (its trials then run again)",
+                    file.string(), *why));
   if (access == StoreAccess::read_only) {
-    refuse_special_file(file);
     if (!std::filesystem::is_regular_file(file))
       throw std::runtime_error(fmt::format("{}: no such result store", file.string()));
     // Without a -wal file the database file holds every committed trial: it is read as an
@@ -511,7 +554,6 @@ ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
     // for a read-only connection to a WAL database, and cannot on a read-only mount).
     open(!std::filesystem::exists(wal_of(file)));
   } else {
-    refuse_special_file(file);
     if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
     open(false);
   }
@@ -545,6 +587,12 @@ void ResultStore::open(bool immutable) {
 // was (no WAL switch, no table).
 void ResultStore::adopt_schema() {
   auto not_a_store = [&](const std::string& why) {
+    // SQLite's own verdict on pages it could not read: a damaged store, not another file.
+    if (sqlite3_errcode(db_) == SQLITE_CORRUPT)
+      throw DamagedStore(
+          fmt::format("{}: damaged result store: {}; restore it from a copy or "
+                      "remove it (its trials then run again)",
+                      file_.string(), why));
     throw std::runtime_error(
         fmt::format("{}: not an rkhs-study result store: {}", file_.string(), why));
   };

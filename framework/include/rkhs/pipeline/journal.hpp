@@ -21,8 +21,11 @@ class Journal {
  public:
   /// Creates (truncates) `file` and writes the header for the study's metrics.
   Journal(const std::filesystem::path& file, const StudyDefinition& study);
-  /// Appends one finished trial and flushes.
+  /// Appends one finished trial and flushes; a write that fails (a full disk) is remembered,
+  /// never thrown (this runs in a trial's callback).
   void record(const TrialSpec& trial, const TrialResult& result);
+  /// True while every write succeeded: the file then holds every trial recorded.
+  bool complete() const { return !failed_; }
   /// Closes and deletes the journal (the outputs hold everything now).
   void remove();
   const std::filesystem::path& file() const { return file_; }
@@ -31,6 +34,7 @@ class Journal {
   const StudyDefinition& study_;
   std::filesystem::path file_;
   std::ofstream out_;
+  bool failed_ = false;
 };
 
 }  // namespace rkhs::pipeline

@@ -16,7 +16,9 @@
 namespace rkhs {
 
 /// The page. `plots` is the folder write_plots rendered into (its SVGs are embedded; an empty
-/// path or a missing folder gives a page without plots). The rate tables render
+/// path or a missing folder gives a page without plots; only regular files, not links, of at
+/// most 64 MiB are embedded, so that a results folder from elsewhere can neither put another
+/// file of this machine into the page nor make it wait on a FIFO). The rate tables render
 /// rate_tables(run) and group_tables (rkhs/report/rate_table.hpp): the axis is n or h as the
 /// study fits, the confidence level is each fit's own.
 ///

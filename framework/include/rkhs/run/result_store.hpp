@@ -101,6 +101,14 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
                          const TrialExecutor& execute = run_trials,
                          const std::vector<std::string>& known_hashes = {});
 
+/// A result store whose file is an SQLite database that is damaged (truncated, or pages SQLite
+/// finds malformed) rather than another kind of file: its records may be lost. Commands exit 1
+/// for it ("damaged"), 2 for a file that is not a store at all.
+class DamagedStore : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// How a ResultStore opens its database.
 enum class StoreAccess {
   read_write,  ///< opened or created; WAL mode
@@ -133,7 +141,8 @@ class ResultStore {
   /// is refused before anything is written: std::runtime_error "FILE: not an rkhs-study result
   /// store: why". A `file` that exists and is not a regular file (a directory, a FIFO, a
   /// device) is refused by its type before it is opened: "FILE: is a FIFO, not a result store
-  /// (an SQLite database file)".
+  /// (an SQLite database file)". An SQLite file shorter than its header says (truncated) or one
+  /// SQLite reports malformed throws DamagedStore "FILE: damaged result store: why".
   explicit ResultStore(const std::filesystem::path& file,
                        StoreAccess access = StoreAccess::read_write);
   ~ResultStore();
