@@ -493,3 +493,38 @@ name = "expression"
   CHECK_THAT(noted.output, Catch::Contains("valid; 1 kernel x 2 targets x 1 centre placement x 2 "
                                            "values of n = 4 trials"));
 }
+
+TEST_CASE("a constant series is reported as its value and band, by run and by report alike",
+          "[cli][constant]") {
+  const auto dir = scratch("constant");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "cli_constant"
+metrics = ["power_function_sup", "projection_operator_norm"]
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [8, 16, 32, 64]
+[[kernel]]
+name = "bspline"
+degree = 1
+J = 6
+)";
+  const auto outcome = run("run " + (dir / "study.toml").string() + " --out " +
+                           (dir / "out").string() + " --no-store");
+  INFO(outcome.output);
+  REQUIRE(outcome.exit_code == 0);
+  // An interpolation's operator norm is 1 within its floors: constant, not a rate.
+  CHECK_THAT(outcome.output,
+             Catch::Contains("projection_operator_norm, constant 1.") &&
+                 Catch::Contains("(within the values' floors) on n = 8..64, not a rate"));
+  const auto rates = read(dir / "out" / "rates.csv");
+  CHECK_THAT(rates, Catch::Contains(",value,band,value_floor\n"));
+  CHECK_THAT(rates, Catch::Contains("projection_operator_norm,n,fit,constant,8,64,4,"));
+  CHECK_THAT(read(dir / "out" / "summary.json"), Catch::Contains("\"constant\": {\"value\": 1"));
+  // report DIR rebuilds the same tables from summary.json, constants included.
+  const auto markdown = run("report " + (dir / "out").string() + " --format md");
+  CHECK(markdown.exit_code == 0);
+  CHECK_THAT(markdown.output, Catch::Contains("projection_operator_norm: constant 1."));
+  CHECK(markdown.output == read(dir / "out" / "rates.md"));
+}

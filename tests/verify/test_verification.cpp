@@ -790,3 +790,18 @@ TEST_CASE("verdicts: a bound's extremes and its verdict are decided beyond the f
   CHECK(outcomes[0].verdict == Verdict::pass);
   CHECK_THAT(outcomes[0].found, Catch::Contains("(largest at n = 10)"));
 }
+
+TEST_CASE("verdicts: a bound never passes over a value that is not finite", "[verification]") {
+  auto overflowing = [](const TrialSpec& t, const std::string& metric) {
+    if (metric == "sup_error" && t.n == 50) return std::numeric_limits<double>::infinity();
+    return textbook(t, metric);
+  };
+  const auto outcomes = Synthetic(
+                            "[[expect]]\nmetric = \"sup_error\"\ndegree = 1\nbound = { by = "
+                            "\"power_function_sup\" }\n",
+                            overflowing)
+                            .verify();
+  REQUIRE(outcomes.size() == 1);
+  CHECK(outcomes[0].verdict == Verdict::inconclusive);
+  CHECK_THAT(outcomes[0].reason, Catch::StartsWith("1 value of sup_error or its bound not finite"));
+}

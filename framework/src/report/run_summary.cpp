@@ -551,7 +551,33 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
                                                : series.analysis.exponential) =
         std::move(alternative);
     series.note = reader.text(entry, path, "note");
-    if (!series.fit) series.no_fit_reason = no_fit_reason(series);
+    // A constant series (absent from summary.json files written before constants): its value
+    // and band replace the fit, as fit_series does.
+    if (entry.is_object() && entry.contains("constant") && !entry["constant"].is_null()) {
+      const auto where = Reader::join(path, "constant");
+      const auto& object = reader.member(entry, path, "constant");
+      ConstantSeries constant;
+      constant.value = reader.number(object, where, "value");
+      constant.band = reader.number(object, where, "band");
+      constant.floor = reader.number(object, where, "floor");
+      constant.within = reader.number(object, where, "within");
+      const auto& within_floors = reader.member(object, where, "within_floors");
+      if (!within_floors.is_boolean())
+        reader.fail(Reader::join(where, "within_floors"),
+                    "expected true or false; found " + type_text(within_floors));
+      constant.within_floors = within_floors.get<bool>();
+      constant.points = positions_of(reader, reader.member(object, where, "window"),
+                                     Reader::join(where, "window"), series.n);
+      constant.head = positions_of(reader, reader.member(object, where, "head"),
+                                   Reader::join(where, "head"), series.n);
+      if (constant.points.empty())
+        reader.fail(Reader::join(where, "window"), "a constant needs its points");
+      series.analysis.constant = std::move(constant);
+      series.fit.reset();
+      series.no_fit_reason =
+          fmt::format("constant {}: not a rate", series.analysis.constant->text(series.n));
+    }
+    if (!series.fit && !series.constant()) series.no_fit_reason = no_fit_reason(series);
     folder.rates.push_back(std::move(series));
   }
 

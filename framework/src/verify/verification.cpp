@@ -615,7 +615,7 @@ class Verifier {
     }
     double low = std::numeric_limits<double>::infinity(), high = -low;
     std::size_t used = 0, at_max = 0, at_min = 0, skipped = 0;
-    std::size_t failed_trials = 0, flagged_values = 0, unusable_values = 0;
+    std::size_t failed_trials = 0, flagged_values = 0, unusable_values = 0, non_finite = 0;
     const auto inside = window_members(e, series);
     // Each usable n's effectivity and its floor (the relative floors of its factors, added).
     struct Point {
@@ -644,6 +644,7 @@ class Verifier {
         if (!r.ok) ++failed_trials;
         else if (any_flag) ++flagged_values;
         else ++unusable_values;
+        if (r.ok && !any_flag && !(std::isfinite(value) && std::isfinite(bound))) ++non_finite;
         continue;
       }
       const double effectivity = value / bound;
@@ -699,6 +700,14 @@ class Verifier {
                              e.metric, low / lowest);
     else
       o.reason = "the bound holds at every usable n";
+    // Never a pass over a value that is no number: the bound is not known to hold there.
+    if (o.verdict == Verdict::pass && non_finite > 0) {
+      o.verdict = Verdict::inconclusive;
+      o.reason = fmt::format(
+          "{} value{} of {} or its bound not finite in trials reported ok: the "
+          "bound is not known to hold there",
+          non_finite, non_finite == 1 ? "" : "s", e.metric);
+    }
   }
 
   const StudyDefinition& study_;
