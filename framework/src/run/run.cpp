@@ -241,13 +241,17 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     for (std::size_t i = 0; i < names.size(); ++i)
       if (computed[i] && std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
-    // A value that overflowed is no measurement: the trial fails rather than report it ok.
-    for (std::size_t i = 0; i < names.size(); ++i)
+    // A reported value that overflowed is no measurement: the trial fails rather than report
+    // it ok. (A metric computed only on the way to others is not judged here: the adaptive
+    // trials' max_state_error may be +inf on a path that leaves the estimator unexcited.)
+    for (const auto& name : study.metrics) {
+      const auto i = study.metric_index(name);
       if (computed[i] && std::isinf(result.metrics[i]) &&
           !infinity_is_documented(study.kind, i, result.flags))
         throw std::runtime_error(fmt::format(
-            "{} overflowed to {}: the trial's values exceed the range of a double (1.8e308)",
-            names[i], result.metrics[i] > 0 ? "+inf" : "-inf"));
+            "{} overflowed to {}: the trial's values exceed the range of a double (1.8e308)", name,
+            result.metrics[i] > 0 ? "+inf" : "-inf"));
+    }
     result.ok = true;
   } catch (const TrialCancelled&) {
     result = stopped_while_running();
