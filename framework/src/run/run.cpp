@@ -57,17 +57,6 @@ bool metric_may_be_nan(StudyKind kind, std::size_t position) {
   return MetricTable<ApproximationMetric>::rows[position].may_be_nan;
 }
 
-// Whether an infinite value of metric `position` means something: only where the trial raised
-// the metric row's own flag (a singular Gram matrix's condition number is +inf, flagged
-// gram_singular). Any other infinity is an overflow of the trial's arithmetic.
-bool infinity_is_documented(StudyKind kind, std::size_t position,
-                            const std::vector<std::string>& flags) {
-  const std::string_view flag = kind == StudyKind::adaptive
-                                    ? MetricTable<AdaptiveMetric>::rows[position].flag
-                                    : MetricTable<ApproximationMetric>::rows[position].flag;
-  return !flag.empty() && std::find(flags.begin(), flags.end(), flag) != flags.end();
-}
-
 // The floor of a count N of the integrator's work (FloorRule::step_controller):
 // 0.02 N + 3 sqrt(N), a drift of the path plus three standard deviations of a random walk of
 // accept/reject decisions that flip. Across processors and glibc's code paths the counts of the
@@ -241,17 +230,6 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     for (std::size_t i = 0; i < names.size(); ++i)
       if (computed[i] && std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
-    // A reported value that overflowed is no measurement: the trial fails rather than report
-    // it ok. (A metric computed only on the way to others is not judged here: the adaptive
-    // trials' max_state_error may be +inf on a path that leaves the estimator unexcited.)
-    for (const auto& name : study.metrics) {
-      const auto i = study.metric_index(name);
-      if (computed[i] && std::isinf(result.metrics[i]) &&
-          !infinity_is_documented(study.kind, i, result.flags))
-        throw std::runtime_error(fmt::format(
-            "{} overflowed to {}: the trial's values exceed the range of a double (1.8e308)", name,
-            result.metrics[i] > 0 ? "+inf" : "-inf"));
-    }
     result.ok = true;
   } catch (const TrialCancelled&) {
     result = stopped_while_running();
