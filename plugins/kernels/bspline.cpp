@@ -53,6 +53,15 @@ MultiscaleBSpline::MultiscaleBSpline(const ParameterSet& parameters, const Domai
     throw ParameterError(
         "J", fmt::format("parameter 'J' must be in [0, {}], found {}", max_level, levels));
   levels_ = static_cast<int>(levels);
+  // The knots of every level are held in memory and every feature has an index: bounded
+  // before anything is built (n0 = 8192, J = 16 has 1.07e9 and took 4 GB to validate).
+  const std::int64_t knots =
+      n0 * ((std::int64_t{2} << levels) - 1) + (periodic_ ? 0 : (levels + 1) * degree);
+  if (knots > max_knots)
+    throw ParameterError(
+        "J", fmt::format("n0 = {} and J = {} give {} knots on an axis (n0 (2^(J+1) - 1){}), above "
+                         "the {} (2^24) a B-spline kernel may have; lower J or n0",
+                         n0, levels, knots, periodic_ ? "" : " + (J + 1) degree", max_knots));
 
   if (parameters.given("r")) {
     r_ = parameters.real("r");

@@ -138,3 +138,57 @@ TEST_CASE("a path is checked when the study file is read", "[adaptive][path]") {
   CHECK_THAT(error("path = { from = 0.0, to = 1.0, back = 2 }"),
              Catch::Contains("adaptive.path.back"));
 }
+
+TEST_CASE(
+    "the limit of a path that leaves directions unexcited is searched only as far as the "
+    "lap map says anything",
+    "[adaptive][path][lap_map]") {
+  // The persistence_of_excitation study at n = 64: half of H_n is never excited, so the lap
+  // map has 27 eigenvalues 1 up to its own error (lap_map_rtol). Searched up to 2^62 laps, the
+  // map's powers raised that error to 2.9e17 laps: laps_to_limit = 2.9e17 and the state sampled
+  // there +inf (max_state_error = +inf, a trial that overflowed). The search stops at 50 time
+  // constants of the slowest excited mode: fhat is not within 1% of its limit by then (the
+  // unexcited directions drift), so laps_to_limit is NaN, flagged, and every sample is finite.
+  const auto study = test::run_study_text(R"(
+[study]
+name = "unexcited"
+kind = "adaptive"
+evaluation_points = 1024
+metrics = ["path_l2_error", "max_state_error", "laps_to_limit", "slowest_time_constant_laps",
+           "unexcited_directions"]
+[domain]
+radius = 4.0
+[grid]
+n = [64]
+[[kernel]]
+name = "bspline"
+degree = 1
+n0 = 16
+J = 4
+[[target]]
+name = "sine"
+amplitude = 2.0
+[[plant]]
+name = "quarter_car"
+[[law]]
+name = "rkhs"
+gamma = 2e4
+[[integrator]]
+name = "radau5"
+rtol = 1e-6
+atol = 1e-8
+[adaptive]
+speed = 1e-4
+laps = "limit"
+path = { from = 0.0, to = 12.566370614359172 }
+lap_map_rtol = 1e-8
+)");
+  const auto& result = study.results[0];
+  INFO(result.reason);
+  REQUIRE(result.ok);
+  CHECK(study.metric(0, "unexcited_directions") > 0);
+  CHECK(std::isfinite(study.metric(0, "slowest_time_constant_laps")));
+  CHECK(std::isfinite(study.metric(0, "max_state_error")));
+  CHECK(std::isnan(study.metric(0, "laps_to_limit")));
+  CHECK(std::count(result.flags.begin(), result.flags.end(), "laps_to_limit_unresolved") == 1);
+}

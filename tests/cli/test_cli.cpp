@@ -301,6 +301,45 @@ TEST_CASE("validate names every axis of the grid, in words that agree in number"
   CHECK_THAT(one_thread.output, Catch::Contains("cli_small (6 trials, 1 thread) -> "));
 }
 
+TEST_CASE(
+    "validate names the trials above limits.matrix_megabytes from the counts, and run fails "
+    "them before building anything",
+    "[cli][limits]") {
+  // n = 20000 with 80000 points: 8 (3 n^2 + 2 n E) bytes = 33569 MB, above a limit of 100 MB;
+  // n = 10 is within it. validate answers from the counts alone (exit 1, the exit of the run),
+  // and the run fails that one trial up front and runs the other.
+  const auto dir = scratch("validate_matrix_limit");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "matrix_limit"
+evaluation_points = 80000
+metrics = ["l2_error"]
+[domain]
+radius = 4
+[grid]
+n = [10, 20000]
+[[kernel]]
+name = "gaussian"
+sigma = 0.5
+[[target]]
+name = "sine"
+[limits]
+matrix_megabytes = 100
+)";
+  const auto validated = run("validate " + (dir / "study.toml").string());
+  INFO(validated.output);
+  CHECK(validated.exit_code == 1);
+  CHECK_THAT(validated.output,
+             Catch::Contains("limits: 1 trial of n = 20000 needs more than "
+                             "limits.matrix_megabytes = 100 MB of dense matrices (n = 20000 with "
+                             "80000 evaluation points: 33569 MB)"));
+  const auto ran = run("run " + (dir / "study.toml").string() + " --no-store --no-plots --out " +
+                       (dir / "out").string());
+  INFO(ran.output);
+  CHECK(ran.exit_code == 1);
+  CHECK_THAT(read_text(dir / "out" / "trials.csv"),
+             Catch::Contains("needs 33569 MB of matrices, above limits.matrix_megabytes = 100"));
+}
+
 TEST_CASE("validate and run say which metrics a trial will compute", "[cli][work]") {
   const auto iso = run("validate " + std::string(RKHS_STUDY_SOURCE_DIR) + "/studies/iso8608.toml");
   CHECK(iso.exit_code == 0);

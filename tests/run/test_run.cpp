@@ -502,3 +502,37 @@ snapshot_points = 8
                       result.metrics.size() * sizeof(double)) == 0);
   }
 }
+TEST_CASE("a value that overflows fails its trial instead of being reported ok", "[run][hostile]") {
+  // Amplitude 1e200: the error's squares overflow to +inf, which no trial may report as a
+  // measurement (it was status ok with l2_error = inf); a singular Gram matrix's condition
+  // number (+inf, flagged gram_singular) is a documented infinity and stays ok.
+  auto study_with = [](const std::string& kernel, const std::string& amplitude) {
+    return parse_study(R"([study]
+name = "overflow"
+evaluation_points = 256
+[domain]
+radius = 4
+[grid]
+n = [16]
+[[kernel]]
+)" + kernel + R"(
+[[target]]
+name = "sine"
+amplitude = )" + amplitude +
+                           "\n",
+                       "s.toml");
+  };
+  const auto huge = study_with("name = \"bspline\"\ndegree = 1\nJ = 6", "1e200");
+  const auto overflowed = rkhs::run_trial(huge, huge.trials().front());
+  CHECK_FALSE(overflowed.ok);
+  CHECK_THAT(
+      overflowed.reason,
+      Catch::Contains("overflowed to +inf: the trial's values exceed the range of a double"));
+  const auto singular = study_with("name = \"gaussian\"\nsigma = 50.0", "1");
+  const auto documented = rkhs::run_trial(singular, singular.trials().front());
+  INFO(documented.reason);
+  CHECK(documented.ok);
+  const auto flags = documented.flags;
+  CHECK(std::find(flags.begin(), flags.end(), "gram_singular") != flags.end());
+  CHECK(std::isinf(documented.metrics[singular.metric_index("gram_condition_number")]));
+}

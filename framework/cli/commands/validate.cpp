@@ -6,6 +6,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
+#include "rkhs/run/trial_cost.hpp"
 #include "rkhs/study/tiers.hpp"
 
 namespace rkhs::cli {
@@ -23,12 +24,34 @@ int command_validate(const std::string& study_file) {
   std::cout << fmt::format("{}: valid; {} = {}\n", study_file, fmt::join(factors, " x "),
                            counted(trials, "trial", "trials"));
   std::cout << "  " << computed_metrics_text(study) << "\n";
+  // [limits] matrix_megabytes from the counts alone (run fails such trials before it builds
+  // anything): the largest n first names how far beyond the limit the grid goes.
+  std::size_t too_large = 0, first_too_large = 0;
+  for (const std::size_t n : study.n_values)
+    if (trial_matrix_megabytes(n, study.evaluation_points) > study.limits.matrix_megabytes) {
+      if (too_large == 0) first_too_large = n;
+      ++too_large;
+    }
+  int status = exit_ok;
+  if (too_large > 0) {
+    const std::size_t largest = study.n_values.back(),
+                      refused = trials / study.n_values.size() * too_large;
+    std::cout << fmt::format(
+        "  limits: {} of n = {}{} {} more than limits.matrix_megabytes = {} MB of dense "
+        "matrices (n = {} with {} evaluation points: {:.0f} MB); run fails {} before building "
+        "anything: {}\n",
+        counted(refused, "trial", "trials"), first_too_large, too_large > 1 ? " and above" : "",
+        refused == 1 ? "needs" : "need", format_real(study.limits.matrix_megabytes), largest,
+        study.evaluation_points, trial_matrix_megabytes(largest, study.evaluation_points),
+        refused == 1 ? "it" : "them", "raise the limit or lower n");
+    status = exit_failed_trials;
+  }
   if (const auto tiers = study_tiers(study); !study.expectations.empty() || !tiers.empty())
     std::cout << fmt::format(
         "  {} expectation{}; tiers: {}\n", study.expectations.size(),
         study.expectations.size() == 1 ? "" : "s",
         tiers.empty() ? std::string("none") : fmt::format("{}", fmt::join(tiers, ", ")));
-  return exit_ok;
+  return status;
 }
 
 }  // namespace rkhs::cli

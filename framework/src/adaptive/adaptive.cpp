@@ -132,14 +132,14 @@ namespace {
 
 // The smallest N >= 0 with distance(N) <= fraction distance(0), found by doubling and then
 // bisection (it assumes distance(N) stays below the fraction once it is there, as it does
-// for the contracting learning dynamics). 2^62 when not reached by then.
+// for the contracting learning dynamics). Empty when not reached by `cap` laps (or 2^62).
 template <class Distance>
-std::uint64_t laps_within(Distance&& distance, double fraction) {
+std::optional<std::uint64_t> laps_within(Distance&& distance, double fraction, std::uint64_t cap) {
   const double target = fraction * distance(0);
   if (!(target > 0)) return 0;
   std::uint64_t high = 1;
   while (distance(high) > target) {
-    if (high >= (std::uint64_t{1} << 62)) return high;
+    if (high >= cap || high >= (std::uint64_t{1} << 62)) return std::nullopt;
     high *= 2;
   }
   std::uint64_t low = high / 2;  // distance(low) > target, or low = 0
@@ -148,6 +148,21 @@ std::uint64_t laps_within(Distance&& distance, double fraction) {
     (distance(middle) > target ? low : high) = middle;
   }
   return high;
+}
+
+// The most laps whose powers of the lap map still say something about the limit: 50 time
+// constants of its slowest excited mode (e^-50 = 2e-22 of what it had), and at least 2 m laps
+// (a nilpotent part of an m x m map is gone after m). Beyond them what is left of
+// fhat - fhat(limit) is the map's own error along its unexcited directions (eigenvalues 1 up
+// to lap_map_rtol) raised to the power of the lap count, which overflows: persistence of
+// excitation's unexcited paths gave 2.9e17 laps and a sampled state error of +inf. 2^62 for a
+// map that does not contract (no finite time constant).
+std::uint64_t meaningful_laps(double slowest_time_constant_laps, Eigen::Index dimension) {
+  constexpr auto most = std::uint64_t{1} << 62;
+  if (!std::isfinite(slowest_time_constant_laps)) return most;
+  const double laps =
+      std::max(50.0 * slowest_time_constant_laps, 2.0 * static_cast<double>(dimension));
+  return laps >= static_cast<double>(most) ? most : static_cast<std::uint64_t>(std::ceil(laps));
 }
 
 // Lap numbers 2 .. laps - 2 at which the lap map's state is sampled: every lap up to 200 laps,
@@ -517,14 +532,18 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
       return domain.l2_norm(
           std::span<const double>(gap.data(), static_cast<std::size_t>(gap.size())));
     };
-    metrics[M::laps_to_limit] = static_cast<double>(laps_within(distance_to_limit, 0.01));
+    const std::uint64_t laps_cap = meaningful_laps(limit.slowest_time_constant_laps, m);
+    const auto laps_to_limit = laps_within(distance_to_limit, 0.01, laps_cap);
+    if (laps_to_limit)
+      metrics[M::laps_to_limit] = static_cast<double>(*laps_to_limit);
+    else
+      out.flags.push_back("laps_to_limit_unresolved");
 
     Eigen::VectorXd first = z0;
     integrate(first, adaptive_breakpoints(settings, domain, 0.0, lap_time, kinks,
                                  integrator.restarts_at_kinks(), /*snapshots=*/false));
     const std::uint64_t laps = settings.limit()
-                                   ? std::max<std::uint64_t>(
-                                         2, static_cast<std::uint64_t>(metrics[M::laps_to_limit]))
+                                   ? std::max<std::uint64_t>(2, laps_to_limit.value_or(laps_cap))
                                    : static_cast<std::uint64_t>(settings.laps);
     for (std::uint64_t k : lap_boundaries(laps))
       sample(static_cast<double>(k) * lap_time, powers.advance(z0, k).data());

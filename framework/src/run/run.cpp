@@ -29,12 +29,6 @@ namespace rkhs {
 
 namespace {
 
-// Dense matrices of a trial: Gram (twice, with its eigenvectors) and the cross matrix.
-double matrix_megabytes(const StudyDefinition& study, const TrialSpec& trial) {
-  const auto n = static_cast<double>(trial.n);
-  return 8.0 * (3 * n * n + 2 * n * static_cast<double>(study.evaluation_points)) / 1048576.0;
-}
-
 // The two results of a trial that did not run to its end: never started, or stopped while it ran
 // (neither is reported as finished, so neither is stored).
 TrialResult not_started() {
@@ -55,6 +49,17 @@ TrialResult stopped_while_running() {
 bool metric_may_be_nan(StudyKind kind, std::size_t position) {
   if (kind == StudyKind::adaptive) return MetricTable<AdaptiveMetric>::rows[position].may_be_nan;
   return MetricTable<ApproximationMetric>::rows[position].may_be_nan;
+}
+
+// Whether an infinite value of metric `position` means something: only where the trial raised
+// the metric row's own flag (a singular Gram matrix's condition number is +inf, flagged
+// gram_singular). Any other infinity is an overflow of the trial's arithmetic.
+bool infinity_is_documented(StudyKind kind, std::size_t position,
+                            const std::vector<std::string>& flags) {
+  const std::string_view flag = kind == StudyKind::adaptive
+                                    ? MetricTable<AdaptiveMetric>::rows[position].flag
+                                    : MetricTable<ApproximationMetric>::rows[position].flag;
+  return !flag.empty() && std::find(flags.begin(), flags.end(), flag) != flags.end();
 }
 
 // The floor of a count N of the integrator's work (FloorRule::step_controller):
@@ -128,7 +133,8 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   };
   try {
     const CancellationScope cancellation(stop_requested, deadline);
-    if (const double mb = matrix_megabytes(study, trial); mb > study.limits.matrix_megabytes)
+    if (const double mb = trial_matrix_megabytes(trial.n, study.evaluation_points);
+        mb > study.limits.matrix_megabytes)
       throw std::runtime_error(fmt::format(
           "needs {:.0f} MB of matrices, above limits.matrix_megabytes = {:.0f}", mb,
           study.limits.matrix_megabytes));
@@ -230,6 +236,15 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     for (std::size_t i = 0; i < names.size(); ++i)
       if (computed[i] && std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
+    // A value that overflowed is no measurement: the trial fails rather than report it ok. Every
+    // metric the trial computed is judged, reported or not, so that its status does not depend
+    // on which of them a study prints.
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (computed[i] && std::isinf(result.metrics[i]) &&
+          !infinity_is_documented(study.kind, i, result.flags))
+        throw std::runtime_error(fmt::format(
+            "{} overflowed to {}: the trial's values exceed the range of a double (1.8e308)",
+            names[i], result.metrics[i] > 0 ? "+inf" : "-inf"));
     result.ok = true;
   } catch (const TrialCancelled&) {
     result = stopped_while_running();

@@ -57,6 +57,11 @@ double integrated_laps(const AdaptiveTrialShape& shape) noexcept {
 
 }  // namespace
 
+double trial_matrix_megabytes(std::size_t n, std::size_t evaluation_points) noexcept {
+  const auto m = static_cast<double>(n);
+  return 8.0 * (3 * m * m + 2 * m * static_cast<double>(evaluation_points)) / 1048576.0;
+}
+
 double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) noexcept {
   const auto m = static_cast<double>(n);
   return m * m * m + m * m * static_cast<double>(evaluation_points);

@@ -34,6 +34,13 @@ TEST_CASE("invalid kernel parameters are rejected naming the parameter", "[kerne
   CHECK(blamed_parameter("bspline", {{"degree", std::int64_t{4}}}, track) == "degree");
   CHECK(blamed_parameter("bspline", {{"degree", std::int64_t{-1}}}, interval) == "degree");
   CHECK(blamed_parameter("bspline", {{"J", std::int64_t{17}}}, track) == "J");
+  // Each in range, together 1.07e9 knots (4 GB to validate): refused before anything is built.
+  CHECK(blamed_parameter("bspline", {{"n0", std::int64_t{8192}}, {"J", std::int64_t{16}}}, track) ==
+        "J");
+  // 8192 (2^11 - 1) = 16769024 knots are within 2^24 (not built here: 130 MB); one level more is
+  // not.
+  CHECK(blamed_parameter("bspline", {{"n0", std::int64_t{8192}}, {"J", std::int64_t{11}}}, track) ==
+        "J");
   CHECK(blamed_parameter("bspline", {{"r", 0.0}}, track) == "r");
   CHECK(blamed_parameter("bspline", {{"n0", std::int64_t{0}}}, interval) == "n0");
   // Degree 0 defaults to r = 0, which is not > 0: r must be given.

@@ -109,8 +109,9 @@ struct MetricTable<AdaptiveMetric> {
        "-1 / ln(learning_spectral_radius); NaN unless engine = lap_map", true, ""},
       {M::laps_to_limit, "laps_to_limit", F::propagated, "laps",
        "laps until ||fhat - fhat(limit)|| in L2 is 1% of ||fhat(0) - fhat(limit)||; NaN unless "
-       "engine = lap_map",
-       true, ""},
+       "engine = lap_map, and NaN flagged laps_to_limit_unresolved when not reached within 50 "
+       "time constants of the slowest excited mode",
+       true, "laps_to_limit_unresolved"},
       {M::unexcited_directions, "unexcited_directions", F::exact, "count",
        "directions of z that one lap leaves unchanged (eigenvalue 1 of the lap map); NaN unless "
        "engine = lap_map",

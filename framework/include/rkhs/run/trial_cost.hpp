@@ -42,6 +42,12 @@ struct AdaptiveTrialShape {
   bool lap_map = false;
 };
 
+/// The dense matrices of a trial with `n` centres and `evaluation_points` points, in MiB: the
+/// Gram matrix (three n x n: itself, its factor or eigenvectors, a working copy) and the cross
+/// matrix with its derivative (two n x E). run_trial fails a trial above limits.matrix_megabytes
+/// before it builds anything, and `validate` names such trials from this alone.
+double trial_matrix_megabytes(std::size_t n, std::size_t evaluation_points) noexcept;
+
 /// The estimate of an approximation trial with `n` centres and `evaluation_points` points.
 double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) noexcept;
 

@@ -69,6 +69,9 @@ class MultiscaleBSpline {
   static constexpr int max_degree = 3;
   static constexpr int max_level = 16;  ///< largest J
   static constexpr int max_n0 = 8192;   ///< keeps feature indices within int32
+  /// Most knots (features) on an axis, n0 (2^(J+1) - 1) (+ (J + 1) degree on an interval):
+  /// 128 MiB of knots; J = 16 with n0 = 8192 has 1.07e9.
+  static constexpr std::int64_t max_knots = std::int64_t{1} << 24;
 
   static PluginInfo info();
 
