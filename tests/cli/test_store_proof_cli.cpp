@@ -3,8 +3,11 @@
 // conflicts unless told which record wins and is all-or-nothing, the commands that only read
 // open the database read-only and refuse a database that is not a store, and a full disk ends a
 // run with exit 2 and a message (the trials committed before it kept), never with SIGABRT.
+#include <fcntl.h>
+#include <signal.h>
 #include <sqlite3.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
@@ -115,6 +118,63 @@ rkhs::test::CommandOutcome as_reader(const std::string& arguments, const fs::pat
   return rkhs_study(arguments, unprivileged);
 }
 
+// `file` with `count` more records: copies of its first record under hashes and keys of their
+// own, each sealed with the documented checksum (so that every one verifies), in one
+// transaction.
+void add_copies(const fs::path& file, std::size_t count) {
+  const auto row = rows(file, "SELECT study, key, result FROM trials ORDER BY key LIMIT 1")[0];
+  const auto body = row[2].substr(0, row[2].rfind("checksum "));
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open(file.c_str(), &db) == SQLITE_OK);
+  REQUIRE(sqlite3_exec(db, "BEGIN", nullptr, nullptr, nullptr) == SQLITE_OK);
+  sqlite3_stmt* insert = nullptr;
+  REQUIRE(sqlite3_prepare_v2(db,
+                             "INSERT INTO trials (hash, study, key, result, stored) "
+                             "VALUES (?1, ?2, ?3, ?4, '2024-01-01 00:00:00')",
+                             -1, &insert, nullptr) == SQLITE_OK);
+  bool inserted = true;
+  for (std::size_t i = 0; i < count && inserted; ++i) {
+    const auto hash = rkhs::sha256_hex("copy " + std::to_string(i));
+    const auto key = row[1] + " | copy=" + std::to_string(i);
+    const auto record = resealed(hash, row[0], key, body);
+    sqlite3_reset(insert);
+    sqlite3_bind_text(insert, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 2, row[0].c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 3, key.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 4, record.c_str(), -1, SQLITE_TRANSIENT);
+    inserted = sqlite3_step(insert) == SQLITE_DONE;
+  }
+  sqlite3_finalize(insert);
+  const int committed = sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  REQUIRE(inserted);
+  REQUIRE(committed == SQLITE_OK);
+}
+
+// Starts `rkhs-study args` in the background (its own process, SIGINT not ignored, stdout and
+// stderr in `log`); returns its pid.
+pid_t start(const std::vector<std::string>& args, const fs::path& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
+    execv(RKHS_STUDY_EXECUTABLE, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+// The size of `file`, 0 when it does not exist.
+std::uintmax_t size_of(const fs::path& file) {
+  std::error_code error;
+  const auto size = fs::file_size(file, error);
+  return error ? 0 : size;
+}
+
 }  // namespace
 
 TEST_CASE("store check runs SQLite's integrity check: a flipped byte of the index fails it",
@@ -202,6 +262,77 @@ TEST_CASE("store merge verifies what it copies and leaves the destination as it 
   INFO(whole.output);
   CHECK(whole.exit_code == 0);
   CHECK_THAT(whole.output, Catch::Contains("holds 10 trials"));
+}
+
+TEST_CASE("SIGINT or SIGTERM during a large merge rolls it back: the destination as it was",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_merge_signal");
+  const auto into = make_store(dir, "into.sqlite");
+  fs::copy_file(into, dir / "large.sqlite");
+  const auto large = dir / "large.sqlite";
+  // About 60 MB: a merge of some seconds, most of them reading and verifying the records, then
+  // writing them (the WAL grows past SQLite's cache in the uncommitted transaction).
+  add_copies(large, 40000);
+  const auto before = bytes_of(into);
+  const auto wal = dir / "into.sqlite-wal";
+  const auto log = dir / "log.txt";
+  const auto finish = [&](pid_t pid) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    INFO(read_text(log));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 130);
+    CHECK_THAT(read_text(log), Catch::Contains("interrupted: nothing merged"));
+  };
+
+  SECTION("SIGINT while the records are written into an existing store") {
+    const pid_t pid = start({"merge", into.string(), large.string()}, log);
+    // Frames of the open transaction in the WAL: the merge is writing and has not committed.
+    const bool writing = rkhs::test::wait_until(
+        [&] { return size_of(wal) > (8u << 20) || waitpid(pid, nullptr, WNOHANG) == pid; }, 60);
+    REQUIRE(writing);
+    REQUIRE(kill(pid, SIGINT) == 0);
+    finish(pid);
+    CHECK_THAT(read_text(log), Catch::Contains(into.string() + " is left as it was"));
+    const auto check = rkhs_study("store check --store " + into.string());
+    INFO(check.output);
+    CHECK(check.exit_code == 0);
+    CHECK_THAT(check.output, Catch::Contains("10 records, 10 verified"));
+    CHECK(bytes_of(into) == before);
+    // Uninterrupted, the same merge completes.
+    const auto merged = rkhs_study("merge " + into.string() + " " + large.string());
+    INFO(merged.output);
+    CHECK(merged.exit_code == 0);
+    CHECK_THAT(merged.output, Catch::Contains("holds 40010 trials"));
+  }
+  SECTION("SIGTERM while the sources are read, into a new store") {
+    const auto fresh = dir / "fresh.sqlite";
+    const pid_t pid = start({"merge", fresh.string(), large.string()}, log);
+    // The new store exists once its schema is written, before the source is read.
+    REQUIRE(rkhs::test::wait_until([&] { return fs::exists(fresh); }, 30));
+    REQUIRE(kill(pid, SIGTERM) == 0);
+    finish(pid);
+    CHECK_THAT(read_text(log), Catch::Contains("no " + fresh.string() + " was created"));
+    CHECK_FALSE(fs::exists(fresh));
+    CHECK_FALSE(has_side_files(fresh));
+  }
+  SECTION("SIGINT ignored by the shell that started it (a background job) still stops it") {
+    const auto fresh = dir / "fresh.sqlite";
+    const pid_t pid = fork();
+    if (pid == 0) {
+      signal(SIGINT, SIG_IGN);
+      const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, 1);
+      dup2(out, 2);
+      execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "merge", fresh.c_str(), large.c_str(),
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    REQUIRE(rkhs::test::wait_until([&] { return fs::exists(fresh); }, 30));
+    REQUIRE(kill(pid, SIGINT) == 0);
+    finish(pid);
+    CHECK_FALSE(fs::exists(fresh));
+  }
 }
 
 TEST_CASE("store merge refuses two different records of one trial unless told which wins",

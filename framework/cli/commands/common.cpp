@@ -64,9 +64,13 @@ void print_warnings(const StudyDefinition& study) {
   for (const auto& warning : study.warnings) std::cerr << printable(warning, true) << "\n";
 }
 
-void stop_on_signals(RunOptions& options) {
+void stop_at_signals() {
   std::signal(SIGINT, request_stop);
   std::signal(SIGTERM, request_stop);
+}
+
+void stop_on_signals(RunOptions& options) {
+  stop_at_signals();
   options.stop_requested = [] { return interrupted.load(); };
   options.abandon_after_seconds = abandon_after_seconds;
 }

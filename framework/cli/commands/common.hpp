@@ -30,6 +30,11 @@ void print_warnings(const StudyDefinition& study);
 /// of `run` and `check` say a trial will compute (StudyDefinition::computed_metrics()).
 std::string computed_metrics_text(const StudyDefinition& study);
 
+/// Installs the SIGINT / SIGTERM handlers (also where the shell started the command with them
+/// ignored, as it does a background job's SIGINT): stop_was_requested() then tells whether one
+/// arrived.
+void stop_at_signals();
+
 /// Installs the SIGINT / SIGTERM handlers and makes `options` stop at them: no new trial
 /// starts, trials in flight stop at their next cancellation point (rkhs/core/cancellation.hpp)
 /// or are abandoned 2 s later (in this process; main() then ends at once). Neither kind is

@@ -809,9 +809,19 @@ std::string listed(const std::vector<std::string>& lines) {
 }  // namespace
 
 std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesystem::path>& sources,
-                                                  MergePreference prefer) {
+                                                  MergePreference prefer,
+                                                  const std::function<bool()>& stop_requested) {
   if (access_ == StoreAccess::read_only)
     throw std::logic_error(file_.string() + ": result store opened read-only");
+  // Asked once per batch of records: a stop throws, and the transaction (if begun) is rolled
+  // back below.
+  constexpr std::size_t batch = 1024;
+  std::size_t visited = 0;
+  auto stop_point = [&](bool now = false) {
+    if ((now || ++visited % batch == 0) && stop_requested && stop_requested())
+      throw MergeInterrupted(fmt::format("{}: merge interrupted, nothing merged", file_.string()));
+  };
+  stop_point(true);
   // Every source read and verified first: nothing is written unless all of them are sound.
   std::vector<MergedSource> merged;
   std::vector<std::vector<Entry>> entries(sources.size());
@@ -824,6 +834,7 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
       throw std::runtime_error(fmt::format("{}: SQLite's integrity check failed, nothing merged:{}",
                                            file.string(), listed(problems)));
     source.for_each([&](const Entry& entry) {
+      stop_point();
       if (!entry.check.sound())
         bad.push_back(entry_line(file.string(), entry) + ": " + entry.check.problem);
       entries[s].push_back(entry);
@@ -847,7 +858,10 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
   try {
     std::map<std::string, Candidate> held;
     std::set<std::string> changed;
-    for_each([&](const Entry& entry) { held.insert({entry.hash, {entry, sources.size()}}); });
+    for_each([&](const Entry& entry) {
+      stop_point();
+      held.insert({entry.hash, {entry, sources.size()}});
+    });
     std::vector<std::string> conflicts;
     for (std::size_t s = 0; s < sources.size(); ++s) {
       for (auto& entry : entries[s]) {
@@ -888,6 +902,7 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
                      "VALUES (?1, ?2, ?3, ?4, ?5)",
                      file_);
     for (const auto& hash : changed) {
+      stop_point();
       const auto& entry = held.at(hash).entry;
       sqlite3_reset(insert.handle);
       sqlite3_bind_text(insert.handle, 1, entry.hash.c_str(), -1, SQLITE_TRANSIENT);
@@ -897,6 +912,7 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
       sqlite3_bind_text(insert.handle, 5, entry.stored.c_str(), -1, SQLITE_TRANSIENT);
       if (step(insert.handle) != SQLITE_DONE) fail("cannot store the trial " + entry.key);
     }
+    stop_point(true);
     exec("COMMIT");
   } catch (...) {
     sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);

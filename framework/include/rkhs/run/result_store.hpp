@@ -109,6 +109,13 @@ class DamagedStore : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A merge stopped because it was asked to (SIGINT, SIGTERM): its transaction was rolled back
+/// and nothing was written.
+class MergeInterrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// How a ResultStore opens its database.
 enum class StoreAccess {
   read_write,  ///< opened or created; WAL mode
@@ -166,8 +173,12 @@ class ResultStore {
   /// written in one transaction. A source that is not a store or is damaged, a record that does
   /// not verify (old format included) or a conflict under MergePreference::refuse throws
   /// std::runtime_error naming the source and the trials, and nothing is written.
+  /// `stop_requested` is asked between batches of records (while the sources and the
+  /// destination are read and while the records are written) and before the commit: once it
+  /// returns true the transaction is rolled back and MergeInterrupted thrown.
   std::vector<MergedSource> merge_from(const std::vector<std::filesystem::path>& sources,
-                                       MergePreference prefer = MergePreference::refuse);
+                                       MergePreference prefer = MergePreference::refuse,
+                                       const std::function<bool()>& stop_requested = {});
   /// What SQLite's PRAGMA integrity_check finds wrong with the database file (its index and
   /// table b-trees, their pages and their agreement): empty when nothing.
   std::vector<std::string> integrity_problems() const;
