@@ -13,6 +13,7 @@
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 
 #include "cli_support.hpp"
 #include "rkhs/core/sha256.hpp"
@@ -517,6 +518,135 @@ TEST_CASE("read-only store commands open the store read-only and leave it as it 
   CHECK(rkhs_study("store export --format json --store " + store.string()).exit_code == 0);
   CHECK(bytes_of(store) == before);
   CHECK_FALSE(has_side_files(store));
+}
+
+// `rkhs-study ARGS` with `folder` mounted read-only (a bind mount of its own, remounted ro, in a
+// mount namespace of the command's own: nothing outside it sees the mount); nullopt where
+// this user cannot make mount namespaces (not root, or a container without CAP_SYS_ADMIN).
+std::optional<rkhs::test::CommandOutcome> on_read_only_mount(const fs::path& folder,
+                                                             const std::string& arguments) {
+  const std::string mount = "mount --bind '" + folder.string() + "' '" + folder.string() +
+                            "' && mount -o remount,ro,bind '" + folder.string() + "'";
+  if (geteuid() != 0 ||
+      std::system(("unshare -m sh -c \"" + mount + "\" >/dev/null 2>&1").c_str()) != 0)
+    return std::nullopt;
+  return rkhs::test::run_command("unshare -m sh -c \"" + mount + " && exec " +
+                                 RKHS_STUDY_EXECUTABLE + " " + arguments + "\"");
+}
+
+TEST_CASE("a store on a read-only mount serves the runs that only read it and is named read-only",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_read_only_mount");
+  const auto made = make_store(dir);
+  const auto shelf = dir / "shelf";
+  fs::create_directories(shelf);
+  const auto store = shelf / "store.sqlite";
+  fs::rename(made, store);
+  const auto before = bytes_of(store);
+  const auto study = (dir / "study.toml").string();
+  // The same study with two more n: two trials the store lacks.
+  std::string more = proof_study;
+  more.replace(more.find("128]"), 4, "128, 256]");
+  more.replace(more.find("= 256"), 5, "= 1024");
+  std::ofstream(dir / "more.toml") << more;
+  fs::copy_file(store, dir / "copy.sqlite");
+  const auto probe = on_read_only_mount(shelf, "--version");
+  if (!probe) {
+    WARN("no mount namespace for this user: the read-only mount is not tested here");
+    return;
+  }
+  REQUIRE(probe->exit_code == 0);
+  const auto s = " --store " + store.string();
+
+  // Commands that only read: they work.
+  const auto check = *on_read_only_mount(shelf, "store check" + s);
+  INFO(check.output);
+  CHECK(check.exit_code == 0);
+  CHECK_THAT(check.output, Catch::Contains("10 records, 10 verified"));
+  CHECK(on_read_only_mount(shelf, "store export" + s)->exit_code == 0);
+  // A run whose every trial is stored reads the store: the outputs are those of the run that
+  // stored them.
+  const auto run = *on_read_only_mount(
+      shelf, "run " + study + " --no-plots" + s + " --out " + (dir / "again").string());
+  INFO(run.output);
+  CHECK(run.exit_code == 0);
+  CHECK_THAT(run.output,
+             Catch::Contains("10 trials reused from " + store.string() + ", 0 run now"));
+  CHECK(read_text(dir / "again" / "trials.csv") == read_text(dir / "out" / "trials.csv"));
+  const auto checked = *on_read_only_mount(shelf, "check " + study + " --no-plots" + s);
+  INFO(checked.output);
+  CHECK(checked.exit_code == 0);
+
+  // Commands that must write: refused, naming the store and why, with nothing written.
+  const std::string read_only =
+      store.string() + ": the result store is read-only (the file is on a read-only file system)";
+  for (const auto& command :
+       {"run " + study + " --fresh --quiet --no-plots" + s + " --out " + (dir / "fresh").string(),
+        "run " + (dir / "more.toml").string() + " --quiet --no-plots" + s + " --out " +
+            (dir / "more").string(),
+        "check " + (dir / "more.toml").string() + " --quiet --no-plots" + s + " --out " +
+            (dir / "more").string(),
+        "store vacuum" + s, "merge " + store.string() + " " + (dir / "copy.sqlite").string()}) {
+    const auto refused = *on_read_only_mount(shelf, command);
+    INFO(command << "\n" << refused.output);
+    CHECK(refused.exit_code == 2);
+    CHECK_THAT(refused.output, Catch::Contains(read_only));
+    CHECK_THAT(refused.output, !Catch::Contains("not an rkhs-study result store"));
+  }
+  const auto lacking =
+      *on_read_only_mount(shelf, "run " + (dir / "more.toml").string() + " --quiet --no-plots" + s);
+  CHECK_THAT(lacking.output, Catch::Contains("2 of the 12 trials are not stored in it"));
+  CHECK_FALSE(fs::exists(dir / "fresh"));
+  CHECK_FALSE(fs::exists(dir / "more"));
+  // A new store in the read-only folder: it cannot be created.
+  const auto created =
+      *on_read_only_mount(shelf, "merge " + (shelf / "new.sqlite").string() + " " + store.string());
+  INFO(created.output);
+  CHECK(created.exit_code == 2);
+  CHECK_THAT(created.output, Catch::Contains((shelf / "new.sqlite").string() +
+                                             ": cannot create the result store: its folder " +
+                                             shelf.string() + " is on a read-only file system"));
+  CHECK(bytes_of(store) == before);
+  CHECK_FALSE(has_side_files(store));
+}
+
+TEST_CASE("a run refused because of its store leaves no file in the output folder",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_refused_store_outputs");
+  const auto good = make_store(dir);
+  const auto study = (dir / "study.toml").string();
+  fs::create_directories(dir / "folder.sqlite");
+  const auto whole = bytes_of(good);
+  std::ofstream(dir / "cut.sqlite", std::ios::binary) << whole.substr(0, whole.size() / 2);
+  // An output folder that exists, with a file of an earlier run in it, and one that does not.
+  fs::create_directories(dir / "kept");
+  std::ofstream(dir / "kept" / "notes.txt") << "mine\n";
+  for (const auto& bad : {dir / "study.toml", dir / "folder.sqlite", dir / "cut.sqlite"}) {
+    for (const auto& command : {std::string("run"), std::string("check")}) {
+      for (const auto& out : {dir / "kept", dir / "new"}) {
+        const auto refused = rkhs_study(command + " " + study + " --quiet --store " + bad.string() +
+                                        " --out " + out.string());
+        INFO(command << " --store " << bad << " --out " << out << "\n" << refused.output);
+        CHECK((refused.exit_code == 1 || refused.exit_code == 2));
+        CHECK_THAT(refused.output, Catch::Contains(bad.string() + ": "));
+        CHECK_FALSE(fs::exists(dir / "new"));
+        std::vector<std::string> files;
+        for (const auto& entry : fs::directory_iterator(dir / "kept"))
+          files.push_back(entry.path().filename().string());
+        CHECK(files == std::vector<std::string>{"notes.txt"});
+      }
+    }
+  }
+  // An output folder that cannot be written: a store this run would have created is not left.
+  std::ofstream(dir / "file") << "a file, not a folder\n";
+  const auto no_out =
+      rkhs_study("run " + study + " --quiet --store " + (dir / "new.sqlite").string() + " --out " +
+                 (dir / "file" / "out").string());
+  INFO(no_out.output);
+  CHECK(no_out.exit_code == 2);
+  CHECK_THAT(no_out.output, Catch::Contains("cannot write the output folder"));
+  CHECK_FALSE(fs::exists(dir / "new.sqlite"));
+  CHECK_FALSE(has_side_files(dir / "new.sqlite"));
 }
 
 TEST_CASE("a database that is not a result store is refused by name and left byte-identical",

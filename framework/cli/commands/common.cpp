@@ -38,6 +38,12 @@ void refuse_output_onto_input(const std::string& option, const std::string& outp
         option, output, what, input));
 }
 
+void remove_store_files(const std::string& file) {
+  std::error_code ignored;
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"})
+    std::filesystem::remove(file + suffix, ignored);
+}
+
 std::string counted(std::size_t count, const char* singular, const char* plural) {
   return fmt::format("{} {}", count, count == 1 ? singular : plural);
 }

@@ -19,6 +19,11 @@ namespace rkhs::cli {
 void refuse_output_onto_input(const std::string& option, const std::string& output,
                               const std::string& what, const std::string& input);
 
+/// Removes the store `file` and its -wal, -shm and -journal files: a store this command
+/// created and must not leave behind (a failed merge into a new file, a run refused after it
+/// opened a new store).
+void remove_store_files(const std::string& file);
+
 /// "1 trial", "3 trials".
 std::string counted(std::size_t count, const char* singular, const char* plural);
 

@@ -14,17 +14,6 @@
 
 namespace rkhs::cli {
 
-namespace {
-
-// The files of a store that this merge created.
-void remove_store_files(const std::string& into_file) {
-  std::error_code ignored;
-  for (const char* suffix : {"", "-wal", "-shm", "-journal"})
-    std::filesystem::remove(into_file + suffix, ignored);
-}
-
-}  // namespace
-
 int command_merge(const std::string& into_file, const std::vector<std::string>& from,
                   const std::string& prefer) {
   const auto preference = prefer == "source"        ? MergePreference::source

@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -536,6 +538,31 @@ std::optional<std::string> truncation(const std::filesystem::path& file) {
                      page_size * pages, pages, page_size);
 }
 
+// Why the store `file` cannot be written where it lies, if it cannot: the file itself, or the
+// folder SQLite creates the -wal and -shm files in (or, for a new store, the file in). Asked of
+// the system (access(2)), which knows a read-only file system also for root.
+std::optional<std::string> unwritable(const std::filesystem::path& file) {
+  const auto reason = [](int error, const std::string& what) {
+    return error == EROFS
+               ? fmt::format("{} is on a read-only file system", what)
+               : fmt::format("{} cannot be written by this user: {}", what, std::strerror(error));
+  };
+  std::error_code ignored;
+  const bool exists = std::filesystem::exists(file, ignored);
+  if (exists && ::access(file.c_str(), W_OK) != 0) return reason(errno, "the file");
+  // The nearest folder that exists: the store's own, or the one its folders are created in.
+  auto folder = file.parent_path();
+  while (!folder.empty() && !std::filesystem::exists(folder, ignored))
+    folder = folder.parent_path();
+  if (folder.empty()) folder = ".";
+  const bool side_files = std::filesystem::exists(wal_of(file), ignored) &&
+                          std::filesystem::exists(file.string() + "-shm", ignored);
+  if ((!exists || !side_files) && ::access(folder.c_str(), W_OK | X_OK) != 0)
+    return reason(errno, fmt::format("its folder {}", folder.string())) +
+           (exists ? " (SQLite creates the -wal and -shm files beside the store)" : "");
+  return std::nullopt;
+}
+
 }  // namespace
 
 ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
@@ -554,6 +581,11 @@ ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
     // for a read-only connection to a WAL database, and cannot on a read-only mount).
     open(!std::filesystem::exists(wal_of(file)));
   } else {
+    if (const auto why = unwritable(file))
+      throw ReadOnlyStore(
+          std::filesystem::exists(file)
+              ? fmt::format("{}: the result store is read-only ({})", file.string(), *why)
+              : fmt::format("{}: cannot create the result store: {}", file.string(), *why));
     if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
     open(false);
   }
@@ -593,6 +625,11 @@ void ResultStore::adopt_schema() {
           fmt::format("{}: damaged result store: {}; restore it from a copy or "
                       "remove it (its trials then run again)",
                       file_.string(), why));
+    // A file SQLite could not open or write (its -wal or -shm file) is not judged.
+    const int code = sqlite3_errcode(db_);
+    if (code == SQLITE_CANTOPEN || code == SQLITE_READONLY || code == SQLITE_PERM)
+      throw std::runtime_error(
+          fmt::format("{}: cannot open the result store: {}", file_.string(), why));
     throw std::runtime_error(
         fmt::format("{}: not an rkhs-study result store: {}", file_.string(), why));
   };
