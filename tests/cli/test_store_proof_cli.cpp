@@ -336,6 +336,67 @@ TEST_CASE("SIGINT or SIGTERM during a large merge rolls it back: the destination
   }
 }
 
+// Issue 50: records resealed with the documented checksum carried "nan(0x123)" (read by
+// from_chars, never written by rkhs-study) and raw ESC bytes into trials.csv.
+TEST_CASE("stored records resealed with foreign numbers or control bytes reach no output raw",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_resealed_bytes");
+  const auto store = make_store(dir);
+  const auto all = rows(store, "SELECT hash, study, key, result FROM trials ORDER BY key");
+  REQUIRE(all.size() == 10);
+  const auto edit = [&](const std::vector<std::string>& row, const std::string& field,
+                        const std::string& line) {
+    auto body = row[3].substr(0, row[3].rfind("checksum "));
+    const auto at = body.find("\n" + field + " ") + 1;
+    body.replace(at, body.find('\n', at) - at, line);
+    sqlite3* db = nullptr;
+    REQUIRE(sqlite3_open(store.c_str(), &db) == SQLITE_OK);
+    sqlite3_stmt* update = nullptr;
+    REQUIRE(sqlite3_prepare_v2(db, "UPDATE trials SET result = ?1 WHERE hash = ?2", -1, &update,
+                               nullptr) == SQLITE_OK);
+    const auto record = resealed(row[0], row[1], row[2], body);
+    sqlite3_bind_text(update, 1, record.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(update, 2, row[0].c_str(), -1, SQLITE_TRANSIENT);
+    CHECK(sqlite3_step(update) == SQLITE_DONE);
+    sqlite3_finalize(update);
+    sqlite3_close(db);
+  };
+  // Numbers from_chars reads but format_real never writes: the record does not verify.
+  const std::vector<std::string> foreign{"nan(0x123)", "NaN", "infinity", "INF", "-nan"};
+  for (std::size_t i = 0; i < foreign.size(); ++i) {
+    auto body = all[i][3];
+    const auto metrics = body.find("\nmetrics ") + 9;
+    edit(all[i], "metrics",
+         "metrics " + foreign[i] +
+             body.substr(body.find(' ', metrics),
+                         body.find('\n', metrics) - body.find(' ', metrics)));
+  }
+  // Text fields with ESC and BEL: the record verifies, the bytes are escaped in trials.csv.
+  edit(all[5], "reason", "reason \x1b[31mred\x1b[0m");
+  edit(all[6], "solve",
+       "solve chol\x1b]0;title\x07"
+       "esky");
+  const auto check = rkhs_study("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 1);
+  CHECK_THAT(check.output, Catch::Contains("10 records, 5 verified, 5 bad"));
+  CHECK_THAT(check.output, Catch::Contains("stored value 'nan(0x123)' is not a number"));
+  CHECK_THAT(check.output, Catch::Contains("stored value 'infinity' is not a number"));
+  const auto run = rkhs_study("run " + (dir / "study.toml").string() + " --no-plots --store " +
+                              store.string() + " --out " + (dir / "again").string());
+  INFO(run.output);
+  CHECK(run.exit_code == 0);
+  CHECK_THAT(run.output, Catch::Contains("5 trials reused from " + store.string() + ", 5 run now"));
+  const auto trials = read_text(dir / "again" / "trials.csv");
+  CHECK(trials.find('\x1b') == std::string::npos);
+  CHECK(trials.find('\x07') == std::string::npos);
+  CHECK(trials.find("nan(") == std::string::npos);
+  CHECK_THAT(trials, Catch::Contains(",\\x1b[31mred\\x1b[0m,"));
+  CHECK_THAT(trials, Catch::Contains(",chol\\x1b]0;title\\x07esky,"));
+  const auto csv = rkhs_study("store export --store " + store.string());
+  CHECK(csv.output.find('\x1b') == std::string::npos);
+}
+
 TEST_CASE("store merge refuses two different records of one trial unless told which wins",
           "[cli][store][proof]") {
   const auto dir = rkhs::test::scratch_directory("proof_merge_conflict");

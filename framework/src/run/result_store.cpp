@@ -25,6 +25,7 @@
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/input_file.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
 #include "rkhs/run/trial_identity.hpp"
 
@@ -48,8 +49,10 @@ double parse_real(const std::string& token) {
   if (token == "-inf") return -std::numeric_limits<double>::infinity();
   double value = 0;
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  if (ec != std::errc() || end != token.data() + token.size())
-    throw std::invalid_argument("stored value '" + token + "' is not a number");
+  // Only what format_real writes: "nan(0x123)", "NaN", "infinity" or "INF" are read by
+  // from_chars, but a record that holds them was not written by rkhs-study.
+  if (ec != std::errc() || end != token.data() + token.size() || !std::isfinite(value))
+    throw std::invalid_argument("stored value '" + printable(token) + "' is not a number");
   return value;
 }
 
