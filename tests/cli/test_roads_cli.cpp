@@ -132,6 +132,39 @@ TEST_CASE("the data file's SHA-256 is recorded with every trial in summary.json"
   CHECK_THAT(read(dir / "sine" / "summary.json"), Catch::Contains("\"n\": 8, \"data\": null,"));
 }
 
+// Issue 50: a newline in a CSV road's file name broke the rows of rates.md and ended the "% group"
+// comment of rates.tex, putting the rest of the name ("\end{document}") into the LaTeX; an ESC
+// byte reached every output raw.
+TEST_CASE("control bytes in a CSV road's file name stay inside their row of every output",
+          "[cli][csv_road]") {
+  const auto dir = scratch("control_name");
+  const std::string name = "pro\nfile |x| \x1b[31m\\end{document}.csv";
+  std::ofstream(dir / "data" / "roads" / name) << "u,z\n0,0\n0.5,0.1\n1,-0.1\n1.5,0.05\n2,0.02\n";
+  std::string study(road_study);
+  study.replace(study.find("roads/profile.csv"), 17,
+                "roads/pro\\nfile |x| \\u001b[31m\\\\end{document}.csv");
+  std::ofstream(dir / "study.toml") << study;
+  const auto outcome =
+      rkhs_study("run --quiet --no-plots --threads 1 --data-dir " + (dir / "data").string() +
+                 " --out " + (dir / "out").string() + " " + (dir / "study.toml").string());
+  INFO(outcome.output);
+  REQUIRE(outcome.exit_code == 0);
+  for (const char* file : {"rates.md", "rates.tex", "trials.csv", "rates.csv"}) {
+    const auto text = read(dir / "out" / file);
+    INFO(file);
+    CHECK(text.find('\x1b') == std::string::npos);
+    CHECK_THAT(text, Catch::Contains("pro\\x0afile") || Catch::Contains("pro\nfile"));
+  }
+  // Markdown and LaTeX: the name is on one line, its escapes visible.
+  const auto md = read(dir / "out" / "rates.md");
+  CHECK_THAT(md, Catch::Contains("target=csv file=roads/pro\\x0afile |x| \\x1b[31m"));
+  CHECK(md.find("\nfile |x|") == std::string::npos);
+  const auto tex = read(dir / "out" / "rates.tex");
+  CHECK(tex.find("\nfile |x|") == std::string::npos);
+  CHECK(tex.find("\n\\end{document}.csv") == std::string::npos);
+  CHECK_THAT(tex, Catch::Contains("% group kernel=bspline"));
+}
+
 // Issue 50: /dev/zero, /dev/stdin or a FIFO as a CSV road was "not found" (and a FIFO below
 // the data root would have blocked the reader); a CSV file above its limit was read whole.
 // Each command runs under `timeout`: a hang fails.

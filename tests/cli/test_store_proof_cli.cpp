@@ -3,13 +3,17 @@
 // conflicts unless told which record wins and is all-or-nothing, the commands that only read
 // open the database read-only and refuse a database that is not a store, and a full disk ends a
 // run with exit 2 and a message (the trials committed before it kept), never with SIGABRT.
+#include <fcntl.h>
+#include <signal.h>
 #include <sqlite3.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 
 #include "cli_support.hpp"
 #include "rkhs/core/sha256.hpp"
@@ -115,6 +119,63 @@ rkhs::test::CommandOutcome as_reader(const std::string& arguments, const fs::pat
   return rkhs_study(arguments, unprivileged);
 }
 
+// `file` with `count` more records: copies of its first record under hashes and keys of their
+// own, each sealed with the documented checksum (so that every one verifies), in one
+// transaction.
+void add_copies(const fs::path& file, std::size_t count) {
+  const auto row = rows(file, "SELECT study, key, result FROM trials ORDER BY key LIMIT 1")[0];
+  const auto body = row[2].substr(0, row[2].rfind("checksum "));
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open(file.c_str(), &db) == SQLITE_OK);
+  REQUIRE(sqlite3_exec(db, "BEGIN", nullptr, nullptr, nullptr) == SQLITE_OK);
+  sqlite3_stmt* insert = nullptr;
+  REQUIRE(sqlite3_prepare_v2(db,
+                             "INSERT INTO trials (hash, study, key, result, stored) "
+                             "VALUES (?1, ?2, ?3, ?4, '2024-01-01 00:00:00')",
+                             -1, &insert, nullptr) == SQLITE_OK);
+  bool inserted = true;
+  for (std::size_t i = 0; i < count && inserted; ++i) {
+    const auto hash = rkhs::sha256_hex("copy " + std::to_string(i));
+    const auto key = row[1] + " | copy=" + std::to_string(i);
+    const auto record = resealed(hash, row[0], key, body);
+    sqlite3_reset(insert);
+    sqlite3_bind_text(insert, 1, hash.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 2, row[0].c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 3, key.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 4, record.c_str(), -1, SQLITE_TRANSIENT);
+    inserted = sqlite3_step(insert) == SQLITE_DONE;
+  }
+  sqlite3_finalize(insert);
+  const int committed = sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  REQUIRE(inserted);
+  REQUIRE(committed == SQLITE_OK);
+}
+
+// Starts `rkhs-study args` in the background (its own process, SIGINT not ignored, stdout and
+// stderr in `log`); returns its pid.
+pid_t start(const std::vector<std::string>& args, const fs::path& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
+    execv(RKHS_STUDY_EXECUTABLE, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+// The size of `file`, 0 when it does not exist.
+std::uintmax_t size_of(const fs::path& file) {
+  std::error_code error;
+  const auto size = fs::file_size(file, error);
+  return error ? 0 : size;
+}
+
 }  // namespace
 
 TEST_CASE("store check runs SQLite's integrity check: a flipped byte of the index fails it",
@@ -202,6 +263,138 @@ TEST_CASE("store merge verifies what it copies and leaves the destination as it 
   INFO(whole.output);
   CHECK(whole.exit_code == 0);
   CHECK_THAT(whole.output, Catch::Contains("holds 10 trials"));
+}
+
+TEST_CASE("SIGINT or SIGTERM during a large merge rolls it back: the destination as it was",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_merge_signal");
+  const auto into = make_store(dir, "into.sqlite");
+  fs::copy_file(into, dir / "large.sqlite");
+  const auto large = dir / "large.sqlite";
+  // About 60 MB: a merge of some seconds, most of them reading and verifying the records, then
+  // writing them (the WAL grows past SQLite's cache in the uncommitted transaction).
+  add_copies(large, 40000);
+  const auto before = bytes_of(into);
+  const auto wal = dir / "into.sqlite-wal";
+  const auto log = dir / "log.txt";
+  const auto finish = [&](pid_t pid) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    INFO(read_text(log));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 130);
+    CHECK_THAT(read_text(log), Catch::Contains("interrupted: nothing merged"));
+  };
+
+  SECTION("SIGINT while the records are written into an existing store") {
+    const pid_t pid = start({"merge", into.string(), large.string()}, log);
+    // Frames of the open transaction in the WAL: the merge is writing and has not committed.
+    const bool writing = rkhs::test::wait_until(
+        [&] { return size_of(wal) > (8u << 20) || waitpid(pid, nullptr, WNOHANG) == pid; }, 60);
+    REQUIRE(writing);
+    REQUIRE(kill(pid, SIGINT) == 0);
+    finish(pid);
+    CHECK_THAT(read_text(log), Catch::Contains(into.string() + " is left as it was"));
+    const auto check = rkhs_study("store check --store " + into.string());
+    INFO(check.output);
+    CHECK(check.exit_code == 0);
+    CHECK_THAT(check.output, Catch::Contains("10 records, 10 verified"));
+    CHECK(bytes_of(into) == before);
+    // Uninterrupted, the same merge completes.
+    const auto merged = rkhs_study("merge " + into.string() + " " + large.string());
+    INFO(merged.output);
+    CHECK(merged.exit_code == 0);
+    CHECK_THAT(merged.output, Catch::Contains("holds 40010 trials"));
+  }
+  SECTION("SIGTERM while the sources are read, into a new store") {
+    const auto fresh = dir / "fresh.sqlite";
+    const pid_t pid = start({"merge", fresh.string(), large.string()}, log);
+    // The new store exists once its schema is written, before the source is read.
+    REQUIRE(rkhs::test::wait_until([&] { return fs::exists(fresh); }, 30));
+    REQUIRE(kill(pid, SIGTERM) == 0);
+    finish(pid);
+    CHECK_THAT(read_text(log), Catch::Contains("no " + fresh.string() + " was created"));
+    CHECK_FALSE(fs::exists(fresh));
+    CHECK_FALSE(has_side_files(fresh));
+  }
+  SECTION("SIGINT ignored by the shell that started it (a background job) still stops it") {
+    const auto fresh = dir / "fresh.sqlite";
+    const pid_t pid = fork();
+    if (pid == 0) {
+      signal(SIGINT, SIG_IGN);
+      const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, 1);
+      dup2(out, 2);
+      execl(RKHS_STUDY_EXECUTABLE, RKHS_STUDY_EXECUTABLE, "merge", fresh.c_str(), large.c_str(),
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    REQUIRE(rkhs::test::wait_until([&] { return fs::exists(fresh); }, 30));
+    REQUIRE(kill(pid, SIGINT) == 0);
+    finish(pid);
+    CHECK_FALSE(fs::exists(fresh));
+  }
+}
+
+// Issue 50: records resealed with the documented checksum carried "nan(0x123)" (read by
+// from_chars, never written by rkhs-study) and raw ESC bytes into trials.csv.
+TEST_CASE("stored records resealed with foreign numbers or control bytes reach no output raw",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_resealed_bytes");
+  const auto store = make_store(dir);
+  const auto all = rows(store, "SELECT hash, study, key, result FROM trials ORDER BY key");
+  REQUIRE(all.size() == 10);
+  const auto edit = [&](const std::vector<std::string>& row, const std::string& field,
+                        const std::string& line) {
+    auto body = row[3].substr(0, row[3].rfind("checksum "));
+    const auto at = body.find("\n" + field + " ") + 1;
+    body.replace(at, body.find('\n', at) - at, line);
+    sqlite3* db = nullptr;
+    REQUIRE(sqlite3_open(store.c_str(), &db) == SQLITE_OK);
+    sqlite3_stmt* update = nullptr;
+    REQUIRE(sqlite3_prepare_v2(db, "UPDATE trials SET result = ?1 WHERE hash = ?2", -1, &update,
+                               nullptr) == SQLITE_OK);
+    const auto record = resealed(row[0], row[1], row[2], body);
+    sqlite3_bind_text(update, 1, record.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(update, 2, row[0].c_str(), -1, SQLITE_TRANSIENT);
+    CHECK(sqlite3_step(update) == SQLITE_DONE);
+    sqlite3_finalize(update);
+    sqlite3_close(db);
+  };
+  // Numbers from_chars reads but format_real never writes: the record does not verify.
+  const std::vector<std::string> foreign{"nan(0x123)", "NaN", "infinity", "INF", "-nan"};
+  for (std::size_t i = 0; i < foreign.size(); ++i) {
+    auto body = all[i][3];
+    const auto metrics = body.find("\nmetrics ") + 9;
+    edit(all[i], "metrics",
+         "metrics " + foreign[i] +
+             body.substr(body.find(' ', metrics),
+                         body.find('\n', metrics) - body.find(' ', metrics)));
+  }
+  // Text fields with ESC and BEL: the record verifies, the bytes are escaped in trials.csv.
+  edit(all[5], "reason", "reason \x1b[31mred\x1b[0m");
+  edit(all[6], "solve",
+       "solve chol\x1b]0;title\x07"
+       "esky");
+  const auto check = rkhs_study("store check --store " + store.string());
+  INFO(check.output);
+  CHECK(check.exit_code == 1);
+  CHECK_THAT(check.output, Catch::Contains("10 records, 5 verified, 5 bad"));
+  CHECK_THAT(check.output, Catch::Contains("stored value 'nan(0x123)' is not a number"));
+  CHECK_THAT(check.output, Catch::Contains("stored value 'infinity' is not a number"));
+  const auto run = rkhs_study("run " + (dir / "study.toml").string() + " --no-plots --store " +
+                              store.string() + " --out " + (dir / "again").string());
+  INFO(run.output);
+  CHECK(run.exit_code == 0);
+  CHECK_THAT(run.output, Catch::Contains("5 trials reused from " + store.string() + ", 5 run now"));
+  const auto trials = read_text(dir / "again" / "trials.csv");
+  CHECK(trials.find('\x1b') == std::string::npos);
+  CHECK(trials.find('\x07') == std::string::npos);
+  CHECK(trials.find("nan(") == std::string::npos);
+  CHECK_THAT(trials, Catch::Contains(",\\x1b[31mred\\x1b[0m,"));
+  CHECK_THAT(trials, Catch::Contains(",chol\\x1b]0;title\\x07esky,"));
+  const auto csv = rkhs_study("store export --store " + store.string());
+  CHECK(csv.output.find('\x1b') == std::string::npos);
 }
 
 TEST_CASE("store merge refuses two different records of one trial unless told which wins",
@@ -386,6 +579,135 @@ TEST_CASE("read-only store commands open the store read-only and leave it as it 
   CHECK(rkhs_study("store export --format json --store " + store.string()).exit_code == 0);
   CHECK(bytes_of(store) == before);
   CHECK_FALSE(has_side_files(store));
+}
+
+// `rkhs-study ARGS` with `folder` mounted read-only (a bind mount of its own, remounted ro, in a
+// mount namespace of the command's own: nothing outside it sees the mount); nullopt where
+// this user cannot make mount namespaces (not root, or a container without CAP_SYS_ADMIN).
+std::optional<rkhs::test::CommandOutcome> on_read_only_mount(const fs::path& folder,
+                                                             const std::string& arguments) {
+  const std::string mount = "mount --bind '" + folder.string() + "' '" + folder.string() +
+                            "' && mount -o remount,ro,bind '" + folder.string() + "'";
+  if (geteuid() != 0 ||
+      std::system(("unshare -m sh -c \"" + mount + "\" >/dev/null 2>&1").c_str()) != 0)
+    return std::nullopt;
+  return rkhs::test::run_command("unshare -m sh -c \"" + mount + " && exec " +
+                                 RKHS_STUDY_EXECUTABLE + " " + arguments + "\"");
+}
+
+TEST_CASE("a store on a read-only mount serves the runs that only read it and is named read-only",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_read_only_mount");
+  const auto made = make_store(dir);
+  const auto shelf = dir / "shelf";
+  fs::create_directories(shelf);
+  const auto store = shelf / "store.sqlite";
+  fs::rename(made, store);
+  const auto before = bytes_of(store);
+  const auto study = (dir / "study.toml").string();
+  // The same study with two more n: two trials the store lacks.
+  std::string more = proof_study;
+  more.replace(more.find("128]"), 4, "128, 256]");
+  more.replace(more.find("= 256"), 5, "= 1024");
+  std::ofstream(dir / "more.toml") << more;
+  fs::copy_file(store, dir / "copy.sqlite");
+  const auto probe = on_read_only_mount(shelf, "--version");
+  if (!probe) {
+    WARN("no mount namespace for this user: the read-only mount is not tested here");
+    return;
+  }
+  REQUIRE(probe->exit_code == 0);
+  const auto s = " --store " + store.string();
+
+  // Commands that only read: they work.
+  const auto check = *on_read_only_mount(shelf, "store check" + s);
+  INFO(check.output);
+  CHECK(check.exit_code == 0);
+  CHECK_THAT(check.output, Catch::Contains("10 records, 10 verified"));
+  CHECK(on_read_only_mount(shelf, "store export" + s)->exit_code == 0);
+  // A run whose every trial is stored reads the store: the outputs are those of the run that
+  // stored them.
+  const auto run = *on_read_only_mount(
+      shelf, "run " + study + " --no-plots" + s + " --out " + (dir / "again").string());
+  INFO(run.output);
+  CHECK(run.exit_code == 0);
+  CHECK_THAT(run.output,
+             Catch::Contains("10 trials reused from " + store.string() + ", 0 run now"));
+  CHECK(read_text(dir / "again" / "trials.csv") == read_text(dir / "out" / "trials.csv"));
+  const auto checked = *on_read_only_mount(shelf, "check " + study + " --no-plots" + s);
+  INFO(checked.output);
+  CHECK(checked.exit_code == 0);
+
+  // Commands that must write: refused, naming the store and why, with nothing written.
+  const std::string read_only =
+      store.string() + ": the result store is read-only (the file is on a read-only file system)";
+  for (const auto& command :
+       {"run " + study + " --fresh --quiet --no-plots" + s + " --out " + (dir / "fresh").string(),
+        "run " + (dir / "more.toml").string() + " --quiet --no-plots" + s + " --out " +
+            (dir / "more").string(),
+        "check " + (dir / "more.toml").string() + " --quiet --no-plots" + s + " --out " +
+            (dir / "more").string(),
+        "store vacuum" + s, "merge " + store.string() + " " + (dir / "copy.sqlite").string()}) {
+    const auto refused = *on_read_only_mount(shelf, command);
+    INFO(command << "\n" << refused.output);
+    CHECK(refused.exit_code == 2);
+    CHECK_THAT(refused.output, Catch::Contains(read_only));
+    CHECK_THAT(refused.output, !Catch::Contains("not an rkhs-study result store"));
+  }
+  const auto lacking =
+      *on_read_only_mount(shelf, "run " + (dir / "more.toml").string() + " --quiet --no-plots" + s);
+  CHECK_THAT(lacking.output, Catch::Contains("2 of the 12 trials are not stored in it"));
+  CHECK_FALSE(fs::exists(dir / "fresh"));
+  CHECK_FALSE(fs::exists(dir / "more"));
+  // A new store in the read-only folder: it cannot be created.
+  const auto created =
+      *on_read_only_mount(shelf, "merge " + (shelf / "new.sqlite").string() + " " + store.string());
+  INFO(created.output);
+  CHECK(created.exit_code == 2);
+  CHECK_THAT(created.output, Catch::Contains((shelf / "new.sqlite").string() +
+                                             ": cannot create the result store: its folder " +
+                                             shelf.string() + " is on a read-only file system"));
+  CHECK(bytes_of(store) == before);
+  CHECK_FALSE(has_side_files(store));
+}
+
+TEST_CASE("a run refused because of its store leaves no file in the output folder",
+          "[cli][store][proof]") {
+  const auto dir = rkhs::test::scratch_directory("proof_refused_store_outputs");
+  const auto good = make_store(dir);
+  const auto study = (dir / "study.toml").string();
+  fs::create_directories(dir / "folder.sqlite");
+  const auto whole = bytes_of(good);
+  std::ofstream(dir / "cut.sqlite", std::ios::binary) << whole.substr(0, whole.size() / 2);
+  // An output folder that exists, with a file of an earlier run in it, and one that does not.
+  fs::create_directories(dir / "kept");
+  std::ofstream(dir / "kept" / "notes.txt") << "mine\n";
+  for (const auto& bad : {dir / "study.toml", dir / "folder.sqlite", dir / "cut.sqlite"}) {
+    for (const auto& command : {std::string("run"), std::string("check")}) {
+      for (const auto& out : {dir / "kept", dir / "new"}) {
+        const auto refused = rkhs_study(command + " " + study + " --quiet --store " + bad.string() +
+                                        " --out " + out.string());
+        INFO(command << " --store " << bad << " --out " << out << "\n" << refused.output);
+        CHECK((refused.exit_code == 1 || refused.exit_code == 2));
+        CHECK_THAT(refused.output, Catch::Contains(bad.string() + ": "));
+        CHECK_FALSE(fs::exists(dir / "new"));
+        std::vector<std::string> files;
+        for (const auto& entry : fs::directory_iterator(dir / "kept"))
+          files.push_back(entry.path().filename().string());
+        CHECK(files == std::vector<std::string>{"notes.txt"});
+      }
+    }
+  }
+  // An output folder that cannot be written: a store this run would have created is not left.
+  std::ofstream(dir / "file") << "a file, not a folder\n";
+  const auto no_out =
+      rkhs_study("run " + study + " --quiet --store " + (dir / "new.sqlite").string() + " --out " +
+                 (dir / "file" / "out").string());
+  INFO(no_out.output);
+  CHECK(no_out.exit_code == 2);
+  CHECK_THAT(no_out.output, Catch::Contains("cannot write the output folder"));
+  CHECK_FALSE(fs::exists(dir / "new.sqlite"));
+  CHECK_FALSE(has_side_files(dir / "new.sqlite"));
 }
 
 TEST_CASE("a database that is not a result store is refused by name and left byte-identical",

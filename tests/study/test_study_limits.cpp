@@ -93,7 +93,8 @@ seed = [1, 2]
         "s.toml:18:10: limits.trials: must be a whole number between 1 and 10000000 (every "
         "trial of the grid is held in memory, about 1.7 KB each), found 2.5");
   CHECK(error_of(small + "[limits]\ntrials = 0\n") ==
-        "s.toml:18:10: limits.trials: must be a finite number > 0, found 0");
+        "s.toml:18:10: limits.trials: must be a whole number between 1 and 10000000 (every "
+        "trial of the grid is held in memory, about 1.7 KB each), found 0");
   // Raised to its largest, 10^7, the 21.6 million trials of the huge grid are still refused
   // by their count; a limit above that is refused itself (issue 50: under trials = 1e15 a grid
   // of 2^31 trials was valid, and run ended in std::bad_alloc at 6.6 GB).
@@ -151,7 +152,8 @@ TEST_CASE("n ranges with huge bounds are errors, not overflows", "[study][limits
         "s.toml:6:5: grid.n: 1000000000 values of n (from 1 to 1000000000 in steps of 1), more "
         "than 100000");
   CHECK(with_n("[8, 9223372036854775807]") ==
-        "s.toml:6:9: grid.n: must be <= 1000000000 (centres), found 9223372036854775807");
+        "s.toml:6:9: grid.n: must be between 1 and 1000000000 (centres), found "
+        "9223372036854775807");
   // A step or factor beyond the bounds gives the first value alone (v + step, v * factor
   // would overflow).
   const auto step = parse_study(

@@ -150,7 +150,9 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   SECTION("n must be positive integers") {
     std::string text = minimal;
     text.replace(text.find("[10, 20]"), 8, "[10, 0]");
-    CHECK(error_of(text) == "s.toml:7:10: grid.n: must be >= 1, found 0");
+    CHECK(error_of(text) ==
+          "s.toml:7:10: grid.n: must be between 1 and 1000000000 (centres), "
+          "found 0");
     text = minimal;
     text.replace(text.find("[10, 20]"), 8, "[10, 2.5]");
     CHECK(error_of(text) == "s.toml:7:10: grid.n: expected integers, found a number (2.5)");
@@ -608,6 +610,25 @@ TEST_CASE("hostile values are refused at their key with the allowed range, or re
     CHECK(error_of(std::string(minimal) + "[limits]\ntrials = 9007199254740993\n") ==
           "s.toml:11:10: limits.trials: must be a whole number between 1 and 10000000 (every "
           "trial of the grid is held in memory, about 1.7 KB each), found 9007199254740993");
+    // Below the range, not whole, or not a number: the same message, naming both bounds (issue
+    // 50: evaluation_points = 1 was "must be a finite number > 1", 1e8 + 1 named only 2).
+    for (const auto& [value, shown] :
+         std::vector<std::pair<std::string, std::string>>{{"1", "1"},
+                                                          {"0", "0"},
+                                                          {"-3", "-3"},
+                                                          {"2.5", "2.5"},
+                                                          {"1.5e8", "150000000.0"},
+                                                          {"100000001", "100000001"},
+                                                          {"inf", "inf"},
+                                                          {"nan", "nan"},
+                                                          {"\"many\"", "a string ('many')"}})
+      CHECK(error_of(with("name = \"t\"", "name = \"t\"\nevaluation_points = " + value)) ==
+            "s.toml:4:21: study.evaluation_points: must be a whole number between 2 and "
+            "100000000, found " +
+                shown);
+    CHECK(error_of(std::string(minimal) + "[limits]\ntrials = 0\n") ==
+          "s.toml:11:10: limits.trials: must be a whole number between 1 and 10000000 (every "
+          "trial of the grid is held in memory, about 1.7 KB each), found 0");
   }
   SECTION("adaptive speed and laps above 2^53") {
     const std::string adaptive = R"(

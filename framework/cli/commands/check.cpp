@@ -130,10 +130,21 @@ class Check {
 
   pipeline::PipelineOutcome run_one(const CheckedStudy& checked) {
     executor_.agree_on(checked.study, checked.trials);
-    // Before any trial: an output folder that cannot be written is exit 2, naming it.
+    // The store first: one that is refused leaves the output folder as it was.
+    auto opened = pipeline::open_store(executor_, checked.study, checked.trials, arguments_.store);
+    // Before any trial: an output folder that cannot be written is exit 2, naming it (and a
+    // store this check created is removed again).
     if (executor_.is_root() && !arguments_.out_dir.empty()) {
-      prepare_output_directory(output_directory(checked));
-      if (arguments_.plots) prepare_output_directory(output_directory(checked) / "plots");
+      try {
+        prepare_output_directory(output_directory(checked));
+        if (arguments_.plots) prepare_output_directory(output_directory(checked) / "plots");
+      } catch (...) {
+        if (opened.created && opened.store) {
+          opened.store.reset();
+          remove_store_files(arguments_.store.file);
+        }
+        throw;
+      }
     }
     const int threads = arguments_.threads > 0 ? arguments_.threads : executor_.default_threads();
     if (!quiet())
@@ -144,7 +155,8 @@ class Check {
     RunOptions options;
     options.threads = threads;
     stop_on_signals(options);
-    return pipeline::run_study(executor_, checked.study, checked.trials, options, arguments_.store);
+    return pipeline::run_study(executor_, checked.study, checked.trials, options, arguments_.store,
+                               std::move(opened));
   }
 
   bool quiet() const { return arguments_.quiet || !executor_.is_root(); }

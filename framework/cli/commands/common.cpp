@@ -38,6 +38,12 @@ void refuse_output_onto_input(const std::string& option, const std::string& outp
         option, output, what, input));
 }
 
+void remove_store_files(const std::string& file) {
+  std::error_code ignored;
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"})
+    std::filesystem::remove(file + suffix, ignored);
+}
+
 std::string counted(std::size_t count, const char* singular, const char* plural) {
   return fmt::format("{} {}", count, count == 1 ? singular : plural);
 }
@@ -64,9 +70,13 @@ void print_warnings(const StudyDefinition& study) {
   for (const auto& warning : study.warnings) std::cerr << printable(warning, true) << "\n";
 }
 
-void stop_on_signals(RunOptions& options) {
+void stop_at_signals() {
   std::signal(SIGINT, request_stop);
   std::signal(SIGTERM, request_stop);
+}
+
+void stop_on_signals(RunOptions& options) {
+  stop_at_signals();
   options.stop_requested = [] { return interrupted.load(); };
   options.abandon_after_seconds = abandon_after_seconds;
 }

@@ -19,6 +19,11 @@ namespace rkhs::cli {
 void refuse_output_onto_input(const std::string& option, const std::string& output,
                               const std::string& what, const std::string& input);
 
+/// Removes the store `file` and its -wal, -shm and -journal files: a store this command
+/// created and must not leave behind (a failed merge into a new file, a run refused after it
+/// opened a new store).
+void remove_store_files(const std::string& file);
+
 /// "1 trial", "3 trials".
 std::string counted(std::size_t count, const char* singular, const char* plural);
 
@@ -29,6 +34,11 @@ void print_warnings(const StudyDefinition& study);
 /// study.metrics and why ("fill_distance for abscissa = h"): what `validate` and the start line
 /// of `run` and `check` say a trial will compute (StudyDefinition::computed_metrics()).
 std::string computed_metrics_text(const StudyDefinition& study);
+
+/// Installs the SIGINT / SIGTERM handlers (also where the shell started the command with them
+/// ignored, as it does a background job's SIGINT): stop_was_requested() then tells whether one
+/// arrived.
+void stop_at_signals();
 
 /// Installs the SIGINT / SIGTERM handlers and makes `options` stop at them: no new trial
 /// starts, trials in flight stop at their next cancellation point (rkhs/core/cancellation.hpp)

@@ -21,20 +21,25 @@ int command_merge(const std::string& into_file, const std::vector<std::string>& 
                                                     : MergePreference::refuse;
   // A merge that fails leaves no store behind where there was none.
   const bool existed = std::filesystem::exists(into_file);
+  // SIGINT / SIGTERM stop the merge between batches of records: its one transaction is rolled
+  // back and the destination left as it was.
+  stop_at_signals();
   std::vector<MergedSource> merged;
   std::size_t held = 0;
   try {
     ResultStore into(into_file);
-    merged =
-        into.merge_from(std::vector<std::filesystem::path>(from.begin(), from.end()), preference);
+    merged = into.merge_from(std::vector<std::filesystem::path>(from.begin(), from.end()),
+                             preference, stop_was_requested);
     into.checkpoint();
     held = into.size();
+  } catch (const MergeInterrupted&) {
+    if (!existed) remove_store_files(into_file);
+    std::cerr << fmt::format(
+        "rkhs-study: interrupted: nothing merged; {} (run the same command again to merge)\n",
+        existed ? into_file + " is left as it was" : "no " + into_file + " was created");
+    return exit_interrupted;
   } catch (...) {
-    if (!existed) {
-      std::error_code ignored;
-      for (const char* suffix : {"", "-wal", "-shm", "-journal"})
-        std::filesystem::remove(into_file + suffix, ignored);
-    }
+    if (!existed) remove_store_files(into_file);
     throw;
   }
   for (const auto& source : merged) {
@@ -51,6 +56,11 @@ int command_merge(const std::string& into_file, const std::vector<std::string>& 
     std::cout << "\n";
   }
   std::cout << fmt::format("{} holds {}\n", into_file, counted(held, "trial", "trials"));
+  if (stop_was_requested())  // once the transaction was committed: too late to undo it
+    std::cerr << fmt::format(
+        "rkhs-study: the interruption came after the merge was committed: {} holds every "
+        "merged trial\n",
+        into_file);
   return exit_ok;
 }
 

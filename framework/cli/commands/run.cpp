@@ -99,12 +99,24 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   const bool quiet = arguments.quiet || !root;
   const int thread_count = arguments.threads > 0 ? arguments.threads : executor.default_threads();
 
+  // The store first: one that is refused (not a store, damaged, a directory, read-only and
+  // lacking trials) leaves the output folder as it was, without a journal.csv.
+  auto opened = pipeline::open_store(executor, study, trials, arguments.store);
   std::optional<pipeline::Journal> journal;
   if (root) {
-    // Before any trial: an output folder that cannot be written is exit 2, naming it.
-    prepare_output_directory(out_dir);
-    if (arguments.plots) prepare_output_directory(std::filesystem::path(out_dir) / "plots");
-    journal.emplace(std::filesystem::path(out_dir) / "journal.csv", study);
+    // Before any trial: an output folder that cannot be written is exit 2, naming it (and a
+    // store this run created is removed again).
+    try {
+      prepare_output_directory(out_dir);
+      if (arguments.plots) prepare_output_directory(std::filesystem::path(out_dir) / "plots");
+      journal.emplace(std::filesystem::path(out_dir) / "journal.csv", study);
+    } catch (...) {
+      if (opened.created && opened.store) {
+        opened.store.reset();
+        remove_store_files(arguments.store.file);
+      }
+      throw;
+    }
   }
   if (!quiet)
     std::cerr << fmt::format("rkhs-study: {} ({}, {}{}) -> {}\n", study.name,
@@ -130,7 +142,8 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
           fmt::format("  trial failed: {}: {}", printable(trial.key), printable(result.reason)));
     progress->trial_finished(trial.index, result.ok);
   };
-  const auto outcome = pipeline::run_study(executor, study, trials, options, arguments.store);
+  const auto outcome =
+      pipeline::run_study(executor, study, trials, options, arguments.store, std::move(opened));
   if (!root) return stop_was_requested() ? exit_interrupted : exit_ok;
   if (!quiet) print_run_sources(outcome, executor);
   if (progress) progress->stop();

@@ -1,5 +1,7 @@
 #include "rkhs/pipeline/study_pipeline.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <ctime>
@@ -20,24 +22,62 @@ RunRecord CompletedRun::record() const {
   return RunRecord{study, trials, stored.results, rates, threads, seconds, started, ranks};
 }
 
+OpenedStore open_store(const Executor& executor, const StudyDefinition& study,
+                       const std::vector<TrialSpec>& trials, const StoreOptions& options) {
+  OpenedStore opened;
+  executor.on_every_process([&] {
+    if (options.disabled || !executor.is_root()) return;
+    const std::filesystem::path file = options.file;
+    std::error_code ignored;
+    opened.created = !std::filesystem::exists(file, ignored);
+    // How many of `trials` the read-only store lacks a verified record of.
+    const auto missing = [&](const ResultStore& store) {
+      const auto hashes = trial_hashes(study, trials);
+      return static_cast<std::size_t>(std::count_if(
+          hashes.begin(), hashes.end(),
+          [&](const auto& hash) { return !store.lookup(hash, &study.all_metrics()).sound(); }));
+    };
+    if (options.read_only_when_complete && !options.fresh && !opened.created) {
+      auto store = std::make_unique<ResultStore>(file, StoreAccess::read_only);
+      if (missing(*store) == 0) {
+        opened.store = std::move(store);
+        return;
+      }
+    }
+    try {
+      opened.store = std::make_unique<ResultStore>(file);
+    } catch (const ReadOnlyStore& e) {
+      // A store this run cannot write serves a run that only reads it.
+      if (opened.created) throw;
+      if (options.fresh)
+        throw ReadOnlyStore(fmt::format(
+            "{}; --fresh runs every trial again and stores it: give a store that can be "
+            "written",
+            e.what()));
+      auto store = std::make_unique<ResultStore>(file, StoreAccess::read_only);
+      if (const auto lacking = missing(*store))
+        throw ReadOnlyStore(fmt::format(
+            "{}: {} of the {} trials are not stored in it, and their results could not be "
+            "stored; run with a store that can be written (a copy: `rkhs-study merge "
+            "COPY.sqlite {}`, then --store COPY.sqlite) or with --no-store",
+            e.what(), lacking, trials.size(), file.string()));
+      opened.store = std::move(store);
+    }
+  });
+  return opened;
+}
+
 PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
                           const std::vector<TrialSpec>& trials, RunOptions options,
                           const StoreOptions& store_options, Rates fit) {
-  std::optional<ResultStore> store;
-  executor.on_every_process([&] {
-    if (store_options.disabled || !executor.is_root()) return;
-    if (store_options.read_only_when_complete && !store_options.fresh &&
-        std::filesystem::exists(store_options.file)) {
-      store.emplace(store_options.file, StoreAccess::read_only);
-      const auto hashes = trial_hashes(study, trials);
-      const bool complete = std::all_of(hashes.begin(), hashes.end(), [&](const auto& hash) {
-        return store->lookup(hash, &study.all_metrics()).sound();
-      });
-      if (complete) return;
-      store.reset();
-    }
-    store.emplace(store_options.file);
-  });
+  return run_study(executor, study, trials, std::move(options), store_options,
+                   open_store(executor, study, trials, store_options), fit);
+}
+
+PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
+                          const std::vector<TrialSpec>& trials, RunOptions options,
+                          const StoreOptions& store_options, OpenedStore opened, Rates fit) {
+  auto& store = opened.store;
   if (options.threads <= 0) options.threads = executor.default_threads();
   freeze_registries();
   const std::string started = utc_now();

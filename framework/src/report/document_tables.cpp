@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "rkhs/core/printable.hpp"
 #include "rkhs/report/convergence_table.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/report/rate_table.hpp"
@@ -25,7 +26,11 @@ constexpr std::string_view latex_exponential_note =
 // Metrics per tabular of the fitted rates (a rate and its interval each).
 constexpr std::size_t latex_fits_per_tabular = 2;
 
-std::string latex_escape(std::string_view text) {
+// Text from a study or data file (a CSV road's file name, a study name): control bytes and
+// bytes that are not UTF-8 first written as \xNN (printable), so that a newline cannot end a
+// table row or a LaTeX comment and put the rest of the text on a line of its own.
+std::string latex_escape(std::string_view raw) {
+  const auto text = printable(raw);
   std::string out;
   for (char c : text) {
     if (c == '_' || c == '%' || c == '&' || c == '#' || c == '$' || c == '{' || c == '}')
@@ -45,13 +50,27 @@ std::string latex_escape(std::string_view text) {
   return out;
 }
 
-std::string markdown_escape(std::string_view text) {
+std::string markdown_escape(std::string_view raw) {
   std::string out;
-  for (char c : text) {
+  for (char c : printable(raw)) {
     if (c == '|' || c == '*') out += '\\';
     out += c;
   }
   return out;
+}
+
+// `raw` as a Markdown code span: printable, fenced by one backtick more than the longest run of
+// backticks in it (and a space inside the fence when it has any), so that it cannot end early.
+std::string markdown_code(std::string_view raw) {
+  const auto text = printable(raw);
+  std::size_t longest = 0, run = 0;
+  for (char c : text) {
+    run = c == '`' ? run + 1 : 0;
+    longest = std::max(longest, run);
+  }
+  const std::string fence(longest + 1, '`');
+  const std::string pad = longest ? " " : "";
+  return fence + pad + text + pad + fence;
 }
 
 // The column of `group` that holds `metric`, or nullptr.
@@ -235,8 +254,8 @@ std::string markdown_tables(const RunRecord& run) {
 
   // The convergence table of each group: every metric's value and pairwise rate.
   for (const auto& group : groups) {
-    out +=
-        fmt::format("\n## {}\n\nGroup `{}`\n\n| n |", markdown_escape(group.title()), group.group);
+    out += fmt::format("\n## {}\n\nGroup {}\n\n| n |", markdown_escape(group.title()),
+                       markdown_code(group.group));
     std::string align = "|---:|";
     if (group.shows_h()) {
       out += " h |";
@@ -331,7 +350,7 @@ std::string latex_tables(const RunRecord& run) {
                                   : fmt::format("group{}", g + 1);
       out += fmt::format(
           "% group {}\n\\begin{{table}}[ht]\n\\centering\n\\caption{{{}: {}{}}}\n\\label{{{}}}\n",
-          group.group, latex_escape(run.study.name), latex_escape(group.title()),
+          printable(group.group), latex_escape(run.study.name), latex_escape(group.title()),
           from > 0 ? " (continued)" : "", latex_label(run.study.name, label));
       out += latex_tabular(group, tables, part) + "\\par\\smallskip\n{\\footnotesize\n";
       bool any_flagged = false, any_exponential = false;

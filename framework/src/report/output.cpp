@@ -143,7 +143,11 @@ std::string json_number(double value) {
   return value > 0 ? "\"inf\"" : "\"-inf\"";
 }
 
-std::string csv_field(const std::string& value) {
+std::string csv_field(const std::string& raw) {
+  // Control bytes (ESC, BEL, CR, ...) and bytes that are not UTF-8 as \xNN: text from a study,
+  // a data file or a stored record cannot carry terminal escapes into a file that is shown on
+  // a terminal. Line breaks and tabs stay, inside quotes.
+  const auto value = printable(raw, true);
   if (value.find_first_of(",\"\n\r") == std::string::npos) return value;
   std::string out = "\"";
   for (char c : value) {

@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -23,6 +25,7 @@
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/input_file.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
 #include "rkhs/run/trial_identity.hpp"
 
@@ -46,8 +49,10 @@ double parse_real(const std::string& token) {
   if (token == "-inf") return -std::numeric_limits<double>::infinity();
   double value = 0;
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  if (ec != std::errc() || end != token.data() + token.size())
-    throw std::invalid_argument("stored value '" + token + "' is not a number");
+  // Only what format_real writes: "nan(0x123)", "NaN", "infinity" or "INF" are read by
+  // from_chars, but a record that holds them was not written by rkhs-study.
+  if (ec != std::errc() || end != token.data() + token.size() || !std::isfinite(value))
+    throw std::invalid_argument("stored value '" + printable(token) + "' is not a number");
   return value;
 }
 
@@ -536,6 +541,31 @@ std::optional<std::string> truncation(const std::filesystem::path& file) {
                      page_size * pages, pages, page_size);
 }
 
+// Why the store `file` cannot be written where it lies, if it cannot: the file itself, or the
+// folder SQLite creates the -wal and -shm files in (or, for a new store, the file in). Asked of
+// the system (access(2)), which knows a read-only file system also for root.
+std::optional<std::string> unwritable(const std::filesystem::path& file) {
+  const auto reason = [](int error, const std::string& what) {
+    return error == EROFS
+               ? fmt::format("{} is on a read-only file system", what)
+               : fmt::format("{} cannot be written by this user: {}", what, std::strerror(error));
+  };
+  std::error_code ignored;
+  const bool exists = std::filesystem::exists(file, ignored);
+  if (exists && ::access(file.c_str(), W_OK) != 0) return reason(errno, "the file");
+  // The nearest folder that exists: the store's own, or the one its folders are created in.
+  auto folder = file.parent_path();
+  while (!folder.empty() && !std::filesystem::exists(folder, ignored))
+    folder = folder.parent_path();
+  if (folder.empty()) folder = ".";
+  const bool side_files = std::filesystem::exists(wal_of(file), ignored) &&
+                          std::filesystem::exists(file.string() + "-shm", ignored);
+  if ((!exists || !side_files) && ::access(folder.c_str(), W_OK | X_OK) != 0)
+    return reason(errno, fmt::format("its folder {}", folder.string())) +
+           (exists ? " (SQLite creates the -wal and -shm files beside the store)" : "");
+  return std::nullopt;
+}
+
 }  // namespace
 
 ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
@@ -554,6 +584,11 @@ ResultStore::ResultStore(const std::filesystem::path& file, StoreAccess access)
     // for a read-only connection to a WAL database, and cannot on a read-only mount).
     open(!std::filesystem::exists(wal_of(file)));
   } else {
+    if (const auto why = unwritable(file))
+      throw ReadOnlyStore(
+          std::filesystem::exists(file)
+              ? fmt::format("{}: the result store is read-only ({})", file.string(), *why)
+              : fmt::format("{}: cannot create the result store: {}", file.string(), *why));
     if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
     open(false);
   }
@@ -593,6 +628,11 @@ void ResultStore::adopt_schema() {
           fmt::format("{}: damaged result store: {}; restore it from a copy or "
                       "remove it (its trials then run again)",
                       file_.string(), why));
+    // A file SQLite could not open or write (its -wal or -shm file) is not judged.
+    const int code = sqlite3_errcode(db_);
+    if (code == SQLITE_CANTOPEN || code == SQLITE_READONLY || code == SQLITE_PERM)
+      throw std::runtime_error(
+          fmt::format("{}: cannot open the result store: {}", file_.string(), why));
     throw std::runtime_error(
         fmt::format("{}: not an rkhs-study result store: {}", file_.string(), why));
   };
@@ -809,9 +849,19 @@ std::string listed(const std::vector<std::string>& lines) {
 }  // namespace
 
 std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesystem::path>& sources,
-                                                  MergePreference prefer) {
+                                                  MergePreference prefer,
+                                                  const std::function<bool()>& stop_requested) {
   if (access_ == StoreAccess::read_only)
     throw std::logic_error(file_.string() + ": result store opened read-only");
+  // Asked once per batch of records: a stop throws, and the transaction (if begun) is rolled
+  // back below.
+  constexpr std::size_t batch = 1024;
+  std::size_t visited = 0;
+  auto stop_point = [&](bool now = false) {
+    if ((now || ++visited % batch == 0) && stop_requested && stop_requested())
+      throw MergeInterrupted(fmt::format("{}: merge interrupted, nothing merged", file_.string()));
+  };
+  stop_point(true);
   // Every source read and verified first: nothing is written unless all of them are sound.
   std::vector<MergedSource> merged;
   std::vector<std::vector<Entry>> entries(sources.size());
@@ -824,6 +874,7 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
       throw std::runtime_error(fmt::format("{}: SQLite's integrity check failed, nothing merged:{}",
                                            file.string(), listed(problems)));
     source.for_each([&](const Entry& entry) {
+      stop_point();
       if (!entry.check.sound())
         bad.push_back(entry_line(file.string(), entry) + ": " + entry.check.problem);
       entries[s].push_back(entry);
@@ -847,7 +898,10 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
   try {
     std::map<std::string, Candidate> held;
     std::set<std::string> changed;
-    for_each([&](const Entry& entry) { held.insert({entry.hash, {entry, sources.size()}}); });
+    for_each([&](const Entry& entry) {
+      stop_point();
+      held.insert({entry.hash, {entry, sources.size()}});
+    });
     std::vector<std::string> conflicts;
     for (std::size_t s = 0; s < sources.size(); ++s) {
       for (auto& entry : entries[s]) {
@@ -888,6 +942,7 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
                      "VALUES (?1, ?2, ?3, ?4, ?5)",
                      file_);
     for (const auto& hash : changed) {
+      stop_point();
       const auto& entry = held.at(hash).entry;
       sqlite3_reset(insert.handle);
       sqlite3_bind_text(insert.handle, 1, entry.hash.c_str(), -1, SQLITE_TRANSIENT);
@@ -897,6 +952,7 @@ std::vector<MergedSource> ResultStore::merge_from(const std::vector<std::filesys
       sqlite3_bind_text(insert.handle, 5, entry.stored.c_str(), -1, SQLITE_TRANSIENT);
       if (step(insert.handle) != SQLITE_DONE) fail("cannot store the trial " + entry.key);
     }
+    stop_point(true);
     exec("COMMIT");
   } catch (...) {
     sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);

@@ -116,9 +116,9 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
   if (values.empty()) report.fail(node.source(), "grid.n", "no values");
   std::vector<std::size_t> n;
   for (const auto& [v, where] : values) {
-    if (v < 1) report.fail(where, "grid.n", fmt::format("must be >= 1, found {}", v));
-    if (v > max_n)
-      report.fail(where, "grid.n", fmt::format("must be <= {} (centres), found {}", max_n, v));
+    if (v < 1 || v > max_n)
+      report.fail(where, "grid.n",
+                  fmt::format("must be between 1 and {} (centres), found {}", max_n, v));
     n.push_back(static_cast<std::size_t>(v));
   }
   std::sort(n.begin(), n.end());
@@ -736,13 +736,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
     }
   }
   auto count = [&](std::string_view key, std::size_t fallback) {
-    const double value =
-        get_number(report, *table, key, "adaptive.", static_cast<double>(fallback), 0);
-    if (value != std::floor(value) || value > 1e7)
-      report.fail(table->get(key)->source(), fmt::format("adaptive.{}", key),
-                  fmt::format("must be a whole number between 1 and 10000000, found {}",
-                              show(*table->get(key))));
-    return static_cast<std::size_t>(value);
+    return static_cast<std::size_t>(
+        get_whole_number(report, *table, key, "adaptive.", fallback, 1, 10000000));
   };
   settings.snapshot_points = count("snapshot_points", 0);
   settings.samples_per_lap = count("samples_per_lap", settings.samples_per_lap);
@@ -926,12 +921,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   else
     report.fail(header->get("abscissa")->source(), "study.abscissa",
                 fmt::format("found \"{}\", expected \"n\" or \"h\" (fill distance)", abscissa));
-  const double points = get_number(report, *header, "evaluation_points", "study.", 4096, 1);
-  if (points != std::floor(points) || points > 1e8)
-    report.fail(header->get("evaluation_points")->source(), "study.evaluation_points",
-                fmt::format("must be a whole number between 2 and 100000000, found {}",
-                            show(*header->get("evaluation_points"))));
-  study.evaluation_points = static_cast<std::size_t>(points);
+  study.evaluation_points = static_cast<std::size_t>(
+      get_whole_number(report, *header, "evaluation_points", "study.", 4096, 2, 100000000));
 
   const auto& all_metrics = metric_names(study.kind);
   if (const auto* metrics = header->get("metrics")) {
@@ -981,10 +972,12 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     for (std::size_t a = 0; a < list->size(); ++a) {
       const auto& item = *list->get(a);
       const auto value = real_of(item);
-      if (!value || !(*value > 0) || !std::isfinite(*value))
-        report.fail(
-            item.source(), "domain.lengths",
-            fmt::format("axis {}: expected an extent > 0 in metres, found {}", a + 1, show(item)));
+      if (!value)
+        report.fail(item.source(), "domain.lengths",
+                    fmt::format("axis {}: expected an extent in metres (a number between {} and "
+                                "{}), found {}",
+                                a + 1, format_real(Domain::min_extent),
+                                format_real(Domain::max_extent), show(item)));
       if (!in_extent_range(*value))
         report.fail(item.source(), "domain.lengths",
                     fmt::format("axis {}: must be between {} and {} metres, found {} ({})", a + 1,
@@ -993,7 +986,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
       (a == 0 ? study.domain.length : a == 1 ? study.domain.width : study.domain.height) = *value;
     }
   } else if (domain->contains("length")) {
-    study.domain.length = get_number(report, *domain, "length", "domain.", 0, 0);
+    study.domain.length = real_of(*domain->get("length")).value_or(0);
     if (!in_extent_range(study.domain.length))
       report.fail(domain->get("length")->source(), "domain.length",
                   fmt::format("must be between {} and {} metres, found {} ({})",
@@ -1001,7 +994,7 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
                               show(*domain->get("length")), extent_range_reason));
   } else {
     // The track's length 2 pi radius must lie in the extents' range.
-    const double radius = get_number(report, *domain, "radius", "domain.", 0, 0);
+    const double radius = real_of(*domain->get("radius")).value_or(0);
     study.domain.length = 2 * std::numbers::pi * radius;
     if (!in_extent_range(study.domain.length))
       report.fail(domain->get("radius")->source(), "domain.radius",
@@ -1030,14 +1023,9 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
         get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
     study.limits.matrix_megabytes = get_number(report, *limits, "matrix_megabytes", "limits.",
                                                study.limits.matrix_megabytes, 0);
-    const double trials =
-        get_number(report, *limits, "trials", "limits.", static_cast<double>(max_trials), 0);
-    if (trials != std::floor(trials) || trials > static_cast<double>(max_max_trials))
-      report.fail(limits->get("trials")->source(), "limits.trials",
-                  fmt::format("must be a whole number between 1 and {} (every trial of the grid "
-                              "is held in memory, about 1.7 KB each), found {}",
-                              max_max_trials, show(*limits->get("trials"))));
-    max_trials = static_cast<std::uint64_t>(trials);
+    max_trials =
+        get_whole_number(report, *limits, "trials", "limits.", max_trials, 1, max_max_trials,
+                         " (every trial of the grid is held in memory, about 1.7 KB each)");
   }
   // Before any plugin choice or trial is built: a short file can ask for billions of trials.
   check_grid_size(report, root, study.kind, study.n_values.size(), *grid->get("n"), max_trials);

@@ -205,6 +205,23 @@ double get_number(const Reporter& report, const toml::table& table, std::string_
   return value;
 }
 
+std::uint64_t get_whole_number(const Reporter& report, const toml::table& table,
+                               std::string_view key, std::string_view prefix,
+                               std::uint64_t fallback, std::uint64_t low, std::uint64_t high,
+                               std::string_view why) {
+  const auto* node = table.get(key);
+  if (!node) return fallback;
+  const auto value = real_of(*node);
+  if (!value || !std::isfinite(*value) || *value != std::floor(*value) ||
+      *value < static_cast<double>(low) || *value > static_cast<double>(high))
+    report.fail(
+        node->source(), fmt::format("{}{}", prefix, key),
+        fmt::format("must be a whole number between {} and {}{}, found {}", low, high, why,
+                    node->is_number() ? show(*node)
+                                      : fmt::format("{} ({})", describe(*node), show(*node))));
+  return static_cast<std::uint64_t>(*value);
+}
+
 bool get_bool(const Reporter& report, const toml::table& table, std::string_view key,
               std::string_view prefix, bool fallback) {
   const auto* node = table.get(key);

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -96,6 +97,14 @@ std::optional<double> real_of(const toml::node& node);
 /// `table[key]` as a finite number > `min_exclusive`; `fallback` when absent.
 double get_number(const Reporter& report, const toml::table& table, std::string_view key,
                   std::string_view prefix, double fallback, double min_exclusive);
+
+/// `table[key]` as a whole number in [low, high]; `fallback` when absent. Every refusal (not a
+/// number, not whole, out of range) names both bounds: "must be a whole number between LOW and
+/// HIGH<why>, found X".
+std::uint64_t get_whole_number(const Reporter& report, const toml::table& table,
+                               std::string_view key, std::string_view prefix,
+                               std::uint64_t fallback, std::uint64_t low, std::uint64_t high,
+                               std::string_view why = {});
 
 /// `table[key]` as a boolean; `fallback` when absent.
 bool get_bool(const Reporter& report, const toml::table& table, std::string_view key,

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,9 +63,30 @@ struct PipelineOutcome {
 /// of it (a shard), whose results do not cover the grid positions rates are read at.
 enum class Rates { fitted, not_fitted };
 
+/// The result store a run uses, opened before the run writes anything else (its outputs, its
+/// journal): a store that is refused leaves nothing behind.
+struct OpenedStore {
+  std::unique_ptr<ResultStore> store;  ///< nullptr with StoreOptions::disabled, and off the root
+  bool created = false;                ///< no file was there: this run creates it
+};
+
+/// Opens the store of `options` on the root (on every process the same success or failure,
+/// Executor::on_every_process). Read-write, but read-only (StoreAccess::read_only) where it
+/// cannot be written (ReadOnlyStore: a read-only file system, a file or folder this user may
+/// not write) or with StoreOptions::read_only_when_complete, when it holds a verified record
+/// of every one of `trials`: such a run only reads it. A read-only store that lacks some trial
+/// (or with --fresh) throws ReadOnlyStore naming the store, why and how many trials it lacks.
+OpenedStore open_store(const Executor& executor, const StudyDefinition& study,
+                       const std::vector<TrialSpec>& trials, const StoreOptions& options);
+
 /// Runs `trials` of `study` through the store on `executor` with `options` (threads 0: the
 /// executor's default), freezing the registries first. Non-root processes get an empty
-/// outcome once the job is done.
+/// outcome once the job is done. `opened`: the store open_store opened for these trials.
+PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
+                          const std::vector<TrialSpec>& trials, RunOptions options,
+                          const StoreOptions& store, OpenedStore opened,
+                          Rates rates = Rates::fitted);
+/// The same, opening the store first (open_store).
 PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
                           const std::vector<TrialSpec>& trials, RunOptions options,
                           const StoreOptions& store, Rates rates = Rates::fitted);

@@ -94,7 +94,8 @@ void mark_outputs_complete(const std::filesystem::path& directory);
 /// system's reason ("cannot write out/trials.csv (write): File too large").
 void write_file_atomically(const std::filesystem::path& file, const std::string& content);
 
-/// A CSV field, quoted when it contains a comma, quote or line break (RFC 4180).
+/// A CSV field, quoted when it contains a comma, quote or line break (RFC 4180); control bytes
+/// other than line breaks and tabs, and bytes that are not UTF-8, written as \xNN (printable).
 std::string csv_field(const std::string& value);
 /// A real for CSV: shortest round-trip representation, "inf"/"-inf", "" for NaN.
 std::string csv_number(double value);

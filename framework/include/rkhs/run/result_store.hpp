@@ -109,6 +109,21 @@ class DamagedStore : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A result store that cannot be written where it lies (a read-only file system, a file or
+/// folder this user may not write): "FILE: the result store is read-only (why)". A command that
+/// only needs to read it may open it with StoreAccess::read_only instead.
+class ReadOnlyStore : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A merge stopped because it was asked to (SIGINT, SIGTERM): its transaction was rolled back
+/// and nothing was written.
+class MergeInterrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// How a ResultStore opens its database.
 enum class StoreAccess {
   read_write,  ///< opened or created; WAL mode
@@ -142,7 +157,10 @@ class ResultStore {
   /// store: why". A `file` that exists and is not a regular file (a directory, a FIFO, a
   /// device) is refused by its type before it is opened: "FILE: is a FIFO, not a result store
   /// (an SQLite database file)". An SQLite file shorter than its header says (truncated) or one
-  /// SQLite reports malformed throws DamagedStore "FILE: damaged result store: why".
+  /// SQLite reports malformed throws DamagedStore "FILE: damaged result store: why". read_write
+  /// on a store that cannot be written (on a read-only file system, not writable by this user,
+  /// or in a folder where SQLite cannot create its -wal and -shm files) throws ReadOnlyStore
+  /// before the database is opened; where no file is, one that cannot be created throws it too.
   explicit ResultStore(const std::filesystem::path& file,
                        StoreAccess access = StoreAccess::read_write);
   ~ResultStore();
@@ -166,8 +184,12 @@ class ResultStore {
   /// written in one transaction. A source that is not a store or is damaged, a record that does
   /// not verify (old format included) or a conflict under MergePreference::refuse throws
   /// std::runtime_error naming the source and the trials, and nothing is written.
+  /// `stop_requested` is asked between batches of records (while the sources and the
+  /// destination are read and while the records are written) and before the commit: once it
+  /// returns true the transaction is rolled back and MergeInterrupted thrown.
   std::vector<MergedSource> merge_from(const std::vector<std::filesystem::path>& sources,
-                                       MergePreference prefer = MergePreference::refuse);
+                                       MergePreference prefer = MergePreference::refuse,
+                                       const std::function<bool()>& stop_requested = {});
   /// What SQLite's PRAGMA integrity_check finds wrong with the database file (its index and
   /// table b-trees, their pages and their agreement): empty when nothing.
   std::vector<std::string> integrity_problems() const;
