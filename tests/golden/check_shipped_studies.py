@@ -124,9 +124,14 @@ def sanitizer_grid(study, text):
 # --portable: the run another x86-64 processor would make. glibc's exp, log, sin and pow take
 # their baseline SSE2 code paths instead of the FMA ones (GLIBC_TUNABLES masks the features glibc
 # chooses them by): other bits in the last places of every value, the same files within floors.
-# The dense kernels stay pinned to the baseline: with the widest variant as well, series that
-# are constant to round-off still move their asymptotic windows and notes, and a tie ("largest
-# at n = 8") can go either way (issue 48 items 2 and the variant check: open).
+# The dense kernels stay pinned to the baseline. With the widest variant (avx512) instead, 13 of
+# 20 studies still match and 7 differ (checked on 914148b): asymptotic windows of series near
+# their floors move (gram_and_power: a head point n = 10 kept instead of cut; paper_converged,
+# paper_synthetic: a window n = 10..100 instead of 20..70), and one adaptive trial of
+# paper_synthetic (Gaussian, pe_level_unresolved) moves by 1.75 times its integration floor
+# (l2_error 1.8274997 against 1.8275095, floor 5.6e-6; 989 steps against 1051): that floor, an
+# estimate from the integrator's tolerances, is too small where the Gram matrix is this badly
+# conditioned (issue 48, the variant check: open).
 PORTABLE_GLIBC_TUNABLES = "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX512F,-AVX"
 
 

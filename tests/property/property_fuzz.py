@@ -52,9 +52,8 @@ import time
 # of such a class is an expected failure (XFAIL) in the replay and the CI budget. Remove an entry
 # once its fix is on main.
 KNOWN_FAILURES = {
-    # Target values of 1e100 and above (amplitude = 1e200, a constant target of 1e300): status
-    # ok with l2_error = inf or a wrong 0 (issue 50 item 1; the trial runner and the metrics).
-    "overflow_reported_ok": "issue 50 item 1, being fixed on main",
+    # None open. overflow_reported_ok (amplitude = 1e200, a constant target of 1e300: status ok
+    # with l2_error = inf) is fixed: such a trial fails, "l2_error overflowed to +inf".
 }
 
 # Target magnitudes above this make the known overflow class; --ci does not generate them.
