@@ -452,6 +452,41 @@ TEST_CASE("GramSolver checks the trial's deadline before each symmetric eigenval
   CHECK(rkhs::GramSolver(regular, {}, rkhs::GramSpectrumMode::exact).method() == "cholesky");
 }
 
+TEST_CASE("limits.trial_seconds stops a trial inside the symmetric eigenvalue solve of its Gram",
+          "[run][hostile]") {
+  // A Gaussian Gram of n = 3000 centres on the paper's track, singular to working precision:
+  // its eigenvalue solve was one uninterruptible call into Eigen, and with trial_seconds = 2
+  // the trial ended after 7.6 s on the 2-core development machine (n = 6000: 227 s, under
+  // load). The solve now checks the deadline between its O(n^2) steps (symmetric_eigen.hpp):
+  // measured 1.02 s with trial_seconds = 1. Asserted below limit + 3 s, not + 1 s, so that a
+  // loaded CI machine (the Gram's assembly and a step of the solve slowed several times) does
+  // not make it flaky; the unpatched solve alone takes well over that.
+  const auto study = parse_study(R"([study]
+name = "deadline_in_eigen_solve"
+evaluation_points = 256
+metrics = ["gram_condition_number", "gram_min_eigenvalue", "gram_max_eigenvalue"]
+[domain]
+radius = 4
+[grid]
+n = [3000]
+[[kernel]]
+name = "gaussian"
+sigma = 1.0
+[limits]
+trial_seconds = 1
+)",
+                                 "s.toml");
+  const auto start = std::chrono::steady_clock::now();
+  const auto result = rkhs::run_trial(study, study.trials().front());
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  INFO(result.reason << " after " << wall << " s");
+  CHECK_FALSE(result.ok);
+  CHECK_FALSE(result.skipped);
+  CHECK_THAT(result.reason, Catch::StartsWith("exceeded limits.trial_seconds = 1 ("));
+  CHECK(wall < 4.0);
+}
+
 TEST_CASE("a trial of a laps axis runs with its own lap count, as a study with that one count",
           "[run][laps]") {
   const auto study_with = [](const std::string& laps, const std::string& snapshots) {

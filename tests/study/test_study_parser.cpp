@@ -573,6 +573,25 @@ TEST_CASE("hostile values are refused at their key with the allowed range, or re
                Catch::StartsWith("s.toml:12:10: kernel.radius: ") &&
                    Catch::Contains("would sum 1.602e+07 images per kernel value on this torus"));
   }
+  SECTION("a periodic Gaussian sigma above 1e5 periods (2 million images per kernel value)") {
+    // The property fuzzer's hang-2-642: a track of 1e-12 m, sigma = 1: image_count reached its
+    // cap of 2^20 images each side and a trial of n = 16 ran 39 s past trial_seconds = 2.
+    const auto gaussian = [](const std::string& domain) {
+      return "[study]\nname = \"t\"\n[domain]\n" + domain +
+             "\n[grid]\nn = [4, 8, 16]\n[[kernel]]\nname = \"gaussian\"\nsigma = 1.0\n"
+             "convention = \"sigma2\"\n";
+    };
+    CHECK_THAT(error_of(gaussian("length = 1e-12\nperiodic = true")),
+               Catch::StartsWith("s.toml:10:9: kernel.sigma: ") &&
+                   Catch::Contains("parameter 'sigma' must be at most 100000 times the period of "
+                                   "a periodic domain") &&
+                   Catch::Contains("found sigma = 1 on a period of 1e-12"));
+    // At the bound it is a kernel; on an interval any sigma is; on a torus each axis counts.
+    CHECK_NOTHROW(parse_study(gaussian("length = 1e-5"), "s.toml"));
+    CHECK_NOTHROW(parse_study(gaussian("length = 1e-12\nperiodic = false"), "s.toml"));
+    CHECK_THAT(error_of(gaussian("lengths = [1.0, 1e-6]")),
+               Catch::Contains("found sigma = 1 on a period of 1e-06"));
+  }
   SECTION("integers above 2^53 in real-valued keys are read as the nearest double") {
     // 9007199254740993 = 2^53 + 1 is no double: toml++ gives no value<double>() for it, and the
     // parser ended in "bad optional access" without a position.

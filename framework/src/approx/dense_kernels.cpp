@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <vector>
 
+#include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
 
 namespace rkhs::dense {
@@ -64,6 +65,7 @@ bool parallel_cholesky(const Kernels& variant, double* a, Index n, Index lda) {
   };
   std::vector<Tile> tiles;
   for (Index k = 0; k < n; k += block) {
+    check_cancelled();
     const Index bs = std::min(block, n - k), rs = n - k - bs;
     if (!variant.cholesky_unblocked(at(k, k), bs, lda)) return false;
     if (rs == 0) break;
@@ -83,6 +85,7 @@ bool parallel_cholesky(const Kernels& variant, double* a, Index n, Index lda) {
     }
     const Index base = k + bs;
     run_parts(tiles.size(), [&](std::size_t t) {
+      check_cancelled();  // a tile is at most 256 x 1024 x 128 multiply-adds
       const Tile& tile = tiles[t];
       if (tile.row0 == tile.col0)
         variant.subtract_gram_lower(at(base + tile.col0, k), tile.cols, bs, lda,

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "rkhs/approx/dense_kernels.hpp"
+#include "rkhs/approx/symmetric_eigen.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
 #include "rkhs/core/work_counters.hpp"
@@ -128,14 +129,15 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
                                          const SolverOptions& options) {
   // The eigenvalues alone (the same values as with the eigenvectors: the tridiagonal QR
   // iteration does not depend on whether they are accumulated); the vectors only when the
-  // pseudo-inverse needs them. Each solve is one call into Eigen that no deadline interrupts
-  // (seconds at n = 3000): the trial's deadline and stop request are checked before each.
+  // pseudo-inverse needs them. Each solve is Eigen's SelfAdjointEigenSolver bit for bit,
+  // with the trial's deadline and stop request checked between its O(n^2) steps
+  // (symmetric_eigen.hpp).
   check_cancelled();
   count_factorisation();  // a symmetric eigenvalue solve
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram, Eigen::EigenvaluesOnly);
-  if (eigen.info() != Eigen::Success)
+  const SymmetricEigen eigen = symmetric_eigen(gram, false);
+  if (eigen.info != Eigen::Success)
     throw std::runtime_error("symmetric eigen-decomposition of the Gram matrix did not converge");
-  const Eigen::VectorXd& values = eigen.eigenvalues();  // increasing
+  const Eigen::VectorXd& values = eigen.values;  // increasing
   spectrum_ = {};
   spectrum_.lambda_min = values(0);
   spectrum_.lambda_max = values(n_ - 1);
@@ -170,15 +172,15 @@ void GramSolver::decide_from_eigenvalues(const Eigen::MatrixXd& gram,
       return;
     case SingularPolicy::pseudo_inverse: {
       count_factorisation();
-      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> pairs(gram);
-      if (pairs.info() != Eigen::Success)
+      const SymmetricEigen pairs = symmetric_eigen(gram, true);
+      if (pairs.info != Eigen::Success)
         throw std::runtime_error(
             "symmetric eigen-decomposition of the Gram matrix did not converge");
-      const Eigen::VectorXd& pair_values = pairs.eigenvalues();
+      const Eigen::VectorXd& pair_values = pairs.values;
       Eigen::Index first = 0;
       while (first < n_ && !(pair_values(first) > cutoff)) ++first;
       const Eigen::Index rank = n_ - first;
-      kept_vectors_ = pairs.eigenvectors().rightCols(rank);
+      kept_vectors_ = pairs.vectors.rightCols(rank);
       kept_values_ = pair_values.tail(rank);
       method_ = fmt::format("pseudo-inverse (rank {} of {}, cutoff {:.3e} lambda_max)", rank, n_,
                             static_cast<double>(n_) * eps);

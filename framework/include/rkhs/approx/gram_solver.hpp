@@ -17,10 +17,11 @@
 // is never below the true one; when it is within a factor 100 of the threshold, or the
 // factorisation fails, the exact solve decides, so both modes take the same decision.
 //
-// Between its O(n^3) steps (before each symmetric eigenvalue solve and before the factorisation
-// or pseudo-inverse that follows one) it calls check_cancelled() (core/cancellation.hpp): inside
+// Between its O(n^3) steps, and inside them (between the O(n^2) steps of the symmetric
+// eigenvalue solves, symmetric_eigen.hpp, and between the panels and tiles of the Cholesky
+// factorisation, dense_kernels.hpp), it calls check_cancelled() (core/cancellation.hpp): inside
 // a trial a passed deadline or a stop request ends it there (TrialTimeLimitExceeded,
-// TrialCancelled). One step is not interrupted: a trial overruns its limit by at most that step.
+// TrialCancelled), within tens of milliseconds at n = 6000.
 
 #include <Eigen/Dense>
 #include <optional>

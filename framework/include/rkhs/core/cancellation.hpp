@@ -12,9 +12,10 @@
 // Outside a scope it does nothing. A check costs one call of the predicate and one clock read:
 // call it per step or per row of work, not per kernel evaluation.
 //
-// Work inside one library call that never returns to such a point (a dense eigendecomposition
-// of a large Gram matrix in Eigen) cannot be stopped this way; run_trials() handles that case
-// by abandoning the trial after a grace period (rkhs/run/run.hpp).
+// Work inside one library call that never returns to such a point cannot be stopped this way
+// (the Gram matrix's eigen-decomposition and Cholesky factorisation check it themselves,
+// approx/symmetric_eigen.hpp and approx/dense_kernels.hpp); run_trials() handles that case by
+// abandoning the trial after a grace period (rkhs/run/run.hpp).
 
 #include <chrono>
 #include <functional>

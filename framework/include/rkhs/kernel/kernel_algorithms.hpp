@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
 #include "rkhs/core/work_counters.hpp"
 #include "rkhs/kernel/kernel.hpp"
@@ -59,6 +60,12 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> feature_matrix(const K& kernel,
   return phi;
 }
 
+/// Kernel loops call check_cancelled() (core/cancellation.hpp) once per this many kernel
+/// values: one value of a periodised kernel may sum up to 2^21 images (the bounds of
+/// docs/study-files.md, milliseconds each), so a trial's deadline is seen within a fraction of
+/// a second; a check (a clock read) costs about as much as one plain exponential.
+inline constexpr std::size_t cancellation_stride = 32;
+
 /// Calls visit(m, i) for every pair of point m and centre i with domain distance below
 /// `radius` (and possibly a few more at the boundary of the window), in increasing i for each m.
 template <class Visit>
@@ -92,7 +99,10 @@ void for_each_pair_within(const Domain& domain, double radius, std::span<const d
       std::sort(hits.begin(), hits.end());
       hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
     }
-    for (std::size_t i : hits) visit(m, i);
+    for (std::size_t k = 0; k < hits.size(); ++k) {
+      if (k % cancellation_stride == 0) check_cancelled();
+      visit(m, hits[k]);
+    }
   }
 }
 
@@ -109,8 +119,12 @@ Eigen::MatrixXd assemble_point_cross(const K& kernel, const Domain& domain,
   Eigen::MatrixXd out(rows, cols);
   for (Eigen::Index i = 0; i < cols; ++i) {
     const double* c = centres.data() + static_cast<std::size_t>(i) * d;
-    for (Eigen::Index m = 0; m < rows; ++m)
-      out(m, i) = kernel(points.data() + static_cast<std::size_t>(m) * d, c);
+    for (Eigen::Index m0 = 0; m0 < rows; m0 += cancellation_stride) {
+      check_cancelled();
+      const Eigen::Index m1 = std::min<Eigen::Index>(rows, m0 + cancellation_stride);
+      for (Eigen::Index m = m0; m < m1; ++m)
+        out(m, i) = kernel(points.data() + static_cast<std::size_t>(m) * d, c);
+    }
   }
   return out;
 }
@@ -248,7 +262,11 @@ Eigen::MatrixXd assemble_cross(const K& kernel, const Domain& domain,
           });
     } else {
       for (Eigen::Index i = 0; i < cols; ++i)
-        for (Eigen::Index m = 0; m < rows; ++m) out(m, i) = kernel(points[m], centres[i]);
+        for (Eigen::Index m0 = 0; m0 < rows; m0 += detail::cancellation_stride) {
+          check_cancelled();
+          const Eigen::Index m1 = std::min<Eigen::Index>(rows, m0 + detail::cancellation_stride);
+          for (Eigen::Index m = m0; m < m1; ++m) out(m, i) = kernel(points[m], centres[i]);
+        }
     }
     return out;
   }
@@ -273,7 +291,11 @@ void assemble_symmetric(Eigen::Ref<Eigen::MatrixXd> gram, Evaluate&& evaluate) {
   };
   run_parts(strips, [&](std::size_t p) {
     for (Eigen::Index j = first(p); j < first(p + 1); ++j) {
-      for (Eigen::Index i = j; i < n; ++i) gram(i, j) = evaluate(i, j);
+      for (Eigen::Index i0 = j; i0 < n; i0 += cancellation_stride) {
+        check_cancelled();
+        const Eigen::Index i1 = std::min<Eigen::Index>(n, i0 + cancellation_stride);
+        for (Eigen::Index i = i0; i < i1; ++i) gram(i, j) = evaluate(i, j);
+      }
       // Row j right of the diagonal: entries no other strip writes.
       for (Eigen::Index i = j + 1; i < n; ++i) gram(j, i) = gram(i, j);
     }
@@ -712,13 +734,18 @@ class KernelModel final : public AnyKernel {
     require_size(static_cast<Eigen::Index>(out.size()), 1, count, 1, "diagonal_into");
     count_kernel_evaluations(count);
     if (domain_.dimension == 1) {
-      for (std::size_t m = 0; m < count; ++m) out[m] = kernel_(points[m], points[m]);
+      for (std::size_t m = 0; m < count; ++m) {
+        if (m % detail::cancellation_stride == 0) check_cancelled();
+        out[m] = kernel_(points[m], points[m]);
+      }
       return;
     }
     if constexpr (PointKernel<K>) {
       const auto d = static_cast<std::size_t>(domain_.dimension);
-      for (std::size_t m = 0; m < count; ++m)
+      for (std::size_t m = 0; m < count; ++m) {
+        if (m % detail::cancellation_stride == 0) check_cancelled();
         out[m] = kernel_(points.data() + m * d, points.data() + m * d);
+      }
     }
   }
   std::size_t feature_count() const noexcept override {

@@ -17,9 +17,14 @@
 // On a box or torus of d = 2, 3: k0(x, y) = exp(-|x - y|^2 / (c sigma^2)); on a torus the lattice
 // sum of its images, the product over axes of the per-axis image sums above.
 // Properties: strictly positive definite, analytic (no Sobolev order), global support,
-// stationary, dimension d of the domain. Wide Gaussians (sigma of the order of L or larger) have Gram matrices that are
-// singular to double precision: the kernel is still evaluated correctly, the trial reports it.
-// Fails: nothing beyond the parameter declarations (ParameterSet::resolve checks sigma > 0).
+// stationary, dimension d of the domain. Wide Gaussians (sigma of the order of L or larger) have
+// Gram matrices that are singular to double precision: the kernel is still evaluated correctly, the
+// trial reports it. Fails: ParameterError naming "sigma" on a periodic domain when sigma exceeds
+// max_periods times the period (the track's length, or any axis' extent of a torus): the image sum
+// would need close to image_count's cap of 2^20 images each side (M = 6.9e5 for "sigma2", 9.8e5 for
+// "2sigma2" at sigma / L = 1e5), millions of exponentials per kernel value, for a kernel that
+// is constant to double precision from sigma / L ~ 2 on (its variation is
+// exp(-pi^2 c sigma^2 / L^2) of its mean).
 
 #include <cmath>
 
@@ -33,6 +38,9 @@ namespace rkhs::kernels {
 
 class Gaussian {
  public:
+  /// The largest sigma / L on a periodic domain (per axis on a torus): see "Fails" above.
+  static constexpr double max_periods = 1e5;
+
   static PluginInfo info();
 
   Gaussian(const ParameterSet& parameters, const Domain& domain);
