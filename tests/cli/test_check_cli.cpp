@@ -547,3 +547,16 @@ theory = true
   CHECK_THAT(outcome.output, !Catch::Contains("trials,"));
   CHECK_THAT(outcome.output, !Catch::Contains("PASS"));
 }
+
+TEST_CASE("check on a study without [[expect]] exits 5, like -k selecting nothing",
+          "[cli][check]") {
+  const auto dir = scratch("no_expectations");
+  const auto study = write_study(dir, "");
+  const auto outcome =
+      rkhs_study("check " + study.string() + " --no-store --quiet --out " + (dir / "out").string());
+  INFO(outcome.output);
+  CHECK(outcome.exit_code == 5);
+  CHECK_THAT(outcome.output, Catch::Contains("no expectations to check (nothing verified)"));
+  // Its trials ran and its outputs were written all the same.
+  CHECK(fs::is_regular_file(dir / "out" / "trials.csv"));
+}

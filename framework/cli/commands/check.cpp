@@ -2,7 +2,8 @@
 // [[expect]] tables (docs/verification.md): the test cases `-k` selects, xfail markers, one
 // combined report, one JUnit file with a suite per study, one exit code over all studies: 0 all
 // pass, 1 a failure (--strict: also inconclusive or XPASS), 3 inconclusive ones besides passes
-// (0 with --allow inconclusive), 5 when -k selected nothing.
+// (0 with --allow inconclusive), 5 when no test case was judged (-k selected nothing, or no
+// study has an [[expect]] table).
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
