@@ -521,7 +521,7 @@ assert x["reason"].startswith("the 95% CI lies entirely below 4.90"), x["reason"
   CHECK(report.output.find("gaussian") == std::string::npos);
 }
 
-TEST_CASE("check --junit into a missing folder creates it; one that cannot be is exit 2 up front",
+TEST_CASE("check --junit into a missing folder creates it, one that cannot be is exit 2 up front",
           "[cli][check]") {
   const auto dir = scratch("junit_folder");
   const auto study = write_study(dir, R"(
