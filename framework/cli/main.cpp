@@ -18,6 +18,7 @@
 #include "rkhs/distributed.hpp"
 #include "rkhs/plugin/builtins.hpp"  // plugin_kind_names(), for `list`
 #include "rkhs/run/run.hpp"
+#include "rkhs/verify/verification.hpp"  // check_none_selected
 
 namespace {
 
@@ -260,15 +261,16 @@ class StandardOutput : public std::streambuf {
 };
 
 // Standard output flushed and checked once, for every command: a write that failed (a full disk,
-// `> /dev/full`, a closed descriptor) turns a success into exit 1 with the reason; an exit code
-// that already says failure is kept.
+// `> /dev/full`, a closed descriptor) turns a success into exit 1 with the reason, and so `check`'s
+// 5 (nothing verified: what it printed was all it had to say); an exit code that already says
+// failure is kept.
 int checked_standard_output(int code, const StandardOutput& output) {
   std::cout.flush();
   if (output.error() == 0 && std::cout.good()) return code;
   std::cerr << "rkhs-study: cannot write to standard output"
             << (output.error() ? std::string(": ") + std::strerror(output.error()) : std::string())
             << "\n";
-  return code == 0 ? 1 : code;
+  return code == 0 || code == rkhs::check_none_selected ? 1 : code;
 }
 
 }  // namespace

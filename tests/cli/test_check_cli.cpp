@@ -520,3 +520,43 @@ assert x["reason"].startswith("the 95% CI lies entirely below 4.90"), x["reason"
   CHECK(report.exit_code == 0);
   CHECK(report.output.find("gaussian") == std::string::npos);
 }
+
+TEST_CASE("check --junit into a missing folder creates it, one that cannot be is exit 2 up front",
+          "[cli][check]") {
+  const auto dir = scratch("junit_folder");
+  const auto study = write_study(dir, R"(
+[[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+theory = true
+)");
+  const auto xml = dir / "missing" / "dir" / "r.xml";
+  auto outcome =
+      rkhs_study("check " + study.string() + " --no-store --quiet --junit " + xml.string());
+  INFO(outcome.output);
+  CHECK(outcome.exit_code != 2);
+  CHECK(fs::is_regular_file(xml));
+  // A folder that cannot be made (a file is in the way): exit 2 naming the path, no trial run.
+  std::ofstream(dir / "a_file") << "x";
+  const auto blocked = dir / "a_file" / "r.xml";
+  outcome =
+      rkhs_study("check " + study.string() + " --no-store --quiet --junit " + blocked.string());
+  INFO(outcome.output);
+  CHECK(outcome.exit_code == 2);
+  CHECK_THAT(outcome.output, Catch::Contains("cannot write the JUnit report " + blocked.string()));
+  CHECK_THAT(outcome.output, !Catch::Contains("trials,"));
+  CHECK_THAT(outcome.output, !Catch::Contains("PASS"));
+}
+
+TEST_CASE("check on a study without [[expect]] exits 5, like -k selecting nothing",
+          "[cli][check]") {
+  const auto dir = scratch("no_expectations");
+  const auto study = write_study(dir, "");
+  const auto outcome =
+      rkhs_study("check " + study.string() + " --no-store --quiet --out " + (dir / "out").string());
+  INFO(outcome.output);
+  CHECK(outcome.exit_code == 5);
+  CHECK_THAT(outcome.output, Catch::Contains("no expectations to check (nothing verified)"));
+  // Its trials ran and its outputs were written all the same.
+  CHECK(fs::is_regular_file(dir / "out" / "trials.csv"));
+}

@@ -3,11 +3,14 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "cli_support.hpp"
 #include "plugin_test_support.hpp"
@@ -194,4 +197,86 @@ TEST_CASE("a truncated plugin and a FIFO named .so are refused on every way a pl
   const auto whole = run("list --plugin " + (dir / "whole.so").string(), limit);
   INFO(whole.output);
   CHECK(whole.exit_code == 0);
+}
+
+namespace {
+
+// The values of `column` in a trials.csv, in its row order.
+std::vector<std::string> csv_column(const fs::path& file, const std::string& column) {
+  std::istringstream in(rkhs::test::read_text(file));
+  std::string line;
+  std::getline(in, line);
+  auto split = [](const std::string& row) {
+    std::vector<std::string> cells;
+    std::stringstream cells_in(row);
+    for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  const auto header = split(line);
+  const auto at = std::find(header.begin(), header.end(), column) - header.begin();
+  REQUIRE(static_cast<std::size_t>(at) < header.size());
+  std::vector<std::string> values;
+  while (std::getline(in, line)) values.push_back(split(line).at(at));
+  return values;
+}
+
+}  // namespace
+
+TEST_CASE("a rebuilt plugin module re-runs its trials without --fresh", "[cli][store][plugin]") {
+  const auto dir = rkhs::test::scratch_directory("store_rebuilt_plugin");
+  const auto store = dir / "store.sqlite";
+  // The study names the module by one path; "rebuilding" it replaces the file there.
+  fs::copy_file(plugin_dir / "scaled_kernel_1.so", dir / "scaled.so",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "study.toml") << R"(plugins = ["scaled.so"]
+[study]
+name = "rebuilt_plugin"
+metrics = ["power_function_sup", "l2_error"]
+[domain]
+radius = 4
+[grid]
+n = [8, 16, 32]
+[[kernel]]
+name = "scaled_gaussian"
+)";
+  const std::string run = "run " + (dir / "study.toml").string() + " --no-plots --store " +
+                          store.string() + " --out " + (dir / "out").string();
+  auto first = rkhs::test::rkhs_study(run);
+  INFO(first.output);
+  REQUIRE(first.exit_code == 0);
+  CHECK_THAT(first.output,
+             Catch::Contains("0 trials reused from " + store.string() + ", 3 run now"));
+  const auto before = csv_column(dir / "out" / "trials.csv", "power_function_sup");
+
+  // The same module again: every trial reused.
+  auto again = rkhs::test::rkhs_study(run);
+  INFO(again.output);
+  REQUIRE(again.exit_code == 0);
+  CHECK_THAT(again.output,
+             Catch::Contains("3 trials reused from " + store.string() + ", 0 run now"));
+  CHECK(csv_column(dir / "out" / "trials.csv", "power_function_sup") == before);
+
+  // Rebuilt with another width: its trials run again, and say why; the new values.
+  fs::copy_file(plugin_dir / "scaled_kernel_2.so", dir / "scaled.so",
+                fs::copy_options::overwrite_existing);
+  auto rebuilt = rkhs::test::rkhs_study(run);
+  INFO(rebuilt.output);
+  REQUIRE(rebuilt.exit_code == 0);
+  CHECK_THAT(rebuilt.output,
+             Catch::Contains("0 trials reused from " + store.string() +
+                             ", 3 run now (all stored before under another identity: a plugin "
+                             "module rebuilt"));
+  const auto after = csv_column(dir / "out" / "trials.csv", "power_function_sup");
+  REQUIRE(after.size() == before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) CHECK(after[i] != before[i]);
+
+  // Back to the first build: its stored trials are reused again.
+  fs::copy_file(plugin_dir / "scaled_kernel_1.so", dir / "scaled.so",
+                fs::copy_options::overwrite_existing);
+  auto restored = rkhs::test::rkhs_study(run);
+  INFO(restored.output);
+  REQUIRE(restored.exit_code == 0);
+  CHECK_THAT(restored.output,
+             Catch::Contains("3 trials reused from " + store.string() + ", 0 run now"));
+  CHECK(csv_column(dir / "out" / "trials.csv", "power_function_sup") == before);
 }

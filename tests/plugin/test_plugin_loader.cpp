@@ -13,11 +13,14 @@
 #include "rkhs/adaptive/plant.hpp"
 #include "rkhs/approx/projection.hpp"
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/core/sha256.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/plugin/build_configuration.hpp"
 #include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/module.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
+#include "rkhs/run/trial_identity.hpp"
+#include "rkhs/study/study.hpp"
 #include "study_support.hpp"
 
 namespace fs = std::filesystem;
@@ -334,4 +337,49 @@ name = "wendland"
   }
   CHECK(unload_plugin(module("projection_part")));
   CHECK(projection_registry().names() == projections);
+}
+
+TEST_CASE("a trial's identity holds the content hash of the module its plugin comes from",
+          "[plugin][store]") {
+  const std::string text = R"(
+[study]
+name = "module_identity"
+metrics = ["power_function_sup"]
+[domain]
+radius = 4
+[grid]
+n = [8, 16]
+[[kernel]]
+name = "scaled_gaussian"
+[[kernel]]
+name = "gaussian"
+)";
+  std::vector<std::string> first, second;
+  StudyDefinition study;
+  {
+    test::ScopedPlugin plugin(module("scaled_kernel_1"));
+    CHECK(plugin.plugin().sha256 == sha256_file(module("scaled_kernel_1")));
+    study = parse_study(text, "module_identity.toml");
+    first = trial_hashes(study, study.trials());
+    CHECK(first == trial_hashes(study, study.trials()));  // deterministic
+  }
+  {
+    // The same kernel, module and trial keys from another build of the module.
+    test::ScopedPlugin plugin(module("scaled_kernel_2"));
+    second = trial_hashes(study, study.trials());
+  }
+  const auto trials = study.trials();
+  REQUIRE(trials.size() == 4);
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    INFO(trials[i].key);
+    // The plugin's trials change identity with its module; the built-in Gaussian's do not.
+    if (trials[i].kernel.name == "scaled_gaussian")
+      CHECK(first[i] != second[i]);
+    else
+      CHECK(first[i] == second[i]);
+  }
+  // A built-in trial's identity is the same with no module loaded at all.
+  const auto unloaded = trial_hashes(study, trials);
+  for (std::size_t i = 0; i < trials.size(); ++i)
+    if (trials[i].kernel.name == "gaussian") CHECK(unloaded[i] == first[i]);
 }

@@ -2,10 +2,15 @@
 // [[expect]] tables (docs/verification.md): the test cases `-k` selects, xfail markers, one
 // combined report, one JUnit file with a suite per study, one exit code over all studies: 0 all
 // pass, 1 a failure (--strict: also inconclusive or XPASS), 3 inconclusive ones besides passes
-// (0 with --allow inconclusive), 5 when -k selected nothing.
+// (0 with --allow inconclusive), 5 when no test case was judged (-k selected nothing, or no
+// study has an [[expect]] table).
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <deque>
 #include <exception>
 #include <filesystem>
@@ -55,6 +60,31 @@ void require_distinct_names(const std::deque<CheckedStudy>& studies) {
                               studies[i].study.name));
 }
 
+// Before any trial: the folder of the --junit file is created when missing, and a file can be
+// created in it; otherwise exit 2 naming the path, with nothing run (the report is written last,
+// after every study, where a failure would have cost the whole check).
+void prepare_junit_file(const std::filesystem::path& file) {
+  namespace fs = std::filesystem;
+  const auto fail = [&](const std::string& why) {
+    throw std::runtime_error(
+        fmt::format("cannot write the JUnit report {}: {} (choose another "
+                    "with --junit FILE)",
+                    file.string(), why));
+  };
+  std::error_code error;
+  if (fs::is_directory(file, error)) fail("it is a folder");
+  const auto folder = file.parent_path().empty() ? fs::path(".") : file.parent_path();
+  fs::create_directories(folder, error);
+  if (error) fail(fmt::format("cannot create its folder {}: {}", folder.string(), error.message()));
+  if (!fs::is_directory(folder, error)) fail(fmt::format("{} is not a folder", folder.string()));
+  const auto probe = folder / fmt::format(".rkhs-study-probe.{}", static_cast<long>(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0)
+    fail(fmt::format("cannot create a file in {}: {}", folder.string(), std::strerror(errno)));
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
 class Check {
  public:
   Check(const CheckCommand& arguments, pipeline::Executor& executor)
@@ -68,6 +98,7 @@ class Check {
   int run() {
     collect();
     const bool root = executor_.is_root();
+    if (root && !arguments_.junit_file.empty()) prepare_junit_file(arguments_.junit_file);
     for (auto& checked : studies_) {
       if (selection_ && checked.selected.empty()) {
         if (root) report_not_run(checked);

@@ -122,10 +122,19 @@ void print_run_sources(const pipeline::PipelineOutcome& outcome,
                               ranks[r].lost ? " (lost)" : "");
     std::cerr << fmt::format("  trials run per MPI rank: {}\n", per_rank);
   }
-  if (outcome.completed && !outcome.store_file.empty())
-    std::cerr << fmt::format("  {} reused from {}, {} run now\n",
-                             counted(outcome.completed->stored.reused, "trial", "trials"),
-                             outcome.store_file, outcome.completed->stored.ran);
+  if (outcome.completed && !outcome.store_file.empty()) {
+    const auto& stored = outcome.completed->stored;
+    // A trial stored under another identity was not reused: say so, and what can change it.
+    const auto superseded = std::min(stored.superseded, stored.ran);
+    std::cerr << fmt::format(
+        "  {} reused from {}, {} run now{}\n", counted(stored.reused, "trial", "trials"),
+        outcome.store_file, stored.ran,
+        superseded ? fmt::format(" ({} stored before under another identity: a plugin module "
+                                 "rebuilt, another rkhs-study build or other study settings)",
+                                 superseded == stored.ran ? std::string("all")
+                                                          : fmt::format("{} of them", superseded))
+                   : std::string());
+  }
 }
 
 std::size_t render_plots(const RunRecord& record, const std::string& out_dir, bool quiet) {

@@ -18,6 +18,7 @@
 
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/input_file.hpp"
+#include "rkhs/core/sha256.hpp"
 #include "rkhs/plugin/build_configuration.hpp"
 #include "rkhs/plugin/module.hpp"
 #include "rkhs/plugin/plugin_kinds.hpp"
@@ -181,6 +182,13 @@ LoadedPlugin load_plugin(const fs::path& file) {
         fmt::format("{}: is {}, not a plugin file (a shared library)", shown, file_kind(type)));
   if (const auto why = incomplete_elf(canonical); !why.empty())
     throw PluginError(fmt::format("{}: not an rkhs-study plugin ({})", shown, why));
+  // The bytes that will be mapped, hashed once: what the trials it computes are keyed by.
+  std::string content_hash;
+  try {
+    content_hash = sha256_file(canonical);
+  } catch (const std::exception& e) {
+    throw PluginError(fmt::format("{}: not an rkhs-study plugin ({})", shown, e.what()));
+  }
 
   const auto before = RegistryState::take();
   dlerror();
@@ -267,6 +275,7 @@ LoadedPlugin load_plugin(const fs::path& file) {
 
   LoadedPlugin plugin;
   plugin.file = canonical;
+  plugin.sha256 = content_hash;
   plugin.name = name;
   plugin.rkhs_study_version = built_with;
   plugin.abi_version = abi;

@@ -182,6 +182,10 @@ StoredRun run_with_store(const StudyDefinition& study, const std::vector<TrialSp
     pending.push_back(trials[i]);
     position.push_back(i);
   }
+  if (store && !fresh && !pending.empty()) {
+    const auto stored_keys = store->keys_of_study(study.name);
+    for (const auto& trial : pending) out.superseded += stored_keys.count(trial.key);
+  }
   if (old_format)
     out.store_problems.push_back(fmt::format(
         "{}: {} stored in the old record format (no checksum): run again and stored anew",
@@ -752,6 +756,19 @@ void ResultStore::put(const std::string& hash, const std::string& study, const s
   sqlite3_bind_text(statement.handle, 3, key.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(statement.handle, 4, record.c_str(), -1, SQLITE_TRANSIENT);
   if (step(statement.handle) != SQLITE_DONE) fail("cannot store the trial " + key);
+}
+
+std::set<std::string> ResultStore::keys_of_study(const std::string& study) const {
+  Statement statement(db_, "SELECT key FROM trials WHERE study = ?1", file_);
+  sqlite3_bind_text(statement.handle, 1, study.c_str(), -1, SQLITE_TRANSIENT);
+  std::set<std::string> keys;
+  for (bool first = true;; first = false) {
+    const int status = first ? step(statement.handle) : sqlite3_step(statement.handle);
+    if (status == SQLITE_DONE) return keys;
+    if (status != SQLITE_ROW) fail("cannot read the stored trials");
+    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(statement.handle, 0));
+    keys.emplace(text ? text : "");
+  }
 }
 
 void ResultStore::for_each(const std::function<void(const Entry&)>& visit) const {

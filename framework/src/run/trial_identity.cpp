@@ -7,10 +7,12 @@
 #include <map>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/sha256.hpp"
+#include "rkhs/plugin/plugin_loader.hpp"
 
 namespace rkhs {
 
@@ -122,6 +124,32 @@ std::string study_settings_text(const StudyDefinition& study) {
   return out;
 }
 
+namespace {
+
+// " | modules=kernel:imq=<sha256>,..." for the trial's plugins that a loaded module registered,
+// in the order of TrialSpec's fields; "" when every one is built in, so that the identity of a
+// trial of built-in plugins is what it was before modules entered it.
+std::string plugin_modules_text(
+    const TrialSpec& trial,
+    const std::map<std::pair<std::string, std::string>, std::string>& module_of) {
+  if (module_of.empty()) return {};
+  const std::pair<const char*, const PluginChoice*> choices[] = {
+      {"kernel", &trial.kernel},         {"target", &trial.target}, {"centres", &trial.centres},
+      {"projection", &trial.projection}, {"plant", &trial.plant},   {"law", &trial.law},
+      {"integrator", &trial.integrator}};
+  std::string text;
+  for (const auto& [kind, choice] : choices) {
+    if (choice->name.empty()) continue;
+    auto it = module_of.find({kind, choice->name});
+    if (it == module_of.end()) continue;
+    text += fmt::format("{}{}:{}={}", text.empty() ? " | modules=" : ",", kind, choice->name,
+                        it->second);
+  }
+  return text;
+}
+
+}  // namespace
+
 std::vector<std::string> trial_hashes(const StudyDefinition& study,
                                       const std::vector<TrialSpec>& trials) {
   const auto& build = build_info();
@@ -131,6 +159,12 @@ std::vector<std::string> trial_hashes(const StudyDefinition& study,
       fmt::format("rkhs-study {} {} | {} | computes {}", build.version, build.git_commit,
                   study_settings_text(study), fmt::join(study.computed_metric_names(), ","));
   std::map<std::string, std::string> data_of_target;  // target label -> data provenance
+  // The module each loaded plugin came from, by (kind, name): its content hash, taken once when
+  // it was loaded. Built-in plugins are in none (the build's commit covers them).
+  std::map<std::pair<std::string, std::string>, std::string> module_of;
+  for (const auto& module : loaded_plugins())
+    for (const auto& [kind, names] : module.registered)
+      for (const auto& name : names) module_of[{kind, name}] = module.sha256;
   std::vector<std::string> out;
   out.reserve(trials.size());
   for (const auto& trial : trials) {
@@ -147,7 +181,8 @@ std::vector<std::string> trial_hashes(const StudyDefinition& study,
       }
       it = data_of_target.emplace(label, provenance).first;
     }
-    out.push_back(sha256_hex(common + " | " + trial.key + " | data=" + it->second));
+    out.push_back(sha256_hex(common + " | " + trial.key + " | data=" + it->second +
+                             plugin_modules_text(trial, module_of)));
   }
   return out;
 }

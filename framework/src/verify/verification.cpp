@@ -813,7 +813,7 @@ VerdictCounts count_verdicts(const std::vector<ExpectationOutcome>& outcomes) {
 int check_exit_code(const VerdictCounts& counts, const CheckPolicy& policy) {
   if (counts.failed > 0 || (policy.strict && (counts.inconclusive > 0 || counts.xpassed > 0)))
     return check_failed;
-  if (counts.selected() == 0 && counts.deselected > 0) return check_none_selected;
+  if (counts.selected() == 0) return check_none_selected;
   if (counts.inconclusive > 0 && !policy.allow_inconclusive) return check_inconclusive;
   return check_passed;
 }

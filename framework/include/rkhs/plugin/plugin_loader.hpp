@@ -47,6 +47,10 @@ class PluginError : public std::runtime_error {
 /// A module that loaded.
 struct LoadedPlugin {
   std::filesystem::path file;      ///< canonical path
+  /// SHA-256 (hex) of the file's bytes as it was loaded, read once per process (a module is
+  /// loaded once): part of the identity of every trial that uses one of its plugins
+  /// (run/trial_identity.hpp), so a rebuilt module re-runs its trials.
+  std::string sha256;
   std::string name;                ///< RKHS_PLUGIN_MODULE(name)
   std::string rkhs_study_version;  ///< the rkhs-study it was built against
   int abi_version = 0;

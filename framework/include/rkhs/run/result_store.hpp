@@ -20,6 +20,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -81,6 +82,10 @@ struct StoredRun {
   std::size_t ran = 0;               ///< trials run (and stored) now
   std::size_t skipped = 0;           ///< trials not run because the run was interrupted
   std::size_t stopped = 0;           ///< of those, trials stopped while they ran (not stored)
+  /// Of the trials run now, those of which the store held a record of the same study and trial
+  /// key under another identity (trial_hashes): a plugin module rebuilt, another rkhs-study
+  /// build or other study settings; their stored records were not reused.
+  std::size_t superseded = 0;
   /// What was wrong with the stored records that were not reused (their trials ran again),
   /// one line each: "STORE: trial KEY: what is wrong; run again", and one line for all
   /// records of the old format ("STORE: N stored trials in the old record format ...").
@@ -202,6 +207,9 @@ class ResultStore {
     RecordCheck check;
     std::string record;  ///< the stored text of the record
   };
+  /// The trial keys of the rows of `study` (one read of the table, not per trial): a trial of
+  /// that study and key not found by its hash was stored under another identity.
+  std::set<std::string> keys_of_study(const std::string& study) const;
   /// Calls `visit` for every stored row, in the order of their keys.
   void for_each(const std::function<void(const Entry&)>& visit) const;
   /// Removes the rows of these hashes; returns how many there were.

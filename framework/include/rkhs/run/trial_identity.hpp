@@ -2,8 +2,9 @@
 // The identity of a trial: what the result store keys its results by (docs/results.md). A stored
 // result is reused only when everything that can change it is the same: the build (version and
 // commit), the trial's key (every plugin choice with its parameters, n, and its lap count when
-// the study has a laps axis), the data files it
-// reads (their SHA-256), and the study settings.
+// the study has a laps axis), the data files it reads (their SHA-256), the plugin modules its
+// plugins come from (the SHA-256 of each .so, LoadedPlugin::sha256; built-in plugins add
+// nothing: the commit covers them), and the study settings.
 //
 // The study settings are derived, not listed by hand: every field of StudyDefinition is read
 // with Boost.PFR (field by field, nested aggregates included), so a field added to the study
@@ -32,8 +33,10 @@ struct ExcludedField {
 };
 std::vector<ExcludedField> not_in_identity(const StudyDefinition& study);
 
-/// The content hash of each trial (SHA-256, hex): build, study settings, trial key and the
-/// provenance of the data it reads. Equal hashes mean the stored result can be reused.
+/// The content hash of each trial (SHA-256, hex): build, study settings, trial key, the
+/// provenance of the data it reads and the content hash of every loaded plugin module one of
+/// its plugins comes from (hashed once, when the module was loaded; not per trial). Equal hashes
+/// mean the stored result can be reused.
 std::vector<std::string> trial_hashes(const StudyDefinition& study,
                                       const std::vector<TrialSpec>& trials);
 

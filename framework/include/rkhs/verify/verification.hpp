@@ -95,9 +95,9 @@ struct CheckPolicy {
 inline constexpr int check_passed = 0, check_failed = 1, check_inconclusive = 3,
                      check_none_selected = 5;
 
-/// 1 any fail (strict: or any inconclusive or XPASS); else 5 when cases were deselected and
-/// none selected (pytest's "no tests collected"); else 3 when some are inconclusive and they
-/// are not allowed; else 0 (also with nothing to check).
+/// 1 any fail (strict: or any inconclusive or XPASS); else 5 when no case was judged: -k
+/// deselected every one, or there was none (no [[expect]]), pytest's "no tests collected";
+/// else 3 when some are inconclusive and they are not allowed; else 0.
 int check_exit_code(const VerdictCounts& counts, const CheckPolicy& policy = {});
 
 /// The console report: per outcome "OUTCOME  name (file:line:column)" with the expected /
