@@ -537,7 +537,8 @@ def run_study(exe, text, work, metrics, st, data_dir, store=None):
         f"validate {v.code}, run {r.code}", 0) + 1
     if r.timed_out or r.code < 0:
         return findings, executions
-    if (v.code == 0) != (r.code != 2):
+    # validate's exit 1: valid, but trials above [limits] that run fails (exit 1) up front.
+    if (v.code in (0, 1)) != (r.code != 2):
         findings.append(("validate_run_disagree", f"validate {v.code}, run {r.code}: "
                          f"{(v.err + r.err).strip()[:300]}"))
     if r.code in (0, 1):
