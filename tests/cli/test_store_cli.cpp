@@ -13,6 +13,7 @@
 #include <fstream>
 #include <thread>
 
+#include "background_command.hpp"
 #include "cli_support.hpp"
 #include "rkhs/run/result_store.hpp"
 
@@ -26,21 +27,6 @@ std::string slow_study(const std::string& sigmas) {
   return rkhs::test::slow_study("store_cli", sigmas);
 }
 
-// Starts `rkhs-study args` in the background with stdout and stderr in `log`; returns its pid.
-pid_t start(const std::vector<std::string>& args, const fs::path& log = "/dev/null") {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out, 1);
-    dup2(out, 2);
-    execv(RKHS_STUDY_EXECUTABLE, argv.data());
-    _exit(127);
-  }
-  return pid;
-}
 
 // Waits until the store holds at least `count` trials (or the process ended).
 void wait_for_stored(const fs::path& store, std::size_t count, pid_t pid) {
@@ -61,8 +47,9 @@ TEST_CASE("a run killed with SIGKILL resumes and equals an uninterrupted run", "
   const auto dir = rkhs::test::scratch_directory("store_kill");
   std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
   const auto store = dir / "store.sqlite";
-  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
-                           "--store", store.string(), "--out", (dir / "killed").string()});
+  const pid_t pid = rkhs::test::start_rkhs_study({"run", (dir / "study.toml").string(), "--threads",
+                                                  "1", "--quiet", "--store", store.string(),
+                                                  "--out", (dir / "killed").string()});
   wait_for_stored(store, 2, pid);
   kill(pid, SIGKILL);
   waitpid(pid, nullptr, 0);
@@ -90,9 +77,10 @@ TEST_CASE("SIGINT stops the run: what finished is stored, and it says how to res
   std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
   const auto store = dir / "store.sqlite";
   const auto log = dir / "log.txt";
-  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
-                           "--store", store.string(), "--out", (dir / "out").string()},
-                          log);
+  const pid_t pid = rkhs::test::start_rkhs_study(
+      {"run", (dir / "study.toml").string(), "--threads", "1", "--quiet", "--store", store.string(),
+       "--out", (dir / "out").string()},
+      log);
   wait_for_stored(store, 1, pid);
   kill(pid, SIGINT);
   int status = 0;
@@ -239,9 +227,10 @@ nu = 2.5
 )";
   const auto store = dir / "store.sqlite";
   const auto log = dir / "log.txt";
-  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--store",
-                           store.string(), "--out", (dir / "out").string()},
-                          log);
+  const pid_t pid =
+      rkhs::test::start_rkhs_study({"run", (dir / "study.toml").string(), "--threads", "1",
+                                    "--store", store.string(), "--out", (dir / "out").string()},
+                                   log);
   // Alive inside the long trial: the progress line shows the trial in flight and its time.
   wait_for_text(log, "0/1 trials, 0 failed, ", pid, 30);
   CHECK_THAT(read_text(log), Catch::Contains("; running 1: "));
@@ -269,9 +258,10 @@ TEST_CASE("an interrupted --no-store run says that nothing was stored, and where
   std::ofstream(dir / "study.toml") << slow_study("[0.5, 0.7]");
   const auto log = dir / "log.txt";
   const auto journal = dir / "out" / "journal.csv";
-  const pid_t pid = start({"run", (dir / "study.toml").string(), "--threads", "1", "--quiet",
-                           "--no-store", "--out", (dir / "out").string()},
-                          log);
+  const pid_t pid =
+      rkhs::test::start_rkhs_study({"run", (dir / "study.toml").string(), "--threads", "1",
+                                    "--quiet", "--no-store", "--out", (dir / "out").string()},
+                                   log);
   // Until the journal holds a finished trial (header + 1 line).
   REQUIRE(rkhs::test::wait_until(
       [&] {

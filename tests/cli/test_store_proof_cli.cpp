@@ -15,6 +15,7 @@
 #include <fstream>
 #include <optional>
 
+#include "background_command.hpp"
 #include "cli_support.hpp"
 #include "rkhs/core/sha256.hpp"
 
@@ -152,22 +153,6 @@ void add_copies(const fs::path& file, std::size_t count) {
   REQUIRE(committed == SQLITE_OK);
 }
 
-// Starts `rkhs-study args` in the background (its own process, SIGINT not ignored, stdout and
-// stderr in `log`); returns its pid.
-pid_t start(const std::vector<std::string>& args, const fs::path& log) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> argv{const_cast<char*>(RKHS_STUDY_EXECUTABLE)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out, 1);
-    dup2(out, 2);
-    execv(RKHS_STUDY_EXECUTABLE, argv.data());
-    _exit(127);
-  }
-  return pid;
-}
 
 // The size of `file`, 0 when it does not exist.
 std::uintmax_t size_of(const fs::path& file) {
@@ -287,7 +272,7 @@ TEST_CASE("SIGINT or SIGTERM during a large merge rolls it back: the destination
   };
 
   SECTION("SIGINT while the records are written into an existing store") {
-    const pid_t pid = start({"merge", into.string(), large.string()}, log);
+    const pid_t pid = rkhs::test::start_rkhs_study({"merge", into.string(), large.string()}, log);
     // Frames of the open transaction in the WAL: the merge is writing and has not committed.
     const bool writing = rkhs::test::wait_until(
         [&] { return size_of(wal) > (8u << 20) || waitpid(pid, nullptr, WNOHANG) == pid; }, 60);
@@ -308,7 +293,7 @@ TEST_CASE("SIGINT or SIGTERM during a large merge rolls it back: the destination
   }
   SECTION("SIGTERM while the sources are read, into a new store") {
     const auto fresh = dir / "fresh.sqlite";
-    const pid_t pid = start({"merge", fresh.string(), large.string()}, log);
+    const pid_t pid = rkhs::test::start_rkhs_study({"merge", fresh.string(), large.string()}, log);
     // The new store exists once its schema is written, before the source is read.
     REQUIRE(rkhs::test::wait_until([&] { return fs::exists(fresh); }, 30));
     REQUIRE(kill(pid, SIGTERM) == 0);

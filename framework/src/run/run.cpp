@@ -233,18 +233,19 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     // Metrics that are undefined by design in some trials (MetricRow::may_be_nan: a single
     // centre has no separation; coefficient and Lyapunov metrics need a road in H_n).
     const auto& names = study.all_metrics();
-    for (std::size_t i = 0; i < names.size(); ++i)
-      if (computed[i] && std::isnan(result.metrics[i]) && !metric_may_be_nan(study.kind, i))
+    // A value that overflowed is no measurement either: the trial fails rather than report it
+    // ok. Every metric the trial computed is judged, reported or not, so that its status does
+    // not depend on which of them a study prints.
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (!computed[i]) continue;
+      const double value = result.metrics[i];
+      if (std::isnan(value) && !metric_may_be_nan(study.kind, i))
         throw std::runtime_error(fmt::format("{} is NaN", names[i]));
-    // A value that overflowed is no measurement: the trial fails rather than report it ok. Every
-    // metric the trial computed is judged, reported or not, so that its status does not depend
-    // on which of them a study prints.
-    for (std::size_t i = 0; i < names.size(); ++i)
-      if (computed[i] && std::isinf(result.metrics[i]) &&
-          !infinity_is_documented(study.kind, i, result.flags))
+      if (std::isinf(value) && !infinity_is_documented(study.kind, i, result.flags))
         throw std::runtime_error(fmt::format(
             "{} overflowed to {}: the trial's values exceed the range of a double (1.8e308)",
-            names[i], result.metrics[i] > 0 ? "+inf" : "-inf"));
+            names[i], value > 0 ? "+inf" : "-inf"));
+    }
     result.ok = true;
   } catch (const TrialCancelled&) {
     result = stopped_while_running();
