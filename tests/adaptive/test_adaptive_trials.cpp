@@ -2,6 +2,9 @@
 // state error goes to zero, and a road in H_n is learnt (alpha -> alpha*, V non-increasing).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <stdexcept>
+
+#include "rkhs/adaptive/breakpoints.hpp"
 
 #include "study_support.hpp"
 
@@ -294,4 +297,57 @@ speed = 1
 )";
   CHECK_THROWS_WITH(parse_study(approximation, "a.toml"),
                     Catch::Contains("adaptive: only for adaptive studies"));
+}
+
+TEST_CASE("a horizon too long to step through fails its trial before the first step",
+          "[adaptive][limits]") {
+  // laps = 1e300 is not a lap count the lap map can take (it needs a whole number below
+  // 9.2e18), so the trial steps through time; its 3.2e301 output samples were built one by one
+  // before the first step, with no bound and no cancellation point (property fuzzer, seed 53).
+  const auto study = parse_study(R"(
+[study]
+name = "long"
+kind = "adaptive"
+evaluation_points = 128
+[domain]
+radius = 0.5
+[grid]
+n = [4]
+[[kernel]]
+name = "wendland"
+k = 3
+radius = 0.3
+[[target]]
+name = "sine"
+[[plant]]
+name = "linear"
+A = "-1"
+B = "1"
+[[law]]
+name = "rkhs"
+gamma = 10.0
+[[integrator]]
+name = "rk_fehlberg78"
+[adaptive]
+speed = 0.5
+laps = 1e300
+)",
+                                 "long.toml");
+  const auto results = run_trials(study, study.trials(), RunOptions{});
+  REQUIRE(results.size() == 1);
+  const auto& result = results[0];
+  CHECK_FALSE(result.ok);
+  CHECK_THAT(result.reason, Catch::Contains("1e+300 laps stepped through time") &&
+                                Catch::Contains("more than the 100000000"));
+
+  // The bound itself: one breakpoint more than max_breakpoints is refused, by count.
+  AdaptiveSettings settings;
+  settings.speed = 1;
+  settings.samples_per_lap = 1;
+  const Domain track;  // a periodic track of length 1
+  const double lap = settings.lap_time(track.length);
+  CHECK(adaptive_breakpoints(settings, track, 0, 3 * lap, {}, false).size() == 4);
+  CHECK_THROWS_AS(adaptive_breakpoints(settings, track, 0,
+                                       static_cast<double>(max_breakpoints + 1) * lap, {}, false),
+                  std::length_error);
 }

@@ -452,6 +452,9 @@ TEST_CASE("[adaptive] laps and engine errors name file, line, column, key, found
                    "periodic steady state) or an array of them");
   CHECK(error_of(adaptive_text("laps = 0\n")) ==
         at(0, 8) + "adaptive.laps: must be a finite number > 0 or \"limit\", found 0");
+  // final_time = 0 ran the default 10 laps while laps = 0 was refused: both are refused.
+  CHECK(error_of(adaptive_text("final_time = 0\n")) ==
+        at(0, 14) + "adaptive.final_time: must be a finite number > 0, found 0");
   CHECK(error_of(adaptive_text("laps = true\n")) ==
         at(0, 8) + "adaptive.laps: found a boolean (true), expected a lap count > 0, \"limit\" "
                    "(the periodic steady state) or an array of them");

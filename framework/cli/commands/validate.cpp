@@ -36,7 +36,7 @@ int command_validate(const std::string& study_file) {
   if (too_large > 0) {
     const std::size_t largest = study.n_values.back(),
                       refused = trials / study.n_values.size() * too_large;
-    std::cout << fmt::format(
+    std::cerr << fmt::format(
         "  limits: {} of n = {}{} {} more than limits.matrix_megabytes = {} MB of dense "
         "matrices (n = {} with {} evaluation points: {:.0f} MB); run fails {} before building "
         "anything: {}\n",

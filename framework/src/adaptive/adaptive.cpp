@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/cancellation.hpp"
@@ -68,19 +69,32 @@ std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings,
   std::vector<Breakpoint> points{{start, sample_role, 0}};
   const double lap_time = settings.lap_time(domain.length);
   const double laps_total = (end - start) / lap_time;
-  const auto samples = static_cast<std::size_t>(
-      std::max(1.0, std::ceil(laps_total * static_cast<double>(settings.samples_per_lap))));
-  for (std::size_t k = 1; k <= samples; ++k)
+  const double sample_count =
+      std::max(1.0, std::ceil(laps_total * static_cast<double>(settings.samples_per_lap)));
+  const auto in_lap =
+      restart_at_kinks ? path_kink_times(settings, domain, kinks) : std::vector<double>{};
+  const double kink_count = std::ceil(laps_total) * static_cast<double>(in_lap.size());
+  if (!(sample_count + kink_count <= static_cast<double>(max_breakpoints)))
+    throw std::length_error(fmt::format(
+        "{:.6g} laps stepped through time need {:.3g} breakpoints ({} output samples per lap{}), "
+        "more than the {} the time-stepping engine holds; the lap map, whose cost does not "
+        "grow with the horizon, takes a whole number of laps below 9.2e18 or laps = \"limit\" "
+        "(without final_time)",
+        laps_total, sample_count + kink_count, settings.samples_per_lap,
+        in_lap.empty() ? "" : fmt::format(" and {} kinks", in_lap.size()), max_breakpoints));
+  const auto samples = static_cast<std::size_t>(sample_count);
+  for (std::size_t k = 1; k <= samples; ++k) {
+    if (k % 65536 == 0) check_cancelled();
     points.push_back(
         {start + (end - start) * static_cast<double>(k) / static_cast<double>(samples),
          sample_role, 0});
+  }
   if (snapshots)
     for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i) {
       const double t = settings.snapshot_laps[i] * lap_time;
       if (t <= end * (1 + 1e-12)) points.push_back({std::min(t, end), snapshot_role, i});
     }
   if (restart_at_kinks) {
-    const auto in_lap = path_kink_times(settings, domain, kinks);
     for (double lap = std::floor(start / lap_time); lap * lap_time < end; ++lap)
       for (double kink_time : in_lap) {
         const double t = lap * lap_time + kink_time;

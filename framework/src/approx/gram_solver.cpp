@@ -36,7 +36,8 @@ Eigen::VectorXd lanczos_start(Eigen::Index n) {
 // The largest eigenvalue of the symmetric positive semi-definite operator `apply` (out = A in)
 // of size n: the largest Ritz value of Lanczos with full reorthogonalisation, from
 // lanczos_start, stopped when it changes by less than `tolerance` relative in one step, at an
-// invariant subspace, or after `max_steps`. A Ritz value never exceeds the eigenvalue.
+// invariant subspace, or after `max_steps`. A Ritz value never exceeds the eigenvalue. Checks
+// cancellation before every step (rkhs/core/cancellation.hpp).
 // Strips of columns of an n x n matrix for run_parts: [strip_begin(p, n), strip_begin(p + 1, n)),
 // a fixed partition (so nothing computed in strips depends on the thread count).
 constexpr Eigen::Index strip_columns = 256;
@@ -55,6 +56,7 @@ double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::I
   Eigen::VectorXd diagonal(steps), off_diagonal(steps), w(n);
   double ritz = 0;
   for (Eigen::Index k = 0; k < steps; ++k) {
+    check_cancelled();  // a step is one product with G or one pair of solves: O(n^2)
     apply(basis.col(k), w);
     diagonal[k] = basis.col(k).dot(w);
     // Full reorthogonalisation, twice (Gram-Schmidt twice is enough).

@@ -668,7 +668,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   } else {
     settings.laps = lap_counts.front().first;
   }
-  settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, -1e-300);
+  // Absent: 0 (the laps decide); given: a time > 0 (final_time = 0 ran the default laps).
+  settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, 0);
 
   // The reference integrates every trial once more by time stepping: never with the lap map.
   if (const auto* reference = table->get("reference")) {

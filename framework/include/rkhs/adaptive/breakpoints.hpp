@@ -25,10 +25,16 @@ struct Breakpoint {
 std::vector<double> path_kink_times(const AdaptiveSettings& settings, const Domain& domain,
                                     const std::vector<double>& kinks);
 
+/// The most breakpoints one integration holds (2.4 GB of them): a horizon that needs more
+/// fails its trial up front instead of exhausting memory or time before its first step.
+inline constexpr std::size_t max_breakpoints = 100'000'000;
+
 /// From t = start to t = end (laps of settings.lap_time): sample times (samples_per_lap per lap,
 /// evenly spaced, start and end included), snapshot times (when `snapshots`) and, when
 /// `restart_at_kinks`, the times at which s(t) = v t mod L crosses one of `kinks`, merged in
-/// increasing order; times closer than 1e-12 end are one breakpoint.
+/// increasing order; times closer than 1e-12 end are one breakpoint. Throws std::length_error
+/// (naming the laps and the count) when they would be more than max_breakpoints, and
+/// TrialCancelled or TrialTimeLimitExceeded from check_cancelled while it builds them.
 std::vector<Breakpoint> adaptive_breakpoints(const AdaptiveSettings& settings, const Domain& domain,
                                              double start, double end,
                                              const std::vector<double>& kinks,
