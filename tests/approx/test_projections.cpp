@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -196,6 +197,35 @@ TEST_CASE("interpolation: ||I - Pi||_{H -> C} is the power function", "[projecti
           1e-12 * k->diagonal(grid).maxCoeff());
     CHECK(projection_operator_norm(*k, op) == Approx(1.0).epsilon(1e-8));
   }
+}
+
+TEST_CASE(
+    "||Pi||_{H -> H}'s floor covers the round-off of a basis built from ill-conditioned solves",
+    "[projection][floor]") {
+  // The H-orthogonal interpolation projection has norm exactly 1. Its orthonormal basis and
+  // weights are solves with the Gram matrix G, so the computed norm misses 1 by about
+  // n eps cond(G), and the floor must say so: a floor from the basis Gram matrix alone
+  // (n eps cond(G_B) / 2, cond(G_B) = 1 for an orthonormal basis) was 1600 times too small on
+  // Theorem 4.1's second-order B-splines at n = 64.
+  const Domain domain{2 * std::numbers::pi * 4, true};
+  const auto gaussian = kernel("gaussian", {{"sigma", 2.0}}, domain);
+  const auto bspline = kernel("bspline", {{"degree", std::int64_t{2}}}, domain);
+  for (const AnyKernel* k : {gaussian.get(), bspline.get()})
+    for (std::size_t n : {8, 16, 24, 32}) {
+      const auto centres = uniform(n, domain);
+      const GramSolver solver(k->gram(centres), {});
+      const double condition = solver.spectrum().condition_number;
+      const auto op = build("interpolation", *k, n, centres);
+      double floor = 0;
+      const double norm = projection_operator_norm(*k, op, &floor);
+      const double round_off = static_cast<double>(n) * std::numeric_limits<double>::epsilon();
+      INFO(k->name() << " n = " << n << ": cond(G) = " << condition
+                     << ", |norm - 1| = " << std::abs(norm - 1) << ", floor = " << floor);
+      CHECK(std::abs(norm - 1) <= floor);
+      // ... and is not inflated beyond the conditioning it accounts for.
+      CHECK(floor >= 0.5 * round_off * condition);
+      CHECK(floor <= 4 * round_off * condition);
+    }
 }
 
 TEST_CASE("mra_level: ||I - Pi_j||_{H -> C} is the power function of V_j", "[projection]") {

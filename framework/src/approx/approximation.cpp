@@ -360,13 +360,9 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
     ProjectionOperator op;
     interpolation_operator(kernel, centres, gram, solver, op);
     check_cancelled();
-    auto& floor = out.floors[ApproximationMetric::projection_operator_norm];
-    const double norm = projection_operator_norm(kernel, op, &floor);
-    out.metrics[ApproximationMetric::projection_operator_norm] = norm;
-    // The operator's weights come from solves with G: their round-off, relative to the norm.
-    floor = std::max(floor, 0.5 * norm *
-                                 solve_round_off(solver.spectrum(),
-                                                 static_cast<Eigen::Index>(op.dimension())));
+    // Its floor counts the round-off of the weights, which are solves with G.
+    out.metrics[ApproximationMetric::projection_operator_norm] = projection_operator_norm(
+        kernel, op, &out.floors[ApproximationMetric::projection_operator_norm]);
   }
   keep_selected(selection, out);
   return out;

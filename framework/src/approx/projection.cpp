@@ -115,21 +115,29 @@ Eigen::VectorXd apply_projection(const AnyKernel& kernel, const ProjectionOperat
   return kernel.cross(points, op.basis_points()) * (op.basis_coefficients() * coefficients);
 }
 
-Eigen::MatrixXd projection_basis_gram(const AnyKernel& kernel, const ProjectionOperator& op) {
-  const Eigen::MatrixXd& E = op.basis_coefficients();
-  Eigen::MatrixXd gram = E.transpose() * kernel.gram(op.basis_points()) * E;
+namespace {
+// G_B = E^T K_BB E for the kernel's Gram matrix K_BB on the basis points, symmetrised.
+Eigen::MatrixXd basis_gram_of(const Eigen::MatrixXd& E, const Eigen::MatrixXd& K_BB) {
+  Eigen::MatrixXd gram = E.transpose() * K_BB * E;
   return 0.5 * (gram + gram.transpose());
 }
 
-namespace {
 // A = W K_SS W^T (dim x dim): (A)_ik = (w_i, w_k) for the functionals w_i = sum_m W_im k(S_m, .)
 // (the H-Riesz representers of f -> c_i), formed once so that what follows costs O(dim) per
 // point instead of O(|S|).
-Eigen::MatrixXd functional_gram(const AnyKernel& kernel, const ProjectionOperator& op) {
-  Eigen::MatrixXd A = op.weights() * (kernel.gram(op.samples()) * op.weights().transpose());
+Eigen::MatrixXd functional_gram_of(const Eigen::MatrixXd& W, const Eigen::MatrixXd& K_SS) {
+  Eigen::MatrixXd A = W * (K_SS * W.transpose());
   return 0.5 * (A + A.transpose());
 }
+
+Eigen::MatrixXd functional_gram(const AnyKernel& kernel, const ProjectionOperator& op) {
+  return functional_gram_of(op.weights(), kernel.gram(op.samples()));
+}
 }  // namespace
+
+Eigen::MatrixXd projection_basis_gram(const AnyKernel& kernel, const ProjectionOperator& op) {
+  return basis_gram_of(op.basis_coefficients(), kernel.gram(op.basis_points()));
+}
 
 Eigen::VectorXd projection_residual_norms(const AnyKernel& kernel, const ProjectionOperator& op,
                                           std::span<const double> points) {
@@ -163,14 +171,51 @@ double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& 
   return projection_norm_floor(kernel, op.sample_count(), points);
 }
 
+namespace {
+// The largest eigenvalue of the symmetric positive semi-definite M (eigenvalues only).
+double largest_eigenvalue(const Eigen::MatrixXd& M) {
+  if (M.size() == 0) return 0.0;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(M, Eigen::EigenvaluesOnly);
+  return solver.eigenvalues().maxCoeff();
+}
+
+// ||X||_2^2 = lambda_max(X^T X), from the smaller of X^T X and X X^T.
+double squared_spectral_norm(const Eigen::MatrixXd& X) {
+  return X.rows() < X.cols() ? largest_eigenvalue(X * X.transpose())
+                             : largest_eigenvalue(X.transpose() * X);
+}
+
+// The amplification of round-off in the coefficients C of a Gram matrix C^T K C against the
+// result's own size: ||C||_2^2 ||K||_inf / ||C^T K C||_2 (>= 1 up to round-off). Coefficients
+// computed by solves with K (C = L^-T for an orthonormal basis) carry relative errors of about
+// eps cond(K), and this ratio is cond(K) for them (||L^-T||^2 = 1 / lambda_min(K)); for
+// coefficients that are data (the identity) it is about 1.
+double coefficient_amplification(const Eigen::MatrixXd& C, const Eigen::MatrixXd& K,
+                                 double gram_norm) {
+  if (!(gram_norm > 0)) return 1.0;
+  const double k_norm = K.size() ? K.cwiseAbs().rowwise().sum().maxCoeff() : 0.0;
+  return std::max(1.0, squared_spectral_norm(C) * k_norm / gram_norm);
+}
+}  // namespace
+
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op,
                                 double* floor) {
   // G_B = V diag(lambda) V^T, R = V diag(sqrt(lambda)) (round-off negatives clamped to 0);
   // ||Pi||^2 = lambda_max(R^T A R).
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> basis(projection_basis_gram(kernel, op));
+  // G_B and A as projection_basis_gram and functional_gram form them, with the kernel's Gram
+  // matrices kept for the floor (one when the samples are the basis points, as in interpolation).
+  const Eigen::MatrixXd& E = op.basis_coefficients();
+  const Eigen::MatrixXd K_B = kernel.gram(op.basis_points());
+  const Eigen::MatrixXd K_S = std::ranges::equal(op.samples(), op.basis_points())
+                                  ? Eigen::MatrixXd()
+                                  : kernel.gram(op.samples());
+  const Eigen::MatrixXd& K_samples = K_S.size() ? K_S : K_B;
+  const Eigen::MatrixXd G_B = basis_gram_of(E, K_B);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> basis(G_B);
   const Eigen::MatrixXd R =
       basis.eigenvectors() * basis.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-  Eigen::MatrixXd T = R.transpose() * functional_gram(kernel, op) * R;
+  const Eigen::MatrixXd A = functional_gram_of(op.weights(), K_samples);
+  Eigen::MatrixXd T = R.transpose() * A * R;
   T = 0.5 * (T + T.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> norm(T, Eigen::EigenvaluesOnly);
   const double value = std::sqrt(std::max(0.0, norm.eigenvalues().maxCoeff()));
@@ -182,8 +227,19 @@ double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperato
     double smallest = largest;
     for (Eigen::Index i = 0; i < lambda.size(); ++i)
       if (lambda(i) > resolved) smallest = std::min(smallest, lambda(i));
-    *floor = largest > 0 ? 0.5 * value * resolved / smallest
-                         : std::numeric_limits<double>::quiet_NaN();
+    // Round-off enters ||Pi||^2 through three matrices: G_B's eigendecomposition (cond(G_B)),
+    // and the basis coefficients E and weights W, each amplified by the Gram matrix it was
+    // built against (coefficient_amplification: cond(K) for coefficients that are solves).
+    const double amplification =
+        largest / smallest + coefficient_amplification(E, K_B, largest) +
+        coefficient_amplification(op.weights().transpose(), K_samples, largest_eigenvalue(A));
+    // Each entry of G_B and A sums over the basis points or samples, which may be more than dim
+    // (a pseudo-inverse keeps dim < n directions of n samples).
+    const double terms = std::max({dim, static_cast<double>(op.sample_count()),
+                                   static_cast<double>(op.basis_coefficients().rows())});
+    *floor = largest > 0
+                 ? 0.5 * value * terms * std::numeric_limits<double>::epsilon() * amplification
+                 : std::numeric_limits<double>::quiet_NaN();
   }
   return value;
 }

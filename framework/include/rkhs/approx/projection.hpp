@@ -192,9 +192,12 @@ double projection_norm_floor(const AnyKernel& kernel, std::size_t sample_count,
 /// ||Pi||_{H -> H} = sqrt(lambda_max(R^T W K_SS W^T R)) with G_B = R R^T: the largest
 /// ||Pi f||_H over ||f||_H = 1 (f ranges over H, seen by Pi through f(S)).
 /// With `floor`, also its round-off floor (FloorRule::round_off): the value times
-/// dim eps cond(G_B) / 2, cond(G_B) the ratio of the basis Gram matrix's largest eigenvalue to its
-/// smallest one above dim eps lambda_max (the relative error its eigendecomposition and the
-/// weights built from the same matrices leave in ||Pi||^2).
+/// m eps (cond(G_B) + a(E, K_BB) + a(W^T, K_SS)) / 2, m the largest of dim, the samples and the
+/// basis points (the terms each entry sums), where cond(G_B) is the ratio of the basis
+/// Gram matrix's largest eigenvalue to its smallest one above dim eps lambda_max (its
+/// eigendecomposition) and a(C, K) = ||C||_2^2 ||K||_inf / ||C^T K C||_2 the amplification of
+/// the coefficients' own round-off (cond(K) for coefficients that are solves with K, as the
+/// orthonormal bases and interpolation weights are; about 1 for coefficients that are data).
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op,
                                 double* floor = nullptr);
 
