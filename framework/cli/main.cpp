@@ -47,7 +47,8 @@ int rkhs_study_main(int argc, char** argv) {
                   "output directory (default: results/<study name>)");
   run->add_option("--threads", run_arguments.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
-  run->add_flag("--quiet,-q", run_arguments.quiet, "print only the final summary line");
+  run->add_flag("--quiet,-q", run_arguments.quiet,
+                "print only the summary line and the verdict lines");
   auto add_store_options = [&](CLI::App* command, rkhs::pipeline::StoreOptions& store_options) {
     command->add_option(
         "--store", store_options.file,
@@ -105,6 +106,9 @@ int rkhs_study_main(int argc, char** argv) {
   add_rank_timeout(run);
   bool no_plots = false, no_check_plots = false;
   run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
+  run->add_flag("--tables", run_arguments.tables,
+                "also print each group's convergence table (they are in rates.md, rates.tex and "
+                "report.html either way)");
 
   // The kinds `list` accepts come from the table of plugin kinds (plugin_kinds.hpp).
   std::string list_kinds;

@@ -550,7 +550,7 @@ degree = 1
 J = 6
 )";
   const auto outcome = run("run " + (dir / "study.toml").string() + " --out " +
-                           (dir / "out").string() + " --no-store");
+                           (dir / "out").string() + " --no-store --tables");
   INFO(outcome.output);
   REQUIRE(outcome.exit_code == 0);
   // An interpolation's operator norm is 1 within its floors: constant, not a rate.

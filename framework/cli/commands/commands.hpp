@@ -26,6 +26,9 @@ struct RunCommand : RunArguments {
   std::string study_file;
   std::string out_dir;  ///< "" : results/<study name>
   std::string shard;    ///< "K/N" or ""
+  /// --tables: print each group's convergence table (console_tables) before the answer; they
+  /// are in rates.md, rates.tex and report.html either way.
+  bool tables = false;
 };
 int command_run(const RunCommand& arguments, pipeline::Executor& executor);
 

@@ -1,6 +1,8 @@
 // `rkhs-study run STUDY`: every trial, then trials.csv, rates.csv, summary.json, rates.md,
 // rates.tex, plots and report.html (docs/results.md); `--shard K/N` runs a subset into the
-// store only.
+// store only. The console ends with the answer (console_answer): the fitted rates, the
+// convergence in time of an adaptive study and, last, a verdict line per expectation; the groups'
+// convergence tables only with --tables.
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -185,12 +187,15 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
     return exit_interrupted;
   }
 
-  if (!quiet) std::cout << console_tables(record);
+  if (!quiet && arguments.tables) std::cout << console_tables(record);
   std::cout << fmt::format(
       "{}: {}, {} ok, {} failed in {:.2f} s; wrote {}/trials.csv, rates.csv, summary.json, "
       "rates.md, rates.tex, report.html{}\n",
       study.name, counted(trials.size(), "trial", "trials"), trials.size() - run.failed, run.failed,
       run.seconds, out_dir, plot_count ? fmt::format(", plots/ ({} plots)", plot_count) : "");
+  // The answer last, where the terminal shows it: the fitted rates, the convergence in time and
+  // the verdicts (these also with -q).
+  std::cout << console_answer(record, verdicts, quiet);
   return run.failed ? exit_failed_trials : exit_ok;
 }
 

@@ -211,9 +211,9 @@ std::string format_group_table(const GroupTable& group, const std::vector<RateTa
         line.insert(line.end(), {"", ""});
         continue;
       }
-      line.push_back(
-          (std::isnan(row->value) ? std::string("failed") : fmt::format("{:.3e}", row->value)) +
-          (row->flagged ? std::string("*") : marker_slot));
+      line.push_back((std::isnan(row->value) ? std::string(missing_value(*row))
+                                             : fmt::format("{:.3e}", row->value)) +
+                     (row->flagged ? std::string("*") : marker_slot));
       line.push_back(std::isfinite(row->rate) ? fixed_rate(row->rate, tables[t].model) : "-");
     }
   }
@@ -286,6 +286,45 @@ std::string format_convergence_table(const RateTable& table) {
   }
   return render_table(table.metric, table.group, table.axis, rows, rates, table.fit,
                       flagged_value_legend, table.model, table.no_fit_reason);
+}
+
+std::string format_rate_summary(const std::vector<GroupTable>& groups,
+                                const std::vector<RateTable>& tables) {
+  std::vector<std::array<std::string, 4>> lines{{"group", "metric", "rate", "window"}};
+  for (const auto& group : groups)
+    for (auto t : group.columns) {
+      const auto& table = tables[t];
+      std::string rate = "no fit", window = window_text(table);
+      if (table.constant) {
+        rate = fmt::format("const {:.4g}", table.constant->value);
+        window = table.constant_text;
+      } else if (const auto& fit = table.fit) {
+        rate = std::isfinite(fit->std_error)
+                   ? fmt::format("{:.3g} ± {:.2g}", fit->rate, fit->std_error)
+                   : fmt::format("{:.3g}", fit->rate);
+        if (fit->model == RateModel::exponential) rate += " (exp in n)";
+      }
+      lines.push_back({group.title(), table.metric, rate, window});
+    }
+  // Widths in characters, not bytes: "±" is one.
+  const auto length = [](const std::string& text) {
+    return static_cast<std::size_t>(std::count_if(text.begin(), text.end(), [](char c) {
+      return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+    }));
+  };
+  std::array<std::size_t, 3> width{};
+  for (const auto& line : lines)
+    for (std::size_t c = 0; c < width.size(); ++c) width[c] = std::max(width[c], length(line[c]));
+  std::string out = "fitted rates:\n";
+  for (const auto& line : lines) {
+    std::string text = "  ";
+    for (std::size_t c = 0; c < width.size(); ++c)
+      text += line[c] + std::string(width[c] - length(line[c]) + 2, ' ');
+    text += line[3];
+    while (!text.empty() && text.back() == ' ') text.pop_back();
+    out += text + '\n';
+  }
+  return out;
 }
 
 }  // namespace rkhs

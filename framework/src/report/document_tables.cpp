@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "rkhs/core/printable.hpp"
+#include "rkhs/report/convergence_in_time.hpp"
 #include "rkhs/report/convergence_table.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/report/rate_table.hpp"
@@ -178,7 +179,8 @@ std::string latex_tabular(const GroupTable& group, const std::vector<RateTable>&
       }
       // Numbers go to the S column as they are; anything else is text in braces.
       const char* marker = row->flagged ? "*" : "";
-      std::string value = std::isnan(row->value) ? fmt::format("{{failed{}}}", marker)
+      std::string value = std::isnan(row->value)
+                              ? fmt::format("{{{}{}}}", missing_value(*row), marker)
                           : std::isinf(row->value)
                               ? fmt::format("{{${}\\infty${}}}", row->value > 0 ? "" : "-", marker)
                           : row->flagged ? fmt::format("{{\\num{{{:.3e}}}*}}", row->value)
@@ -250,6 +252,13 @@ std::string markdown_tables(const RunRecord& run) {
       out += fmt::format(" {} |", table ? fit_cell(*table) : std::string());
     }
     out += "\n";
+  }
+
+  // Adaptive studies: whether the estimate has converged in time, per group.
+  if (const auto convergence = time_convergence(run); !convergence.empty()) {
+    out += "\n## Convergence in time\n\n";
+    for (const auto& group : convergence)
+      out += fmt::format("- {}: {}\n", markdown_escape(group.label), group.sentence);
   }
 
   // The convergence table of each group: every metric's value and pairwise rate.
@@ -385,6 +394,18 @@ std::string console_tables(const RunRecord& run, std::size_t group_tables_shown)
                      groups.size());
   for (const auto& group : groups) out += format_group_table(group, tables) + "\n";
   return out;
+}
+
+std::string console_answer(const RunRecord& run, const std::vector<ExpectationOutcome>& verdicts,
+                           bool verdicts_only) {
+  std::string out;
+  if (!verdicts_only) {
+    const auto tables = rate_tables(run);
+    const auto groups = group_tables(run, tables);
+    if (!groups.empty()) out += format_rate_summary(groups, tables);
+    out += format_time_convergence(time_convergence(run));
+  }
+  return out + format_verdict_lines(verdicts);
 }
 
 }  // namespace rkhs

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/report/convergence_in_time.hpp"
 #include "rkhs/report/rate_table.hpp"
 
 namespace rkhs {
@@ -123,6 +124,38 @@ std::string verdicts_table(const std::vector<ExpectationOutcome>& verdicts,
   auto counts = count_verdicts(verdicts);
   counts.deselected = deselected;
   return out + "</table>\n<p class=\"counts\">" + escape_html(format_counts(counts)) + "</p>\n";
+}
+
+// The answer, first on the page: the verdict counts, then every failure and inconclusive case
+// (with its reason and advice), then whether an adaptive study's estimate has converged in time.
+std::string answer_section(const RunRecord& run, const std::vector<ExpectationOutcome>* verdicts) {
+  std::string out = "<div class=\"answer\">\n";
+  if (run.study.expectations.empty())
+    out += "<p class=\"counts\">No expectations.</p>\n";
+  else if (!verdicts)
+    out += "<p class=\"counts\">Expectations not judged in this report.</p>\n";
+  else {
+    auto counts = count_verdicts(*verdicts);
+    counts.deselected = run.deselected;
+    out += "<p class=\"counts\"><b>" + escape_html(format_counts(counts)) + "</b></p>\n";
+    std::string problems;
+    for (const auto& o : *verdicts) {
+      const auto outcome = case_outcome(o);
+      if (outcome != CaseOutcome::failed && outcome != CaseOutcome::inconclusive) continue;
+      problems += fmt::format(
+          "<li class=\"{}\"><b>{}</b> {}: {}; {}{}</li>\n", case_outcome_id(outcome),
+          case_outcome_name(outcome), escape_html(o.name), html_text(verdict_numbers(o)),
+          html_text(o.reason), o.advice.empty() ? "" : "<br>advice: " + html_text(o.advice));
+    }
+    if (!problems.empty()) out += "<ul class=\"problems\">\n" + problems + "</ul>\n";
+  }
+  if (const auto convergence = time_convergence(run); !convergence.empty()) {
+    out += "<p>Convergence in time:</p>\n<ul class=\"convergence\">\n";
+    for (const auto& group : convergence)
+      out += fmt::format("<li>{}: {}</li>\n", escape_html(group.label), html_text(group.sentence));
+    out += "</ul>\n";
+  }
+  return out + "</div>\n";
 }
 
 // The fitted rates of every group and metric in one table.
@@ -257,10 +290,13 @@ tr.failed td.outcome {{ background: #ffcdd2; color: #b71c1c; }}
 tr.inconclusive td.outcome {{ background: #fff3c4; color: #7a5b00; }}
 tr.xfailed td.outcome {{ background: #e0e0e0; color: #424242; }}
 tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
+div.answer {{ border: 1px solid #bbb; padding: 0 1em; margin: 0.5em 0 1em; }}
+li.failed b {{ color: #b71c1c; }}
+li.inconclusive b {{ color: #7a5b00; }}
 </style></head>
 <body>
 <h1>{0}</h1>
-<p>{1}</p>
+{13}<p>{1}</p>
 <h2>Provenance</h2>
 <table class="provenance">
 <tr><th>study file</th><td class="text">{2}</td></tr>
@@ -274,7 +310,7 @@ tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
       escape_html(study.name), escape_html(study.description), escape_html(study.source),
       escape_html(std::string(study_kind_name(study.kind))), build.version, build.git_commit,
       build.compiler, build.build_type, escape_html(run.started), run.threads, run.wall_seconds,
-      run.trials.size(), mpi_rows);
+      run.trials.size(), mpi_rows, answer_section(run, verdicts));
 
   // Failed trials first: they are what a reader must not miss.
   std::string failed;

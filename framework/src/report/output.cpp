@@ -90,7 +90,7 @@ std::string expectations_json(const RunRecord& run) {
         "\"outcome\": {}, \"xfail\": {}, \"rate\": {}, \"ci_low\": {}, \"ci_high\": {}, "
         "\"accepted_low\": {}, \"accepted_high\": {}, \"effectivity_min\": {}, "
         "\"effectivity_max\": {}, \"window\": {{\"from\": {}, \"to\": {}, \"points\": {}}}, "
-        "\"expected\": {}, \"found\": {}, \"reason\": {}, \"seconds\": {}}}{}\n",
+        "\"expected\": {}, \"found\": {}, \"reason\": {}, \"advice\": {}, \"seconds\": {}}}{}\n",
         json_string(o.name), optional_text(e.name), json_string(e.metric),
         json_string(expectation_kind_name(e.kind)), json_string(e.location), json_string(o.group),
         json_string(o.group_label), json_string(verdict),
@@ -99,6 +99,7 @@ std::string expectations_json(const RunRecord& run) {
         json_number(o.accepted_high), json_number(o.effectivity_min),
         json_number(o.effectivity_max), n_or_null(o.window_from), n_or_null(o.window_to),
         o.window_points, json_string(o.expected), json_string(o.found), json_string(o.reason),
+        o.advice.empty() ? std::string("null") : json_string(o.advice),
         json_number(std::round(o.seconds * 1e4) / 1e4), k + 1 < run.verdicts->size() ? "," : "");
   }
   return out + "    ]\n  }\n";

@@ -31,6 +31,7 @@ std::vector<RateTable> rate_tables(const RunRecord& run) {
         table.rows.push_back(
             {in_n ? series.n[k] : series.abscissa[k], run.trials[series.trials[k]].n,
              series.values[k], static_cast<bool>(series.flagged[k]),
+             static_cast<bool>(series.failed[k]),
              k == 0 ? std::numeric_limits<double>::quiet_NaN() : series.pairwise[k - 1]});
       table.fit = series.fit;
       table.no_fit_reason = series.no_fit_reason;
@@ -49,8 +50,13 @@ std::string document_abscissa(const RateTable& table, const RateTableRow& row) {
   return table.axis_is_n() ? fmt::format("{}", row.n) : fmt::format("{:.4g}", row.abscissa);
 }
 
+std::string_view missing_value(const RateTableRow& row) {
+  return row.failed ? "failed" : "n/a";
+}
+
 std::string document_value(const RateTableRow& row) {
-  return (std::isnan(row.value) ? std::string("failed") : fmt::format("{:.4g}", row.value)) +
+  return (std::isnan(row.value) ? std::string(missing_value(row))
+                                : fmt::format("{:.4g}", row.value)) +
          (row.flagged ? "*" : "");
 }
 

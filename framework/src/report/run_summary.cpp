@@ -658,6 +658,7 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
       o.expected = reader.text(entry, path, "expected");
       o.found = reader.text(entry, path, "found");
       o.reason = reader.text(entry, path, "reason");
+      o.advice = reader.optional_text(entry, path, "advice");
       o.seconds = reader.number(entry, path, "seconds");
       if (const auto s = series_of.find({o.group, o.expectation->metric}); s != series_of.end())
         o.series = s->second;

@@ -213,6 +213,12 @@ std::pair<bool, std::string> quasi_uniformity(int dimension, const StudyDefiniti
                           h_fit->rate + 0.0, std::fabs(ratio_fit->rate) < 5e-3 ? 0.0 : ratio_fit->rate)};
 }
 
+// Advice: pairwise rates that move by more than this in all over the last points are still
+// moving; a fill distance exponent within this fraction of -1/d is n^(-1/d) (as
+// quasi_uniform_slack).
+constexpr double still_moving = 0.05;
+constexpr double fill_exponent_slack = 0.1;
+
 class Verifier {
  public:
   Verifier(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
@@ -266,8 +272,30 @@ class Verifier {
         judge_constant(e, series, o);
         break;
     }
+    if (o.verdict != Verdict::pass && e.kind != ExpectationKind::bound &&
+        e.kind != ExpectationKind::constant && !series.constant())
+      o.advice =
+          verdict_advice(series, o.window_points, study_.abscissa, fill_distance_scaling(series));
     note_missing_excitation(series, o);
     return o;
+  }
+
+  // How the fill distance of the series' trials scales with n; nullopt when the study does not
+  // measure it or fewer than 2 trials have it.
+  std::optional<FillDistanceScaling> fill_distance_scaling(const MetricSeries& series) const {
+    const auto& all = study_.all_metrics();
+    if (std::find(all.begin(), all.end(), "fill_distance") == all.end()) return std::nullopt;
+    const auto h_index = study_.metric_index("fill_distance");
+    std::vector<double> n, h;
+    for (auto t : series.trials) {
+      const auto& r = results_[t];
+      if (!r.ok || !(r.metrics[h_index] > 0) || !std::isfinite(r.metrics[h_index])) continue;
+      n.push_back(static_cast<double>(trials_[t].n));
+      h.push_back(r.metrics[h_index]);
+    }
+    const auto fit = fit_power_law(n, h);
+    if (!fit) return std::nullopt;
+    return FillDistanceScaling{fit->rate, fit->std_error, study_.domain.dimension};
   }
 
   // Theorem 3.3 needs persistence of excitation: a verdict on a series whose trials the path
@@ -719,6 +747,47 @@ class Verifier {
 
 }  // namespace
 
+std::string verdict_advice(const MetricSeries& series, std::size_t window_points, Abscissa abscissa,
+                           const std::optional<FillDistanceScaling>& fill) {
+  std::vector<std::string> clauses;
+  const auto largest_n = [&] {
+    return series.n.empty() ? std::string("the largest") : format_real(series.n.back());
+  };
+  if (window_points < 3)
+    clauses.push_back(
+        fmt::format("the fit window has {} point{} and a verdict needs at least 3: "
+                    "add n beyond {}",
+                    window_points, window_points == 1 ? "" : "s", largest_n()));
+  if (abscissa == Abscissa::n && fill && fill->dimension > 0) {
+    const double expected = -1.0 / fill->dimension;
+    const double off = std::fabs(fill->exponent - expected);
+    if (off > fill_exponent_slack / fill->dimension &&
+        (!std::isfinite(fill->std_error) || off > fill->std_error))
+      clauses.push_back(fmt::format("h ~ n^{:.2f}, not n^{:.2f}: fit against h (abscissa = \"h\")",
+                                    fill->exponent, expected));
+  }
+  // The trailing finite pairwise rates, at most 3.
+  std::vector<double> last;
+  for (auto k = series.pairwise.size(); k-- > 0 && last.size() < 3;) {
+    if (!std::isfinite(series.pairwise[k])) break;
+    last.insert(last.begin(), series.pairwise[k]);
+  }
+  if (last.size() >= 2) {
+    bool climbs = true, falls = true;
+    for (std::size_t k = 1; k < last.size(); ++k) {
+      climbs = climbs && last[k] > last[k - 1];
+      falls = falls && last[k] < last[k - 1];
+    }
+    if ((climbs || falls) && std::fabs(last.back() - last.front()) > still_moving)
+      clauses.push_back(fmt::format("pairwise rates still {} {:.2f} -> {:.2f}: extend n beyond {}",
+                                    climbs ? "climb" : "fall", last.front(), last.back(),
+                                    largest_n()));
+  }
+  std::string out;
+  for (const auto& clause : clauses) out += (out.empty() ? "" : "; ") + clause;
+  return out;
+}
+
 std::string_view verdict_name(Verdict verdict) {
   switch (verdict) {
     case Verdict::pass: return "PASS";
@@ -834,15 +903,49 @@ std::string format_counts(const VerdictCounts& counts, const CheckPolicy& policy
   return out;
 }
 
+std::string verdict_heading(const ExpectationOutcome& outcome) {
+  return fmt::format("{:<12} {} ({})", case_outcome_name(case_outcome(outcome)), outcome.name,
+                     outcome.expectation->location);
+}
+
+std::string verdict_numbers(const ExpectationOutcome& outcome) {
+  const auto& o = outcome;
+  const auto accepted = [&] {
+    return interval_text(RateInterval{o.accepted_low, o.accepted_high});
+  };
+  if (o.expectation->kind == ExpectationKind::bound) {
+    if (std::isnan(o.effectivity_max)) return std::string("no usable point");
+    return fmt::format("effectivity up to {:.3g} against at most 1", o.effectivity_max);
+  }
+  if (std::isnan(o.rate)) return std::string("no fit");
+  // 3 significant digits: a rate of -0.99999 with its CI is "-1 [-1, -1]".
+  std::string out = fmt::format("rate {:.3g}", o.rate + 0.0);
+  if (std::isfinite(o.ci_low) && std::isfinite(o.ci_high))
+    out += fmt::format(" [{:.3g}, {:.3g}]", o.ci_low + 0.0, o.ci_high + 0.0);
+  if (!std::isnan(o.accepted_low) || !std::isnan(o.accepted_high)) out += " against " + accepted();
+  return out;
+}
+
+std::string format_verdict_lines(const std::vector<ExpectationOutcome>& outcomes) {
+  if (outcomes.empty()) return "no expectations\n";
+  std::string out;
+  for (const auto& o : outcomes) {
+    out += verdict_heading(o) + ": " + verdict_numbers(o) + "\n";
+    if (!o.advice.empty()) out += fmt::format("    advice: {}\n", o.advice);
+  }
+  return out + format_counts(count_verdicts(outcomes)) + "\n";
+}
+
 std::string format_verification(const std::vector<ExpectationOutcome>& outcomes,
                                 const CheckPolicy& policy, std::size_t deselected) {
   std::string out;
   for (const auto& o : outcomes) {
     const auto& e = *o.expectation;
-    out += fmt::format("{:<12} {} ({})\n", case_outcome_name(case_outcome(o)), o.name, e.location);
+    out += verdict_heading(o) + "\n";
     out += fmt::format("    expected: {}\n", o.expected);
     out += fmt::format("    found:    {}\n", o.found);
     out += fmt::format("    verdict:  {}\n", o.reason);
+    if (!o.advice.empty()) out += fmt::format("    advice:   {}\n", o.advice);
     if (!e.xfail.empty()) out += fmt::format("    xfail:    {}\n", e.xfail);
   }
   auto counts = count_verdicts(outcomes);

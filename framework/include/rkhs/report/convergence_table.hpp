@@ -66,6 +66,14 @@ struct GroupTable;  // rkhs/report/rate_table.hpp
 /// and flagged_value_legend. The window and notes lines are console_tables' (output.hpp).
 std::string format_convergence_table(const RateTable& table);
 
+/// The fitted rates `run` prints: one row per group and metric (groups in order, metrics in
+/// the study's order) with the group's title, the metric, "rate ± standard error" ("1.5 ±
+/// 0.031", "(exp in n)" after an exponential rate, the rate alone without an uncertainty,
+/// "const 3.769" for a constant series, "no fit") and the window (window_text; the constant's
+/// text for a constant series), under the heading "fitted rates:"; columns left-aligned.
+std::string format_rate_summary(const std::vector<GroupTable>& groups,
+                                const std::vector<RateTable>& tables);
+
 /// All metrics of one group in one table, as deal.II's ConvergenceTable prints several error
 /// columns with a rate each:
 ///

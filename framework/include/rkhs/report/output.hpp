@@ -60,6 +60,12 @@ std::string latex_tables(const RunRecord& run);
 /// (`run` prints them for 12 at most, `report --format text` for all); beyond, a line that
 /// points to rates.md, rates.tex and report.html.
 std::string console_tables(const RunRecord& run, std::size_t group_tables_shown = 12);
+/// The answer `run` ends with: unless `verdicts_only` (-q), the fitted rates, a row per group and
+/// metric (format_rate_summary), and the convergence in time of an adaptive study's groups
+/// (format_time_convergence); then, last, where a terminal leaves them in view, a line per
+/// expectation and the counts (format_verdict_lines, "no expectations" when there is no outcome).
+std::string console_answer(const RunRecord& run, const std::vector<ExpectationOutcome>& verdicts,
+                           bool verdicts_only);
 
 /// Writes trials.csv, rates.csv and summary.json (and, for adaptive studies, estimates.csv and
 /// timeseries.csv) into `directory` (created if needed).

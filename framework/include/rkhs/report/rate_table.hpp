@@ -25,8 +25,11 @@ namespace rkhs {
 struct RateTableRow {
   double abscissa = 0.0;  ///< the table's axis: n, or the fill distance h (see RateTable::axis)
   std::size_t n = 0;      ///< the trial's number of centres, whatever the axis
-  double value = 0.0;     ///< the metric; NaN for a failed trial
+  /// The metric; NaN for a failed trial and for a metric the trial's engine does not define
+  /// (e.g. a lap-map metric of a trial stepped through time: NaN, the trial ok).
+  double value = 0.0;
   bool flagged = false;   ///< excluded from the fit as numerically meaningless
+  bool failed = false;    ///< the trial failed: a NaN value is "failed", not "n/a"
   /// The pairwise rate of the reported model between the previous row and this one
   /// (MetricSeries::pairwise); NaN in the first row and where it is undefined.
   double rate = 0.0;
@@ -69,8 +72,12 @@ inline constexpr std::string_view flagged_value_legend =
 
 /// The axis cell: n as an integer on an n axis, otherwise 4 significant digits.
 std::string document_abscissa(const RateTable& table, const RateTableRow& row);
-/// The value cell: 4 significant digits or "failed", followed by '*' when flagged.
+/// The value cell: 4 significant digits, "failed" for a failed trial or "n/a" for a metric its
+/// engine does not define (missing_value), followed by '*' when flagged.
 std::string document_value(const RateTableRow& row);
+/// The text of a value that is not a number: "failed" for a failed trial, "n/a" for a metric
+/// the trial's engine does not define (a NaN value of an ok trial).
+std::string_view missing_value(const RateTableRow& row);
 /// The rate cell: 2 decimals, or `missing` where there is no rate.
 std::string document_rate(const RateTableRow& row, std::string_view missing = "-");
 /// The fitted rate: "-1.5 ± 0.03 (95% CI [-1.53, -1.47], R² = 0.999, 10 points)" with the

@@ -49,6 +49,9 @@ struct ExpectationOutcome {
   std::string expected;  ///< what was expected and where it comes from
   std::string found;     ///< what the study shows: fit, CI, window, exclusions, model choice
   std::string reason;    ///< why this verdict, one clause
+  /// For a FAIL or INCONCLUSIVE verdict on a fitted rate: what the fit saw and what would
+  /// decide it (verdict_advice), one line; "" for a pass or when the fit suggests nothing.
+  std::string advice;
   // The judged numbers (NaN where they do not apply), for machine-readable reports.
   double rate = 0.0, ci_low = 0.0, ci_high = 0.0;
   double accepted_low = 0.0, accepted_high = 0.0;
@@ -64,6 +67,28 @@ std::vector<ExpectationOutcome> verify_expectations(const StudyDefinition& study
                                                     const std::vector<TrialSpec>& trials,
                                                     const std::vector<TrialResult>& results,
                                                     const std::vector<MetricSeries>& rates);
+
+/// How the fill distance of a group's trials scales with n: h ~ n^exponent, fitted over every
+/// usable trial, and the dimension d whose quasi-uniform exponent is -1/d.
+struct FillDistanceScaling {
+  double exponent = 0.0;
+  double std_error = 0.0;  ///< of the exponent; NaN with 2 points
+  int dimension = 1;
+};
+
+/// The advice of a FAIL or INCONCLUSIVE verdict on `series`, one line ("" when none applies),
+/// its clauses joined by "; " in this order:
+/// - fewer than 3 points in the fit window (`window_points`): "the fit window has 2 points
+///   (n = 64..128) and a verdict needs at least 3: add n beyond 128";
+/// - against n (`abscissa`), with `fill` measured: the fill distance's exponent differs from
+///   -1/d by more than its standard error and by more than 10% of 1/d: "h ~ n^-0.57, not
+///   n^-0.50: fit against h (abscissa = \"h\")";
+/// - the last pairwise rates (up to 3, at least 2, finite) still move one way by more than 0.05
+///   in all: "pairwise rates still climb 0.90 -> 1.46: extend n beyond 576" ("fall" when they
+///   decrease).
+/// Never throws except std::bad_alloc.
+std::string verdict_advice(const MetricSeries& series, std::size_t window_points, Abscissa abscissa,
+                           const std::optional<FillDistanceScaling>& fill);
 
 /// How an outcome counts, its verdict read with its expectation's xfail marker (pytest's
 /// outcomes): a fail of an xfail expectation is xfailed, a pass xpassed; inconclusive stays.
@@ -100,8 +125,22 @@ inline constexpr int check_passed = 0, check_failed = 1, check_inconclusive = 3,
 /// else 3 when some are inconclusive and they are not allowed; else 0.
 int check_exit_code(const VerdictCounts& counts, const CheckPolicy& policy = {});
 
-/// The console report: per outcome "OUTCOME  name (file:line:column)" with the expected /
-/// found / verdict (and xfail) lines below, then "N passed, M failed, K inconclusive" (and the
+/// The line that names an outcome, as `check` and `run` print it: "OUTCOME      name
+/// (file:line:column)", the outcome (case_outcome_name) padded to 12 characters.
+std::string verdict_heading(const ExpectationOutcome& outcome);
+
+/// The judged numbers in a few words: "rate 1.22 [1.18, 1.26] against rate in [1.40, 1.60]" (the
+/// fitted rate and its CI to 3 significant digits against the accepted interval); for a bound
+/// "effectivity up to 1.07 against at most 1"; "no fit" when nothing was fitted.
+std::string verdict_numbers(const ExpectationOutcome& outcome);
+
+/// The answer `run` ends with: per outcome verdict_heading, ": ", verdict_numbers, then
+/// "    advice: ..." when it has advice; then the counts line (format_counts). "no expectations"
+/// when `outcomes` is empty.
+std::string format_verdict_lines(const std::vector<ExpectationOutcome>& outcomes);
+
+/// The console report: per outcome verdict_heading with the expected / found / verdict (and
+/// advice and xfail) lines below, then "N passed, M failed, K inconclusive" (and the
 /// xfailed, xpassed and deselected counts when there are any).
 std::string format_verification(const std::vector<ExpectationOutcome>& outcomes,
                                 const CheckPolicy& policy = {}, std::size_t deselected = 0);
