@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "rkhs/core/build_info.hpp"
+#include "rkhs/report/plots.hpp"
 #include "rkhs/report/rate_table.hpp"
 
 namespace rkhs {
@@ -305,7 +306,7 @@ tr.xpassed td.outcome {{ background: #e1bee7; color: #4a148c; }}
         fitted_rates_table(groups, tables, metrics);
   }
   page += "<h2>Convergence plots</h2>\n";
-  for (const auto& metric : study.metrics) {
+  for (const auto& metric : convergence_plot_order(study.metrics)) {  // the errors first
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
     bool shown = false;
     for (const auto& svg : convergence_plots(plots, metric)) {
