@@ -2,8 +2,9 @@
 // turn, changes the identity unless it is one of the fields declared unable to change a result,
 // which must then leave it unchanged.
 #include <boost/pfr.hpp>
-#include <cmath>
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -21,6 +22,10 @@ template <class T>
 struct is_vector : std::false_type {};
 template <class T, class A>
 struct is_vector<std::vector<T, A>> : std::true_type {};
+template <class T>
+struct is_map : std::false_type {};
+template <class K, class V, class C, class A>
+struct is_map<std::map<K, V, C, A>> : std::true_type {};
 template <class T>
 struct is_optional : std::false_type {};
 template <class T>
@@ -41,6 +46,8 @@ void perturb(T& value) {
     value = static_cast<T>(static_cast<std::underlying_type_t<T>>(value) + 1);
   } else if constexpr (is_vector<T>::value) {
     value.emplace_back();
+  } else if constexpr (is_map<T>::value) {
+    value.emplace(typename T::key_type{"x"}, typename T::mapped_type{});
   } else if constexpr (is_optional<T>::value) {
     if (value) value.reset();
     else value.emplace();
@@ -51,9 +58,10 @@ void perturb(T& value) {
 }
 
 template <class T>
-constexpr bool is_leaf = std::is_same_v<T, std::string> || std::is_arithmetic_v<T> ||
-                         std::is_enum_v<T> || is_vector<T>::value || is_optional<T>::value ||
-                         std::is_same_v<T, PluginChoice> || !std::is_aggregate_v<T>;
+constexpr bool is_leaf =
+    std::is_same_v<T, std::string> || std::is_arithmetic_v<T> || std::is_enum_v<T> ||
+    is_vector<T>::value || is_map<T>::value || is_optional<T>::value ||
+    std::is_same_v<T, PluginChoice> || !std::is_aggregate_v<T>;
 
 // The metrics of a result, bit for bit (NaN equal to NaN).
 bool same_metrics(const TrialResult& a, const TrialResult& b) {

@@ -140,7 +140,7 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
     const auto e = error_of(std::string(minimal) + "[kernels]\nx = 1\n");
     CHECK(e == "s.toml:10:2: kernels: unknown key (known: study, domain, grid, kernel, target, "
                "centres, projection, solver, limits, rates, adaptive, plant, law, integrator, "
-               "plugins, expect; did you mean 'kernel'?)");
+               "plugins, expect, plot; did you mean 'kernel'?)");
   }
   SECTION("invalid TOML") {
     const auto e = error_of("[study\nname = 1\n");
@@ -682,4 +682,120 @@ name = "gaussian"
     CHECK(parse_study(with("name = \"t\"", "name = \"" + std::string(100, 'a') + "\""), "s.toml")
               .name.size() == 100);
   }
+}
+
+TEST_CASE("[plot] sets the figures' metrics, labels, title, size, font, legend and resolution",
+          "[study][plot]") {
+  const auto plain = parse_study(minimal, "s.toml");
+  CHECK(plain.plot.metrics.empty());
+  CHECK(plain.plot.labels.empty());
+  CHECK(!plain.plot.title);
+  CHECK(plain.plot.width_inches == 0);
+  CHECK(plain.plot.legend == "below");
+  CHECK(plain.plot.png_dpi == 150);
+
+  const auto study = parse_study(std::string(minimal) + R"([plot]
+metrics = ["sup_error", "l2_error"]
+labels = { l2_error = "L^2 error ||f - {/Symbol P}_n f||", sup_error = "$\\|f\\|_\\infty$" }
+title = false
+size = [3.5, 2.5]
+font_size = 8
+legend = "top right"
+png_dpi = 300
+)",
+                                 "s.toml");
+  CHECK(study.plot.metrics == std::vector<std::string>{"sup_error", "l2_error"});
+  CHECK(study.plot.labels.at("l2_error") == "L^2 error ||f - {/Symbol P}_n f||");
+  CHECK(study.plot.labels.at("sup_error") == "$\\|f\\|_\\infty$");
+  REQUIRE(study.plot.title);
+  CHECK(study.plot.title->empty());
+  CHECK(study.plot.width_inches == 3.5);
+  CHECK(study.plot.height_inches == 2.5);
+  CHECK(study.plot.font_points == 8);
+  CHECK(study.plot.legend == "top right");
+  CHECK(study.plot.png_dpi == 300);
+  // The trials are the same: [plot] changes the figures only.
+  CHECK(study.trials().size() == plain.trials().size());
+  CHECK(study.trials().front().key == plain.trials().front().key);
+
+  const auto titled =
+      parse_study(std::string(minimal) + "[plot]\ntitle = \"Gaussian kernel\"\n", "s.toml");
+  CHECK(titled.plot.title == std::optional<std::string>("Gaussian kernel"));
+}
+
+TEST_CASE("[plot] errors name file, line, column, key, what was found and what is allowed",
+          "[study][plot]") {
+  // minimal ends on line 9: [plot] is line 10, its first key line 11.
+  auto error = [](const std::string& lines) {
+    return error_of(std::string(minimal) + "[plot]\n" + lines);
+  };
+  CHECK_THAT(error("legnd = \"below\"\n"),
+             Catch::StartsWith("s.toml:11:1: plot.legnd: unknown key") &&
+                 Catch::Contains("did you mean 'legend'"));
+  CHECK_THAT(error("metrics = [\"l2_eror\"]\n"),
+             Catch::StartsWith("s.toml:11:12: plot.metrics: unknown metric 'l2_eror'") &&
+                 Catch::Contains("did you mean 'l2_error'"));
+  CHECK_THAT(error("metrics = []\n"),
+             Catch::StartsWith("s.toml:11:11: plot.metrics: expected a non-empty array"));
+  CHECK_THAT(error("metrics = [\"l2_error\", \"l2_error\"]\n"),
+             Catch::StartsWith("s.toml:11:24: plot.metrics: 'l2_error' is listed twice"));
+  CHECK_THAT(error_of(R"(
+[study]
+name = "t"
+metrics = ["l2_error"]
+[domain]
+radius = 4.0
+[grid]
+n = [10, 20]
+[[kernel]]
+name = "gaussian"
+[plot]
+metrics = ["sup_error"]
+)"),
+             Catch::StartsWith("s.toml:12:12: plot.metrics: 'sup_error' is not among "
+                               "study.metrics") &&
+                 Catch::Contains("study.metrics: l2_error"));
+  CHECK_THAT(error("labels = \"L2\"\n"),
+             Catch::StartsWith("s.toml:11:10: plot.labels: expected an inline table"));
+  CHECK_THAT(error("labels = { l2_err = \"L2\" }\n"),
+             Catch::StartsWith("s.toml:11:21: plot.labels.l2_err: unknown metric 'l2_err'") &&
+                 Catch::Contains("did you mean 'l2_error'"));
+  CHECK_THAT(error("labels = { l2_error = 2 }\n"),
+             Catch::StartsWith("s.toml:11:23: plot.labels.l2_error: expected a string"));
+  CHECK_THAT(error("labels = { l2_error = \"a\\nb\" }\n"),
+             Catch::StartsWith("s.toml:11:23: plot.labels.l2_error: must be one line"));
+  CHECK_THAT(error("title = true\n"),
+             Catch::StartsWith("s.toml:11:9: plot.title: expected a string, or false"));
+  CHECK_THAT(error("title = 3\n"), Catch::StartsWith("s.toml:11:9: plot.title: expected a string"));
+  CHECK_THAT(error("title = \"" + std::string(301, 'x') + "\"\n"),
+             Catch::StartsWith("s.toml:11:9: plot.title: is 301 bytes long, at most 300"));
+  CHECK_THAT(error("size = [6]\n"),
+             Catch::StartsWith("s.toml:11:8: plot.size: expected [width, height] in inches"));
+  CHECK_THAT(error("size = [0, 4]\n"),
+             Catch::StartsWith("s.toml:11:9: plot.size: width: expected inches, a number above 0 "
+                               "and at most 40, found 0"));
+  CHECK_THAT(error("size = [6, 41]\n"),
+             Catch::StartsWith("s.toml:11:12: plot.size: height: expected inches") &&
+                 Catch::Contains("found 41"));
+  CHECK_THAT(error("size = [6, \"4\"]\n"),
+             Catch::StartsWith("s.toml:11:12: plot.size: height: expected inches"));
+  CHECK_THAT(error("font_size = 3\n"),
+             Catch::StartsWith("s.toml:11:13: plot.font_size: expected a number between 4 and "
+                               "72 points, found 3"));
+  CHECK_THAT(error("font_size = 73\n"), Catch::StartsWith("s.toml:11:13: plot.font_size:"));
+  CHECK_THAT(error("legend = \"top rigth\"\n"),
+             Catch::StartsWith("s.toml:11:10: plot.legend: unknown position 'top rigth'") &&
+                 Catch::Contains("did you mean 'top right'"));
+  CHECK_THAT(error("legend = 1\n"),
+             Catch::StartsWith("s.toml:11:10: plot.legend: expected a string"));
+  CHECK_THAT(error("png_dpi = 49\n"),
+             Catch::StartsWith("s.toml:11:11: plot.png_dpi: must be a whole number between 50 "
+                               "and 1200"));
+  CHECK_THAT(error("png_dpi = 1201\n"), Catch::StartsWith("s.toml:11:11: plot.png_dpi:"));
+  CHECK_THAT(error("png_dpi = 150.5\n"), Catch::StartsWith("s.toml:11:11: plot.png_dpi:"));
+  CHECK_THAT(error("size = [30, 20]\npng_dpi = 1200\n"),
+             Catch::StartsWith("s.toml:12:11: plot.png_dpi: 1200 dpi at 30 inches makes a PNG "
+                               "of 36000 pixels a side, at most 20000"));
+  CHECK_THAT(error_of("plot = 3\n" + std::string(minimal)),
+             Catch::StartsWith("s.toml:1:8: plot: expected a table"));
 }

@@ -11,6 +11,7 @@
 
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/report/convergence_in_time.hpp"
+#include "rkhs/report/plots.hpp"
 #include "rkhs/report/rate_table.hpp"
 
 namespace rkhs {
@@ -341,7 +342,7 @@ li.inconclusive b {{ color: #7a5b00; }}
         fitted_rates_table(groups, tables, metrics);
   }
   page += "<h2>Convergence plots</h2>\n";
-  for (const auto& metric : study.metrics) {
+  for (const auto& metric : convergence_plot_order(study.metrics)) {  // the errors first
     page += fmt::format("<h3 id=\"{0}\">{0}</h3>\n", escape_html(metric));
     bool shown = false;
     for (const auto& svg : convergence_plots(plots, metric)) {

@@ -160,27 +160,64 @@ std::string log_range(const char* axis, const Extent& extent, bool is_x) {
   return out + fmt::format("set {}tics ({})\nset format {} '%g'\n", axis, tics, axis);
 }
 
+// A figure's size in inches.
+struct Figure {
+  double width = 0, height = 0;
+};
+
+// The SVG's canvas, in pixels per inch of the figure (report.html shows it at this size).
+constexpr double svg_pixels_per_inch = 150;
+// The lines' and points' size in the PDF, relative to gnuplot's (the PNG and SVG scale alike).
+constexpr double line_scale = 0.7, point_scale = 0.5;
+
 // The script that renders `drawing` (every setting and plot command; the data blocks come
-// first, outside) to <stem>.svg, <stem>.png and <stem>.pdf in the current directory, on a
-// canvas of width x height pixels (the PDF at 150 pixels to the inch, 900 pixels a 6-inch
-// figure, its fonts, points and lines scaled alike).
-std::string rendered(const std::string& stem, int width, int height, const std::string& data,
-                     const std::string& drawing) {
-  return data + fmt::format(
-                    "do for [ext in \"svg png pdf\"] {{\n"
-                    "reset\n"
-                    "if (ext eq \"svg\") {{ set terminal svg size {0},{1} dynamic enhanced font "
-                    "'sans,11' }}\n"
-                    "if (ext eq \"png\") {{ set terminal pngcairo size {0},{1} enhanced font "
-                    "'sans,10' }}\n"
-                    "if (ext eq \"pdf\") {{ set terminal pdfcairo size {2}in,{3}in enhanced font "
-                    "'sans,7' pointscale 0.5 linewidth 0.7 }}\n"
-                    "set output '{4}.'.ext\n"
-                    "{5}"
-                    "unset output\n"
-                    "}}\n",
-                    width, height, format_real(width / 150.0), format_real(height / 150.0), stem,
-                    drawing);
+// first, outside) to <stem>.svg, <stem>.png and <stem>.pdf in the current directory: the PDF
+// on a page of the figure's size in inches with text of style.font_points points, the PNG its
+// raster at style.png_dpi and the SVG at svg_pixels_per_inch (fonts, lines and points scaled
+// with the resolution, gnuplot's cairo terminals counting 72 points to the inch: the three look
+// alike).
+std::string rendered(const std::string& stem, Figure figure, const PlotStyle& style,
+                     const std::string& data, const std::string& drawing) {
+  auto pixels = [](double inches, double per_inch) {
+    return static_cast<int>(std::lround(inches * per_inch));
+  };
+  const double svg = svg_pixels_per_inch / 72, png = style.png_dpi / 72.0;
+  const auto font = format_real(style.font_points);
+  auto scale = [](double factor) { return fmt::format("{:.4g}", factor); };
+  return data +
+         fmt::format(
+             "do for [ext in \"svg png pdf\"] {{\n"
+             "reset\n"
+             "if (ext eq \"svg\") {{ set terminal svg size {0},{1} dynamic enhanced font "
+             "'sans,{6}' fontscale {7} linewidth {8} }}\n"
+             "if (ext eq \"png\") {{ set terminal pngcairo size {2},{3} enhanced font 'sans,{6}' "
+             "fontscale {9} linewidth {10} pointscale {11} }}\n"
+             "if (ext eq \"pdf\") {{ set terminal pdfcairo size {4}in,{5}in enhanced font "
+             "'sans,{6}' linewidth {12} pointscale {13} }}\n"
+             "set output '{14}.'.ext\n"
+             "{15}"
+             "unset output\n"
+             "}}\n",
+             pixels(figure.width, svg_pixels_per_inch), pixels(figure.height, svg_pixels_per_inch),
+             pixels(figure.width, style.png_dpi), pixels(figure.height, style.png_dpi),
+             format_real(figure.width), format_real(figure.height), font, scale(svg),
+             scale(svg * line_scale), scale(png), scale(png * line_scale), scale(png * point_scale),
+             scale(line_scale), scale(point_scale), stem, drawing);
+}
+
+// The figure's size: [plot] size when given, else `automatic`.
+Figure sized(const PlotStyle& style, Figure automatic) {
+  return style.width_inches > 0 ? Figure{style.width_inches, style.height_inches} : automatic;
+}
+
+// About how many characters of the figure's text fit across `inches` (gnuplot does not wrap).
+std::size_t characters_across(double inches, const PlotStyle& style) {
+  return static_cast<std::size_t>(std::max(10.0, inches * 72 / (0.7 * style.font_points)));
+}
+
+// The height of `lines` lines of text, in inches.
+double text_height(std::size_t lines, const PlotStyle& style) {
+  return static_cast<double>(lines) * 1.35 * style.font_points / 72;
 }
 
 // Colour-blind safe colours (Okabe and Ito, without yellow) with a point type each, filled and
@@ -430,13 +467,44 @@ std::string legend(const TrialSpec& trial) {
   return out;
 }
 
+// The constants of `identity` that a short title names: each plugin every curve shares, by
+// name ("kernel=matern", not its parameters nor an expression target's formula), a lap count,
+// and which axes the curves are the same for.
+std::string short_constants(const Identity& identity) {
+  std::vector<std::string> names;
+  for (const auto& constant : identity.constants) {
+    const auto equals = constant.find('=');
+    const auto axis = constant.substr(0, equals);
+    const bool plugin = std::any_of(std::begin(plugin_axes), std::end(plugin_axes),
+                                    [&](const PluginAxis& a) { return axis == a.first; });
+    if (equals != std::string::npos && (plugin || axis == "laps"))
+      names.push_back(constant.substr(0, constant.find(' ')));
+    else if (constant.starts_with("the same for every"))
+      names.push_back(constant);
+  }
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+// The gnuplot commands that place the key at [plot] legend `position`
+// (PlotStyle::legend_positions). Outside the axes it lies below the x axis' label or right of
+// the axes, never over a label; inside, on an opaque box.
+std::string key_placement(std::string_view position) {
+  const std::string common = "noenhanced Left reverse samplen 2.5 spacing 1.1";
+  if (position == "none") return "unset key\n";
+  if (position == "outside") return fmt::format("set key {} outside right top vertical\n", common);
+  if (position == "below")
+    return fmt::format("set key {} outside below center horizontal\n", common);
+  return fmt::format("set key {} inside {} opaque box\n", common, position);
+}
+
 // ---- Convergence plots ------------------------------------------------------------------------
 
 constexpr std::size_t most_curves_per_panel = 8;
 constexpr std::size_t most_panels_per_file = 12;
-constexpr int single_width = 900, single_height = 640;  // one plot, pixels
-constexpr int panel_width = 480, panel_height = 480;    // one panel of a grid
-constexpr int title_line_height = 18;
+constexpr Figure single_figure{6, 4.5};  // one plot, inches, without its title
+constexpr double panel_inches = 3.2;     // one panel of a grid, square
 
 // One group's series of a metric as plotted: x is n or h (n for an exponential fit).
 struct Curve {
@@ -684,12 +752,14 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
     any_theory = any_theory || (curve.theory_slope && series.fit && !series.fit->used.empty());
   }
   const bool against_n = run.study.abscissa == Abscissa::n;
-  std::vector<std::string> style;
-  style.push_back("points: values");
-  if (any_flagged) style.push_back("hollow: flagged, not fitted");
-  if (any_band) style.push_back("dashed: fitted rate on its window, shaded its 95% band");
-  if (any_constant) style.push_back("const: a series constant on its window, shaded its band");
-  if (any_theory) style.push_back("dotted: theory slope");
+  std::vector<std::string> style_lines;
+  style_lines.push_back("points: values");
+  if (any_flagged) style_lines.push_back("hollow: flagged, not fitted");
+  if (any_band) style_lines.push_back("dashed: fitted rate on its window, shaded its 95% band");
+  if (any_constant)
+    style_lines.push_back("const: a series constant on its window, shaded its band");
+  if (any_theory) style_lines.push_back("dotted: theory slope");
+  const auto shared = short_constants(identity);
 
   const std::size_t parts = (panels.size() + most_panels_per_file - 1) / most_panels_per_file;
   for (std::size_t part = 0; part < parts; ++part) {
@@ -709,31 +779,47 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
       if (first.size() * second.size() == count && second.size() <= 4) columns = second.size();
     }
     const std::size_t rows = (count + columns - 1) / columns;
-    const int width = grid ? static_cast<int>(columns) * panel_width : single_width;
-    std::vector<std::string> title_lines{fmt::format(
-        "{} against {}: {}{}", metric, against_n ? "n" : "the fill distance h", run.study.name,
-        parts > 1 ? fmt::format(" (part {} of {})", part + 1, parts) : "")};
-    const std::size_t characters = static_cast<std::size_t>(width) / 8;
-    if (!identity.constants.empty())
-      title_lines.push_back(wrapped(identity.constants, characters, "; "));
-    title_lines.push_back(wrapped(style, characters, "; "));
+    const auto& style = run.study.plot;
     std::string title;
-    for (const auto& line : title_lines) title += (title.empty() ? "" : "\n") + line;
-    const int title_height =
-        title_line_height * static_cast<int>(std::count(title.begin(), title.end(), '\n') + 2);
-    const int height =
-        grid ? static_cast<int>(rows) * panel_height + title_height : single_height + title_height;
+    if (!style.title) {
+      // The plugins every curve shares, by name (their parameters are in the tables), and
+      // what the line styles mean.
+      std::vector<std::string> title_lines{
+          fmt::format("{}{}{}", run.study.name, shared.empty() ? "" : ": " + shared,
+                      parts > 1 ? fmt::format(" (part {} of {})", part + 1, parts) : "")};
+      const auto automatic_width =
+          grid ? static_cast<double>(columns) * panel_inches : single_figure.width;
+      title_lines.push_back(wrapped(
+          style_lines, characters_across(sized(style, {automatic_width, 0}).width, style), "; "));
+      for (const auto& line : title_lines) title += (title.empty() ? "" : "\n") + line;
+    }
+    const auto title_line_count =
+        style.title && style.title->empty()
+            ? 0
+            : static_cast<std::size_t>(std::count(title.begin(), title.end(), '\n') + 1);
+    const auto figure = sized(
+        style, grid ? Figure{static_cast<double>(columns) * panel_inches,
+                             static_cast<double>(rows) * panel_inches +
+                                 text_height(title_line_count + 1, style)}
+                    : Figure{single_figure.width,
+                             single_figure.height + text_height(title_line_count + 1, style)});
+    // The title as a gnuplot string: the user's in enhanced text, ours as written.
+    const auto title_command =
+        style.title
+            ? (style.title->empty() ? std::string("''") : gp_text(*style.title) + " enhanced")
+            : gp_text(title) + " noenhanced";
+    const auto ylabel = style.labels.contains(metric) ? style.labels.at(metric)
+                                                      : metric_axis_label(run.study.kind, metric);
 
     std::string data, drawing = line_types();
     drawing += fmt::format(
-        "set xlabel {} noenhanced\nset ylabel {} noenhanced\nset logscale xy\n"
-        "set format y '10^{{%L}}'\nset grid\nset datafile missing 'nan'\n{}{}"
-        "set key noenhanced outside below left Left reverse samplen 2.5 spacing 1.1\n",
-        gp_text(against_n ? "n" : "fill distance h"), gp_text(metric), log_range("x", xs, true),
-        log_range("y", ys, false));
+        "set xlabel {} enhanced\nset ylabel {} enhanced\nset logscale xy\n"
+        "set format y '10^{{%L}}'\nset grid\nset datafile missing 'nan'\n{}{}{}",
+        gp_text(against_n ? "n" : "fill distance h (m)"), gp_text(ylabel), log_range("x", xs, true),
+        log_range("y", ys, false), key_placement(style.legend));
     if (grid)
-      drawing += fmt::format("set multiplot layout {},{} rowsfirst title {} noenhanced\n", rows,
-                             columns, gp_text(title));
+      drawing += fmt::format("set multiplot layout {},{} rowsfirst title {}\n", rows, columns,
+                             title_command);
     for (std::size_t p = begin; p < end; ++p) {
       const auto& members = panels[p];
       // Legend: the factors that differ within the panel; the rest names the panel.
@@ -744,12 +830,13 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
         const bool panel = std::find(chosen.begin(), chosen.end(), f) != chosen.end();
         (panel || seen.size() == 1 ? title_factors : legend_factors).push_back(f);
       }
+      const double plot_width = grid ? figure.width / static_cast<double>(columns) : figure.width;
       drawing +=
           grid ? fmt::format(
                      "set title {} noenhanced\n",
                      gp_text(wrapped({identity_text(identity, members.front(), title_factors)},
-                                     panel_width / 7)))
-               : fmt::format("set title {} noenhanced\n", gp_text(title));
+                                     characters_across(plot_width, style))))
+               : fmt::format("set title {}\n", title_command);
       std::string bands, fits, points, theories;
       std::set<std::string> theory_titles;
       std::size_t longest = 0;  // characters of the longest key entry
@@ -796,18 +883,19 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
                                                                     : std::string("notitle"));
         }
       }
-      auto plot = bands + fits + points + theories;
+      // The fitted lines over the data, the theory slopes over both.
+      auto plot = bands + points + fits + theories;
       plot.erase(plot.size() - 2);
-      // Two key columns when two entries fit side by side (about 7 pixels a character and 60
-      // for the sample), else one.
-      const int key_width = grid ? panel_width : single_width;
-      drawing += fmt::format("set key maxcols {}\nplot {}\n",
-                             2 * (7 * static_cast<int>(longest) + 60) < key_width ? 2 : 1, plot);
+      // Two key columns when two entries fit side by side (with their samples, about 6
+      // characters), else one.
+      drawing +=
+          fmt::format("set key maxcols {}\nplot {}\n",
+                      2 * (longest + 6) < characters_across(plot_width, style) ? 2 : 1, plot);
     }
     if (grid) drawing += "unset multiplot\n";
     const auto stem = parts == 1 ? "convergence_" + metric
                                  : fmt::format("convergence_{}_part{}", metric, part + 1);
-    plan.scripts.emplace_back(stem, rendered(stem, width, height, data, drawing));
+    plan.scripts.emplace_back(stem, rendered(stem, figure, style, data, drawing));
   }
 }
 
@@ -917,7 +1005,7 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
     const std::string ylabel = "integration error (relative L2 of fhat(T))";
     plan.scripts.emplace_back(
         time_stem,
-        rendered(time_stem, single_width, single_height, data,
+        rendered(time_stem, sized(run.study.plot, single_figure), run.study.plot, data,
                  line_types() +
                      header(title,
                             fmt::format("wall time of the trial, s (not deterministic: machine, "
@@ -928,7 +1016,7 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
                      "set key outside below\nplot " + plot_time + "\n"));
     plan.scripts.emplace_back(
         steps_stem,
-        rendered(steps_stem, single_width, single_height, data,
+        rendered(steps_stem, sized(run.study.plot, single_figure), run.study.plot, data,
                  line_types() + header(title, "accepted steps; labels: rtol", ylabel, true, true) +
                      log_range("x", steps, true) + log_range("y", errors, false) +
                      "set key outside below\nplot " + plot_steps + "\n"));
@@ -937,10 +1025,26 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
 
 }  // namespace
 
+std::vector<std::string> convergence_plot_order(const std::vector<std::string>& metrics) {
+  auto rank = [](const std::string& metric) {
+    if (metric.find("error") != std::string::npos) return 0;
+    if (metric == "fill_distance" || metric == "separation_distance") return 2;
+    return 1;
+  };
+  auto out = metrics;
+  std::stable_sort(out.begin(), out.end(),
+                   [&](const std::string& a, const std::string& b) { return rank(a) < rank(b); });
+  return out;
+}
+
+std::vector<std::string> plotted_metrics(const StudyDefinition& study) {
+  return study.plot.metrics.empty() ? convergence_plot_order(study.metrics) : study.plot.metrics;
+}
+
 PlotPlan plot_scripts(const RunRecord& run) {
   PlotPlan plan;
   auto& out = plan.scripts;
-  for (const auto& metric : run.study.metrics) convergence_scripts(run, metric, plan);
+  for (const auto& metric : plotted_metrics(run.study)) convergence_scripts(run, metric, plan);
   if (run.study.kind != StudyKind::adaptive) return plan;
   if (!run.study.reference.name.empty()) work_precision_scripts(run, plan);
 
@@ -980,7 +1084,7 @@ PlotPlan plot_scripts(const RunRecord& run) {
             gp_text(fmt::format("fhat after {} laps", format_real(last.snapshots[i].lap))));
       const auto stem = fmt::format("estimates_group{}", g + 1);
       out.emplace_back(
-          stem, rendered(stem, single_width, single_height, data,
+          stem, rendered(stem, sized(run.study.plot, single_figure), run.study.plot, data,
                          header(fmt::format("{} (n = {})", group_name, trial.n), "arc length s (m)",
                                 "elevation (m)", false, false) +
                              "set autoscale xfix\nset key outside below\nplot " + plot + "\n"));
@@ -1020,7 +1124,7 @@ PlotPlan plot_scripts(const RunRecord& run) {
     if (!plot_error.empty())
       out.emplace_back(
           state_stem,
-          rendered(state_stem, single_width, single_height, data,
+          rendered(state_stem, sized(run.study.plot, single_figure), run.study.plot, data,
                    header(group_name + ": |x - xhat|", "t (s)", "|x - xhat|", false, true) +
                        "set autoscale xfix\n" + log_range("y", errors, false) +
                        "set key outside right top\nplot " + plot_error + "\n"));
@@ -1030,11 +1134,12 @@ PlotPlan plot_scripts(const RunRecord& run) {
                       state_stem, g + 1));
     const auto lyapunov_stem = fmt::format("lyapunov_group{}", g + 1);
     if (!plot_v.empty())
-      out.emplace_back(lyapunov_stem,
-                       rendered(lyapunov_stem, single_width, single_height, data,
-                                header(group_name + ": V", "t (s)", "V", false, true) +
-                                    "set autoscale xfix\n" + log_range("y", lyapunov, false) +
-                                    "set key outside right top\nplot " + plot_v + "\n"));
+      out.emplace_back(
+          lyapunov_stem,
+          rendered(lyapunov_stem, sized(run.study.plot, single_figure), run.study.plot, data,
+                   header(group_name + ": V", "t (s)", "V", false, true) + "set autoscale xfix\n" +
+                       log_range("y", lyapunov, false) + "set key outside right top\nplot " +
+                       plot_v + "\n"));
     else
       plan.notes.push_back(fmt::format(
           "{}: not plotted: no trial of group {} has a positive V sample", lyapunov_stem, g + 1));

@@ -103,6 +103,7 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
       {&study.expectations, "expectations",
        "judged after the trials; what trials compute for them enters as computed_metrics()"},
       {&study.warnings, "warnings", "messages about the file"},
+      {&study.plot, "plot", "how the figures look ([plot]), drawn after the trials"},
   };
 }
 

@@ -64,6 +64,30 @@ FloorRule metric_floor_rule(StudyKind kind, std::string_view metric) {
                                      : floor_rule_in<ApproximationMetric>(metric);
 }
 
+namespace {
+template <class Metric>
+std::string axis_label_in(std::string_view metric) {
+  for (const auto& row : MetricTable<Metric>::rows)
+    if (row.name == metric) {
+      const bool physical =
+          row.unit == "m" || row.unit == "s" || row.unit == "1/s" || row.unit == "laps";
+      return physical ? fmt::format("{} ({})", row.label, row.unit) : std::string(row.label);
+    }
+  return std::string(metric);
+}
+}  // namespace
+
+std::string metric_axis_label(StudyKind kind, std::string_view metric) {
+  return kind == StudyKind::adaptive ? axis_label_in<AdaptiveMetric>(metric)
+                                     : axis_label_in<ApproximationMetric>(metric);
+}
+
+const std::vector<std::string>& PlotStyle::legend_positions() {
+  static const std::vector<std::string> positions{
+      "below", "outside", "top right", "top left", "bottom right", "bottom left", "none"};
+  return positions;
+}
+
 const std::vector<std::string>& StudyDefinition::all_metrics() const { return metric_names(kind); }
 
 std::size_t StudyDefinition::metric_index(std::string_view metric) const {

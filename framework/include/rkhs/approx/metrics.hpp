@@ -1,6 +1,6 @@
 #pragma once
 // Metric tables: for each study kind, one enum naming its metrics and one constexpr table with,
-// per metric, its output name, how its round-off floor is estimated, its unit, meaning, whether
+// per metric, its output name, its plot label, how its round-off floor is estimated, its unit, meaning, whether
 // NaN is a legitimate value and the flag that excludes it from rate fits. The enum order is the output order (trials.csv columns,
 // `rkhs-study list metrics`, docs/metrics.md); trials fill their values by identifier.
 
@@ -59,6 +59,9 @@ template <class Metric>
 struct MetricRow {
   Metric id;
   std::string_view name;  ///< column of trials.csv, key of study.metrics in study files
+  /// A plot's axis label: a few words, no unit (the plots add physical units: m, s, laps), in
+  /// gnuplot's enhanced text ("L^2 error": ^ and _ raise and lower the next character or {group})
+  std::string_view label;
   FloorRule floor;        ///< how its floor is estimated (`exact`: none is written)
   /// m (arc length), s, 1 (dimensionless), count, [k] (units of the kernel), [f] (of the
   /// target f), [x] (of the plant state), [V] (of the Lyapunov function), or products of these
@@ -200,43 +203,43 @@ struct MetricTable<ApproximationMetric> {
   using M = ApproximationMetric;
   using F = FloorRule;
   static constexpr std::array<MetricRow<M>, 13> rows{{
-      {M::fill_distance, "fill_distance", F::exact, "m", "h = sup_x min_i |x - c_i|", false, "", true,
+      {M::fill_distance, "fill_distance", "fill distance h", F::exact, "m", "h = sup_x min_i |x - c_i|", false, "", true,
        work_fill},
-      {M::separation_distance, "separation_distance", F::exact, "m",
+      {M::separation_distance, "separation_distance", "separation distance q", F::exact, "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, "", true,
        work_separation},
-      {M::gram_condition_number, "gram_condition_number", F::round_off, "1",
+      {M::gram_condition_number, "gram_condition_number", "condition number of the Gram matrix", F::round_off, "1",
        "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular", true,
        work_spectrum},
-      {M::gram_min_eigenvalue, "gram_min_eigenvalue", F::round_off, "[k]", "lambda_min(G)", false,
+      {M::gram_min_eigenvalue, "gram_min_eigenvalue", "smallest eigenvalue of the Gram matrix", F::round_off, "[k]", "lambda_min(G)", false,
        "gram_singular", true,
        work_spectrum},
-      {M::gram_max_eigenvalue, "gram_max_eigenvalue", F::round_off, "[k]", "lambda_max(G)", false, "", true,
+      {M::gram_max_eigenvalue, "gram_max_eigenvalue", "largest eigenvalue of the Gram matrix", F::round_off, "[k]", "lambda_max(G)", false, "", true,
        work_spectrum},
-      {M::power_function_sup, "power_function_sup", F::round_off, "sqrt([k])",
+      {M::power_function_sup, "power_function_sup", "power function, sup norm", F::round_off, "sqrt([k])",
        "max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid", false, "power_function_at_floor", true,
        work_power | work_cardinal},
-      {M::power_function_floor, "power_function_floor", F::round_off, "sqrt([k])",
+      {M::power_function_floor, "power_function_floor", "round-off level of the power function", F::round_off, "sqrt([k])",
        "round-off level of P_n: max_m sqrt(n eps lambda_max |G^-1 k_X(s_m)|^2)", false, "", true,
        work_power | work_cardinal},
-      {M::l2_error, "l2_error", F::round_off, "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
+      {M::l2_error, "l2_error", "L^2 error", F::round_off, "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
        "l2_error_at_floor", true,
        work_interpolant | work_residual | work_cardinal},
-      {M::sup_error, "sup_error", F::round_off, "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
+      {M::sup_error, "sup_error", "sup-norm error", F::round_off, "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
        "sup_error_at_floor", true,
        work_interpolant | work_residual | work_cardinal},
-      {M::error_floor, "error_floor", F::round_off, "[f]",
+      {M::error_floor, "error_floor", "round-off level of the error", F::round_off, "[f]",
        "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, "", true,
        work_interpolant | work_cardinal},
-      {M::interpolant_native_norm, "interpolant_native_norm", F::round_off, "[f] / sqrt([k])",
+      {M::interpolant_native_norm, "interpolant_native_norm", "native norm of the interpolant", F::round_off, "[f] / sqrt([k])",
        "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, "", true,
        work_interpolant},
-      {M::projection_norm_H_to_C, "projection_norm_H_to_C", F::round_off, "sqrt([k])",
+      {M::projection_norm_H_to_C, "projection_norm_H_to_C", "norm of I - Π from H to C", F::round_off, "sqrt([k])",
        "max_m ||(I - Pi)^* k(s_m, .)||_H = ||I - Pi||_{H -> C} on the grid, from the "
        "projection's own definition (the power function for interpolation)",
        false, "projection_norm_at_floor", true,
        work_projection_residual},
-      {M::projection_operator_norm, "projection_operator_norm", F::round_off, "1",
+      {M::projection_operator_norm, "projection_operator_norm", "norm of Π on H", F::round_off, "1",
        "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
        work_operator_norm},
   }};

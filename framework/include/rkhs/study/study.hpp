@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -12,12 +13,12 @@
 #include <vector>
 
 #include "rkhs/adaptive/adaptive.hpp"
-#include "rkhs/core/domain.hpp"
-#include "rkhs/study/expectation.hpp"
-#include "rkhs/approx/metrics.hpp"
 #include "rkhs/approx/gram_solver.hpp"
-#include "rkhs/rates/asymptotic.hpp"
+#include "rkhs/approx/metrics.hpp"
+#include "rkhs/core/domain.hpp"
 #include "rkhs/core/parameters.hpp"
+#include "rkhs/rates/asymptotic.hpp"
+#include "rkhs/study/expectation.hpp"
 
 namespace rkhs {
 
@@ -89,6 +90,35 @@ std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept;
 /// The engine `name` stands for; std::nullopt for an unknown name.
 std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept;
 
+/// [plot]: how the convergence plots look (docs/study-files.md). Only the figures change: no
+/// number, no trial key, no table. Every field has a default that reads well.
+struct PlotStyle {
+  /// The metrics plotted, in this order (each one of StudyDefinition::metrics); empty: every
+  /// metric of the study, the errors first (convergence_plot_order, rkhs/report/plots.hpp).
+  std::vector<std::string> metrics;
+  /// metric -> y axis label, gnuplot enhanced text ("L^2 error ||f - {/Symbol P}_n f||"); a
+  /// metric not listed gets metric_axis_label().
+  std::map<std::string, std::string> labels;
+  /// The figure's title: std::nullopt for the default (the plugins every curve shares and the
+  /// line styles), "" for none (title = false), else the text, gnuplot enhanced text.
+  std::optional<std::string> title;
+  /// The figure's size in inches (the PDF's page; PNG and SVG alike at png_dpi); 0: the default,
+  /// 6 x 4.5 for one plot plus the title's lines, 3.2 x 3.2 per panel of a grid.
+  double width_inches = 0, height_inches = 0;
+  double font_points = 10;  ///< text size in points, at the figure's size
+  /// Where the key goes: below (under the x axis' label), outside (right of the axes), top
+  /// right, top left, bottom right, bottom left (inside the axes), none.
+  std::string legend = "below";
+  int png_dpi = 150;  ///< PNG pixels per inch (the SVG's canvas is the PNG's size)
+
+  static constexpr double max_inches = 40;
+  static constexpr double min_font_points = 4, max_font_points = 72;
+  static constexpr int min_png_dpi = 50, max_png_dpi = 1200;
+  static constexpr double max_png_pixels = 20000;  ///< per side: inches x png_dpi
+  /// The accepted values of `legend`.
+  static const std::vector<std::string>& legend_positions();
+};
+
 struct StudyDefinition {
   std::string name;
   std::string description;
@@ -125,6 +155,7 @@ struct StudyDefinition {
   /// integrator (with its resolved parameters) every trial also integrates with, for
   /// integration_error; its trials step through time. An empty name: no reference.
   PluginChoice reference;
+  PlotStyle plot;  ///< [plot]
 
   /// The Cartesian product kernels x targets x centres [x projections] [x plants x laws x
   /// integrators] [x laps] x n, n varying fastest.
@@ -174,6 +205,11 @@ const std::vector<std::string>& metric_names(StudyKind kind);
 /// How the floor of `metric` (a metric of a `kind` trial) is estimated (MetricRow::floor);
 /// FloorRule::exact for an unknown name.
 FloorRule metric_floor_rule(StudyKind kind, std::string_view metric);
+
+/// The y axis label of `metric` (a metric of a `kind` trial) in its plots: the metric table's
+/// label (MetricRow::label, gnuplot enhanced text) with the unit in parentheses when it is a
+/// physical one (m, s, 1/s, laps); the name itself for an unknown metric.
+std::string metric_axis_label(StudyKind kind, std::string_view metric);
 
 /// Reads and validates a study file. Throws StudyError (file, line, column, key, found,
 /// allowed, and a suggestion for misspelt names) for any problem.

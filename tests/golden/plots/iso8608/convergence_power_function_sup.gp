@@ -115,9 +115,9 @@ $t2 << EOD
 EOD
 do for [ext in "svg png pdf"] {
 reset
-if (ext eq "svg") { set terminal svg size 900,748 dynamic enhanced font 'sans,11' }
-if (ext eq "png") { set terminal pngcairo size 900,748 enhanced font 'sans,10' }
-if (ext eq "pdf") { set terminal pdfcairo size 6in,4.986666666666666in enhanced font 'sans,7' pointscale 0.5 linewidth 0.7 }
+if (ext eq "svg") { set terminal svg size 900,816 dynamic enhanced font 'sans,10' fontscale 2.083 linewidth 1.458 }
+if (ext eq "png") { set terminal pngcairo size 900,816 enhanced font 'sans,10' fontscale 2.083 linewidth 1.458 pointscale 1.042 }
+if (ext eq "pdf") { set terminal pdfcairo size 6in,5.4375in enhanced font 'sans,10' linewidth 0.7 pointscale 0.5 }
 set output 'convergence_power_function_sup.'.ext
 set linetype 1 lc rgb '#0072B2' lw 1.5 pt 7 ps 0.8
 set linetype 2 lc rgb '#D55E00' lw 1.5 pt 5 ps 0.8
@@ -127,8 +127,8 @@ set linetype 5 lc rgb '#E69F00' lw 1.5 pt 13 ps 0.8
 set linetype 6 lc rgb '#56B4E9' lw 1.5 pt 15 ps 0.8
 set linetype 7 lc rgb '#000000' lw 1.5 pt 7 ps 0.8
 set linetype 8 lc rgb '#8C564B' lw 1.5 pt 5 ps 0.8
-set xlabel 'n' noenhanced
-set ylabel 'power_function_sup' noenhanced
+set xlabel 'n' enhanced
+set ylabel 'power function, sup norm' enhanced
 set logscale xy
 set format y '10^{%L}'
 set grid
@@ -137,9 +137,9 @@ set xrange [9.201876506248752:173.87757800416927]
 set xtics (10, 20, 50, 100)
 set format x '%g'
 set yrange [0.0009888190054240314:1.2768932278327152]
-set key noenhanced outside below left Left reverse samplen 2.5 spacing 1.1
-set title 'power_function_sup against n: iso8608'."\n".'bspline: n0=4 J=8; matern: nu=0.5 length_scale=1;'."\n".'target=iso8608 gd_n0=0 n_min=0 n_max=10 amplitudes=deterministic; centres=uniform offset=0;'."\n".'the same for every class, waviness and seed'."\n".'points: values; dashed: fitted rate on its window, shaded its 95% band; dotted: theory slope' noenhanced
-set key maxcols 2
-plot $f0 using 1:3:4 with filledcurves fc lt 1 fs transparent solid 0.15 noborder notitle, $f1 using 1:3:4 with filledcurves fc lt 2 fs transparent solid 0.15 noborder notitle, $f2 using 1:3:4 with filledcurves fc lt 3 fs transparent solid 0.15 noborder notitle, $f0 using 1:2 with lines lt 1 dt 2 lw 1.2 notitle, $f1 using 1:2 with lines lt 2 dt 2 lw 1.2 notitle, $f2 using 1:2 with lines lt 3 dt 2 lw 1.2 notitle, $c0 using 1:2 with linespoints lt 1 title 'kernel=bspline degree=1 r=1: rate -0.517', $c1 using 1:2 with linespoints lt 2 title 'kernel=bspline degree=2 r=2: rate -1.5', $c2 using 1:2 with linespoints lt 3 title 'kernel=matern: rate -0.483', $t0 using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 title 'theory slope -0.5', $t1 using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 title 'theory slope -1.5', $t2 using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 notitle
+set key noenhanced Left reverse samplen 2.5 spacing 1.1 outside below center horizontal
+set title 'iso8608: target=iso8608, centres=uniform, the same for every class, waviness and seed'."\n".'points: values;'."\n".'dashed: fitted rate on its window, shaded its 95% band;'."\n".'dotted: theory slope' noenhanced
+set key maxcols 1
+plot $f0 using 1:3:4 with filledcurves fc lt 1 fs transparent solid 0.15 noborder notitle, $f1 using 1:3:4 with filledcurves fc lt 2 fs transparent solid 0.15 noborder notitle, $f2 using 1:3:4 with filledcurves fc lt 3 fs transparent solid 0.15 noborder notitle, $c0 using 1:2 with linespoints lt 1 title 'kernel=bspline degree=1 r=1: rate -0.517', $c1 using 1:2 with linespoints lt 2 title 'kernel=bspline degree=2 r=2: rate -1.5', $c2 using 1:2 with linespoints lt 3 title 'kernel=matern: rate -0.483', $f0 using 1:2 with lines lt 1 dt 2 lw 1.2 notitle, $f1 using 1:2 with lines lt 2 dt 2 lw 1.2 notitle, $f2 using 1:2 with lines lt 3 dt 2 lw 1.2 notitle, $t0 using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 title 'theory slope -0.5', $t1 using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 title 'theory slope -1.5', $t2 using 1:2 with lines lc rgb '#505050' dt 3 lw 1.5 notitle
 unset output
 }
