@@ -2,9 +2,11 @@
 #include "rkhs/core/expression.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -186,13 +188,29 @@ class ExpressionTarget final : public TargetFunction {
       const auto where = e.position() >= text.size()
                              ? std::string("at the end of")
                              : fmt::format("at character {} of", e.position() + 1);
-      // A name f reads that the table does not give is most likely a parameter left out.
-      const auto hint = e.unknown_name().empty()
-                            ? std::string()
-                            : fmt::format(
-                                  " (a constant of the target's own is a key of its "
-                                  "[[target]] table, e.g. {} = 1)",
-                                  e.unknown_name());
+      // A coordinate of another dimension (s on a domain in R^d, x or x1 on a track) names the
+      // variables there are; any other name f reads that the table does not give is most
+      // likely a parameter left out.
+      const std::string& unknown = e.unknown_name();
+      const bool coordinate_of_another_dimension =
+          domain.dimension == 1
+              ? unknown == "x" || (unknown.size() >= 2 && unknown[0] == 'x' &&
+                                   std::isdigit(static_cast<unsigned char>(unknown[1])))
+              : unknown == "s" || unknown == "x";
+      const auto hint =
+          unknown.empty() ? std::string()
+          : coordinate_of_another_dimension
+              ? (domain.dimension == 1
+                     ? fmt::format(" ({} is not a variable on this track (d = 1): f reads its "
+                                   "point as s, the arc length)",
+                                   unknown)
+                     : fmt::format(" ({} is not a variable on this domain (d = {}): f reads its "
+                                   "point as {})",
+                                   unknown, domain.dimension, fmt::join(names, ", ")))
+              : fmt::format(
+                    " (a constant of the target's own is a key of its [[target]] table, e.g. "
+                    "{} = 1)",
+                    unknown);
       throw ParameterError("f", fmt::format("{} f = \"{}\": found {}, expected {}{}", where, text,
                                             e.found(), e.expected(), hint));
     }

@@ -153,6 +153,8 @@ TEST_CASE("a mistake in an expression names its position, what was found and wha
         "variable, a constant, a function call or \"(\"");
   // A misspelt function or constant is guessed, a one-letter name is not.
   CHECK_THAT(error_of("2 * sn(s)").expected(), Catch::EndsWith("did you mean \"sin\"?"));
+  // sign, sin and sinh are each one edit from sinn: sin is sinn with a letter left out.
+  CHECK_THAT(error_of("2 * sinn(s)").expected(), Catch::EndsWith("did you mean \"sin\"?"));
   CHECK_THAT(error_of("2 * sqr(s)").expected(), Catch::EndsWith("did you mean \"sqrt\"?"));
   CHECK_THAT(error_of("b * s").expected(), !Catch::Contains("did you mean"));
   CHECK(error_of("b * s").unknown_name() == "b");

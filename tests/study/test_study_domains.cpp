@@ -70,14 +70,27 @@ TEST_CASE("a domain in R^d that is malformed or cannot run is refused where it i
   const auto sine = planar("lengths = [1, 1]");
   CHECK_THAT(
       error_of(std::string(sine).replace(sine.find("expression\"\nf = \"x1 * x2\""), 26, "sine\"")),
-      Catch::Contains("s.toml:10:1: target: sine amplitude=2 cycles=1 phase=0: target 'sine' is a "
+      Catch::Contains("s.toml:10:1: target: sine: target 'sine' is a "
                       "function of the arc length s (d = 1); this domain has d = 2"));
+  // s, the arc length of a track, names the point's coordinates of this domain instead.
+  CHECK_THAT(error_of(std::string(sine).replace(sine.find("x1 * x2"), 7, "sin(s)")),
+             Catch::EndsWith("found the unknown name \"s\", expected a variable or constant (x1, "
+                             "x2, L1, L2, pi) or a function (s is not a variable on this domain "
+                             "(d = 2): f reads its point as x1, x2)"));
   // A grid of n that is no square.
   const auto grid = planar("lengths = [1, 1]");
   CHECK_THAT(error_of(std::string(grid).replace(grid.find("[16, 64]"), 8, "[16, 20]")),
              Catch::Contains(
-                 "s.toml:7:5: grid.n: uniform offset=0: centres 'uniform' in d = 2 place a grid "
+                 "s.toml:7:5: grid.n: centres uniform: centres 'uniform' in d = 2 place a grid "
                  "of m^2 centres; n = 20 is not such a number (nearest: 16, 25)"));
+  // Every n that is no square, located once.
+  const auto message =
+      error_of(std::string(grid).replace(grid.find("[16, 64]"), 8, "[10, 16, 20]"));
+  CHECK_THAT(message, Catch::StartsWith("s.toml:7:5: grid.n: centres uniform: 2 values of n "
+                                        "cannot be placed: centres 'uniform' in d = 2"));
+  CHECK_THAT(message, Catch::Contains("n = 10 is not such a number (nearest: 9, 16); ") &&
+                          Catch::EndsWith("n = 20 is not such a number (nearest: 16, 25)"));
+  CHECK(message.find("s.toml", 1) == std::string::npos);
   // An adaptive study in d = 2 needs a plant whose f reads out 2 coordinates: a road plant
   // (quarter_car, the default) runs along a track.
   CHECK_THAT(error_of("[study]\nname = \"a\"\nkind = \"adaptive\"\n[domain]\nlengths = [1, 1]\n"

@@ -95,17 +95,27 @@ bool is_subsequence(std::string_view part, std::string_view whole) {
 }
 
 // The likely meant name for `found` (closest_name), preferring among equally close names one
-// that contains `found`'s letters in order (sin for sn, not ln); "" when none is close, or when
-// either is a single character (a, s, L: any one-letter name is one edit from every other).
+// whose letters are `found`'s with some left out or added, in order (sin for sn, not ln; sin
+// for sinn, not sign), then the longest common beginning; "" when
+// none is close, or when either is a single character (a, s, L: any one-letter name is one edit
+// from every other).
 std::string likely_name(const std::string& found, const std::vector<std::string>& candidates) {
   const auto closest = closest_name(found, candidates);
   if (closest.empty() || found.size() < 2 || closest.size() < 2) return {};
   const auto distance = edit_distance(found, closest);
+  const auto score = [&](const std::string& candidate) {
+    const bool in_order = is_subsequence(found, candidate) || is_subsequence(candidate, found);
+    const auto prefix = static_cast<std::size_t>(
+        std::mismatch(found.begin(), found.end(), candidate.begin(), candidate.end()).first -
+        found.begin());
+    return std::pair{in_order, prefix};
+  };
+  std::string best = closest;
   for (const auto& candidate : candidates)
     if (candidate.size() >= 2 && edit_distance(found, candidate) == distance &&
-        is_subsequence(found, candidate))
-      return candidate;
-  return closest;
+        score(candidate) > score(best))
+      best = candidate;
+  return best;
 }
 
 // What may start an operand, for "expected" texts.

@@ -293,4 +293,14 @@ std::string ParameterSet::canonical() const {
   return out;
 }
 
+std::string ParameterSet::given_canonical() const {
+  std::string out;
+  for (const auto& [name, value] : values_) {
+    if (!given(name)) continue;
+    if (!out.empty()) out += ' ';
+    out += name + "=" + format_value(value);
+  }
+  return out;
+}
+
 }  // namespace rkhs

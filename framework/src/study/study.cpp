@@ -20,6 +20,11 @@ std::string PluginChoice::label() const {
   return canonical.empty() ? name : name + " " + canonical;
 }
 
+std::string PluginChoice::given_label() const {
+  auto canonical = parameters.given_canonical();
+  return canonical.empty() ? name : name + " " + canonical;
+}
+
 std::string_view study_kind_name(StudyKind kind) noexcept {
   return kind == StudyKind::adaptive ? "adaptive" : "approximation";
 }

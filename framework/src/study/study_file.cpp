@@ -1259,13 +1259,15 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
         const auto choice = resolve_choice(report, section, entry, at);
         try {
           make(choice, entry);
+        } catch (const StudyError&) {
+          throw;  // located already (by `make`)
         } catch (const ParameterError& e) {
           report.fail(parameter_location(entry, at, e.parameter()),
                       fmt::format("{}.{}", section, e.parameter()),
-                      fmt::format("{}: {}", choice.label(), e.what()));
+                      fmt::format("{}: {}", choice.given_label(), e.what()));
         } catch (const std::exception& e) {
           report.fail(root.get(section) ? root.get(section)->source() : toml::source_region{},
-                      section, fmt::format("{}: {}", choice.label(), e.what()));
+                      section, fmt::format("{}: {}", choice.given_label(), e.what()));
         }
       });
   };
@@ -1277,19 +1279,26 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
     for (const auto& note : target->notes())
       study.warnings.push_back(report.locate(entry.where, "target", "note: " + note));
   });
-  // In d > 1 every placement must place every n in this domain (a grid needs n = m^d): an n it
-  // cannot place is reported at grid.n.
+  // In d > 1 every placement must place every n in this domain (a grid needs n = m^d): the n
+  // it cannot place are reported at grid.n, all of them, each with the placement's reason.
   if (study.domain.dimension > 1)
     check_instances(axes[2], [&](const PluginChoice& c, const PluginEntry&) {
       const auto placement = centre_registry().find(c.name)->factory(c.parameters);
+      std::vector<std::string> reasons;
       for (const auto n : study.n_values) {
         try {
           placement->place(n, study.domain, 0);
         } catch (const std::invalid_argument& e) {
-          report.fail(grid->get("n")->source(), "grid.n",
-                      fmt::format("{}: {}", c.label(), e.what()));
+          reasons.emplace_back(e.what());
         }
       }
+      if (reasons.size() == 1)
+        report.fail(grid->get("n")->source(), "grid.n",
+                    fmt::format("centres {}: {}", c.given_label(), reasons[0]));
+      if (reasons.size() > 1)
+        report.fail(grid->get("n")->source(), "grid.n",
+                    fmt::format("centres {}: {} values of n cannot be placed: {}", c.given_label(),
+                                reasons.size(), fmt::join(reasons, "; ")));
     });
   // Every kernel with every projection and n: a projection that cannot be built for one (a
   // spline space of another kernel, an n that is not a level) is an input error.

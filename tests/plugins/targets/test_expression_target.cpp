@@ -256,9 +256,14 @@ TEST_CASE("mistakes in an expression target are refused at load with file:line:c
         "sin(k * s)\": found the unknown name \"k\", expected a variable or constant (s, L, pi, a) "
         "or a function (a constant of the target's own is a key of its [[target]] table, e.g. k "
         "= 1)");
-  // f missing: at the entry.
+  // A coordinate of another dimension: x on a track names s.
+  CHECK_THAT(error_of(study_with("f = \"sin(x)\"\n")),
+             Catch::EndsWith("found the unknown name \"x\", expected a variable or constant (s, "
+                             "L, pi) or a function (x is not a variable on this track (d = 1): f "
+                             "reads its point as s, the arc length)"));
+  // f missing: at the entry, which names only what the file gave.
   CHECK(error_of(study_with("a = 2\n")) ==
-        "s.toml:10:1: target.f: expression f= a=2: parameter 'f' is required: f(s) as an "
+        "s.toml:10:1: target.f: expression a=2: parameter 'f' is required: f(s) as an "
         "expression of the arc length s, e.g. f = \"2 * sin(2 * pi * s / L)\"");
   // The target's own parameters: at the key's value.
   CHECK(error_of(study_with("f = \"a * s\"\na = 1\nb = 2\n")) ==

@@ -94,6 +94,8 @@ class ParameterSet {
 
   /// "name=value name=value" in declaration order, reals printed round-trip exactly.
   std::string canonical() const;
+  /// The same for the parameters the study file gave only (what an error message quotes).
+  std::string given_canonical() const;
 
  private:
   const ParameterValue& find(std::string_view name) const;

@@ -37,6 +37,8 @@ struct PluginChoice {
   std::vector<std::string> tiers;
   /// "name p1=v1 p2=v2": the plugin part of a trial key.
   std::string label() const;
+  /// "name p1=v1" with only the parameters the study file gave: how a message names the entry.
+  std::string given_label() const;
 };
 
 /// One point of the trial grid.
