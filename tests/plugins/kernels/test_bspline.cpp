@@ -195,6 +195,27 @@ TEST_CASE("B-spline features of a point are distinct and the count matches", "[k
   CHECK(open.feature_count() == 3u * ((1u << 5) - 1) + 5u * 2u);
 }
 
+TEST_CASE("B-spline features of a point that is not finite stay in range", "[kernel][bspline]") {
+  // The state of a diverging adaptive trial (a Duffing plant with stiffness 2^62, property
+  // fuzzer seed 54) reached the features as NaN: its cell index was undefined and the features
+  // were written outside their storage (SIGSEGV). Such a point has the features of 0.
+  for (const bool periodic : {true, false}) {
+    const rkhs::Domain domain{rkhs::test::track_length, periodic};
+    const auto kernel =
+        rkhs::test::make_kernel_of<MultiscaleBSpline>(given_of({2, 2.0, 4, 2}), domain);
+    rkhs::SparseFeatures at_zero, f;
+    kernel.features(0.0, at_zero);
+    for (const double u : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+      INFO("periodic " << periodic << ", u = " << u);
+      kernel.features(u, f);
+      CHECK(f.index == at_zero.index);
+      CHECK(f.value == at_zero.value);
+      for (const auto index : f.index)
+        CHECK(static_cast<std::size_t>(index) < kernel.feature_count());
+    }
+  }
+}
+
 TEST_CASE("B-spline Gram matrices have the rank of the finest spline space", "[kernel][bspline]") {
   // The level spaces are nested, so k has rank n_J (periodic) or n_J + p (interval), well below
   // feature_count(): more centres than that give a singular Gram matrix.

@@ -291,6 +291,9 @@ class MultiscaleBSpline {
   /// axis of extent `length` (the track's by default).
   double level0(double u) const noexcept { return level0(u, length_); }
   double level0(double u, double length) const noexcept {
+    // A point that is not finite (the state of a trial that diverged) has the features of 0:
+    // its cell index stays in range, and the trial fails on its non-finite values.
+    if (!std::isfinite(u)) return 0.0;
     if (periodic_) {
       double w = std::fmod(u, length);
       if (w < 0) w += length;
