@@ -11,6 +11,10 @@
   study; rows whose text starts with "adaptive studies only" name exactly what the adaptive
   study adds.
 - Links: every relative link of README and every docs/*.md it names exists.
+- Console excerpts: a fenced block that follows a line `<!-- console: rkhs-study ARGS -->` is
+  what `rkhs-study ARGS` prints on standard output, run in WORK_DIR beside the repository's
+  studies/ (a fresh store): its lines appear in the output in order, a line `...` stands for
+  any number of lines, and a duration (`0.17 s`) matches any duration.
 
 Usage: check_readme.py RKHS_STUDY_EXECUTABLE SOURCE_DIR WORK_DIR
 Exit status 0 when README is current; otherwise 1, with one line per problem naming what is
@@ -206,6 +210,50 @@ def check_links(readme, source, problems):
     return len(targets)
 
 
+CONSOLE_MARKER = re.compile(r"^<!-- console: rkhs-study (.+?) -->\n```[^\n]*\n(.*?)^```",
+                            re.MULTILINE | re.DOTALL)
+DURATION = re.compile(r"\d+(?:\.\d+)? s\b")
+
+
+def excerpt_line_matches(excerpt, printed):
+    """Whether a line of an excerpt says what a printed line says, durations aside."""
+    pattern = r"\d+(?:\.\d+)? s\b".join(re.escape(part) for part in DURATION.split(excerpt))
+    return re.fullmatch(pattern, printed.rstrip()) is not None
+
+
+def check_console_excerpts(readme, executable, source, work, problems):
+    """Each console excerpt against a real run of its command (see the module docstring)."""
+    excerpts = CONSOLE_MARKER.findall(readme)
+    for arguments, block in excerpts:
+        folder = work / "console"
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
+        (folder / "studies").symlink_to((source / "studies").resolve())
+        result = subprocess.run([executable, *arguments.split()], cwd=folder, capture_output=True,
+                                text=True, timeout=300)
+        printed = result.stdout.splitlines()
+        at, skipping = 0, False
+        for line in block.rstrip("\n").split("\n"):
+            if line.strip() == "...":
+                skipping = True
+                continue
+            found = next((i for i in range(at, len(printed) if skipping else min(at + 1,
+                                                                                 len(printed)))
+                          if excerpt_line_matches(line, printed[i])), None)
+            if found is None:
+                near = printed[at] if at < len(printed) else "the end of the output"
+                problems.append(f"README.md: the console excerpt of `rkhs-study {arguments}` "
+                                f"says\n    {line}\n  where the command prints\n    {near}")
+                break
+            at, skipping = found + 1, False
+        else:
+            if not skipping and at < len(printed):
+                problems.append(f"README.md: the console excerpt of `rkhs-study {arguments}` "
+                                f"ends before the output does (next: {printed[at]}); end it "
+                                f"with `...`")
+    return len(excerpts)
+
+
 def main():
     if len(sys.argv) != 4:
         print(__doc__, file=sys.stderr)
@@ -220,13 +268,14 @@ def main():
     commands = check_commands(readme, executable, problems)
     outputs = check_outputs(readme, executable, work, problems)
     links = check_links(readme, source, problems)
+    excerpts = check_console_excerpts(readme, executable, source, work, problems)
     if problems:
         print("\n".join(problems))
         print(f"{len(problems)} problem{'s' if len(problems) > 1 else ''}: README.md does not "
               f"match the repository or `rkhs-study`")
         return 1
     print(f"README.md is current: {studies} studies, {commands} subcommands, {outputs} outputs, "
-          f"{links} links checked")
+          f"{links} links and {excerpts} console excerpt{'s' if excerpts != 1 else ''} checked")
     return 0
 
 
