@@ -71,7 +71,7 @@ snapshot_points = 16
 
 }  // namespace
 
-TEST_CASE("run ends with the fitted rates and the verdict lines; --tables adds the tables",
+TEST_CASE("run ends with the fitted rates and the verdict lines, and --tables adds the tables",
           "[cli][answer]") {
   const auto dir = rkhs::test::scratch_directory("cli_answer");
   std::ofstream(dir / "study.toml") << study_with_expectations;
