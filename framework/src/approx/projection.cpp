@@ -172,17 +172,40 @@ double projection_norm_floor(const AnyKernel& kernel, const ProjectionOperator& 
 }
 
 namespace {
-// The largest eigenvalue of the symmetric positive semi-definite M (eigenvalues only).
-double largest_eigenvalue(const Eigen::MatrixXd& M) {
-  if (M.size() == 0) return 0.0;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(M, Eigen::EigenvaluesOnly);
-  return solver.eigenvalues().maxCoeff();
+// lambda_max of the symmetric positive semi-definite operator `apply` (y = M x) of size n: the
+// Rayleigh quotient after 60 steps of the power method from a fixed start (deterministic, O(n)
+// memory; a lower bound, close enough for the floors it serves).
+template <class Apply>
+double power_largest(Apply&& apply, Eigen::Index n) {
+  if (n == 0) return 0.0;
+  Eigen::VectorXd x(n), y(n);
+  for (Eigen::Index i = 0; i < n; ++i) x(i) = 1.0 + 0.5 * std::sin(static_cast<double>(i + 1));
+  x.normalize();
+  double rayleigh = 0.0;
+  for (int step = 0; step < 60; ++step) {
+    apply(x, y);
+    rayleigh = x.dot(y);
+    const double length = y.norm();
+    if (!(length > 0)) break;
+    x = y / length;
+  }
+  return rayleigh;
 }
 
-// ||X||_2^2 = lambda_max(X^T X), from the smaller of X^T X and X X^T.
-double squared_spectral_norm(const Eigen::MatrixXd& X) {
-  return X.rows() < X.cols() ? largest_eigenvalue(X * X.transpose())
-                             : largest_eigenvalue(X.transpose() * X);
+// ||C||_2^2 = lambda_max(C^T C), through products with C and C^T (C^T C is never formed).
+double squared_spectral_norm(const Eigen::MatrixXd& C) {
+  Eigen::VectorXd Cx(C.rows());
+  return power_largest(
+      [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+        Cx.noalias() = C * x;
+        y.noalias() = C.transpose() * Cx;
+      },
+      C.cols());
+}
+
+// ||K||_inf, the largest absolute row sum: a bound of ||K||_2 for a symmetric K.
+double infinity_norm(const Eigen::MatrixXd& K) {
+  return K.size() ? K.cwiseAbs().rowwise().sum().maxCoeff() : 0.0;
 }
 
 // The amplification of round-off in the coefficients C of a Gram matrix C^T K C against the
@@ -190,10 +213,8 @@ double squared_spectral_norm(const Eigen::MatrixXd& X) {
 // computed by solves with K (C = L^-T for an orthonormal basis) carry relative errors of about
 // eps cond(K), and this ratio is cond(K) for them (||L^-T||^2 = 1 / lambda_min(K)); for
 // coefficients that are data (the identity) it is about 1.
-double coefficient_amplification(const Eigen::MatrixXd& C, const Eigen::MatrixXd& K,
-                                 double gram_norm) {
+double coefficient_amplification(const Eigen::MatrixXd& C, double k_norm, double gram_norm) {
   if (!(gram_norm > 0)) return 1.0;
-  const double k_norm = K.size() ? K.cwiseAbs().rowwise().sum().maxCoeff() : 0.0;
   return std::max(1.0, squared_spectral_norm(C) * k_norm / gram_norm);
 }
 }  // namespace
@@ -201,20 +222,27 @@ double coefficient_amplification(const Eigen::MatrixXd& C, const Eigen::MatrixXd
 double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperator& op,
                                 double* floor) {
   // G_B = V diag(lambda) V^T, R = V diag(sqrt(lambda)) (round-off negatives clamped to 0);
-  // ||Pi||^2 = lambda_max(R^T A R).
-  // G_B and A as projection_basis_gram and functional_gram form them, with the kernel's Gram
-  // matrices kept for the floor (one when the samples are the basis points, as in interpolation).
+  // ||Pi||^2 = lambda_max(R^T A R). G_B and A as projection_basis_gram and functional_gram form
+  // them; of the kernel's Gram matrices only their norms are kept, for the floor (the
+  // matrices themselves live no longer than in those two).
   const Eigen::MatrixXd& E = op.basis_coefficients();
-  const Eigen::MatrixXd K_B = kernel.gram(op.basis_points());
-  const Eigen::MatrixXd K_S = std::ranges::equal(op.samples(), op.basis_points())
-                                  ? Eigen::MatrixXd()
-                                  : kernel.gram(op.samples());
-  const Eigen::MatrixXd& K_samples = K_S.size() ? K_S : K_B;
-  const Eigen::MatrixXd G_B = basis_gram_of(E, K_B);
+  double basis_kernel_norm = 0, sample_kernel_norm = 0;
+  Eigen::MatrixXd G_B;
+  {
+    const Eigen::MatrixXd K_B = kernel.gram(op.basis_points());
+    G_B = basis_gram_of(E, K_B);
+    if (floor) basis_kernel_norm = infinity_norm(K_B);
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> basis(G_B);
+  G_B.resize(0, 0);
   const Eigen::MatrixXd R =
       basis.eigenvectors() * basis.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-  const Eigen::MatrixXd A = functional_gram_of(op.weights(), K_samples);
+  Eigen::MatrixXd A;
+  {
+    const Eigen::MatrixXd K_S = kernel.gram(op.samples());
+    A = functional_gram_of(op.weights(), K_S);
+    if (floor) sample_kernel_norm = infinity_norm(K_S);
+  }
   Eigen::MatrixXd T = R.transpose() * A * R;
   T = 0.5 * (T + T.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> norm(T, Eigen::EigenvaluesOnly);
@@ -227,12 +255,14 @@ double projection_operator_norm(const AnyKernel& kernel, const ProjectionOperato
     double smallest = largest;
     for (Eigen::Index i = 0; i < lambda.size(); ++i)
       if (lambda(i) > resolved) smallest = std::min(smallest, lambda(i));
+    const double largest_of_A = power_largest(
+        [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { y.noalias() = A * x; }, A.rows());
     // Round-off enters ||Pi||^2 through three matrices: G_B's eigendecomposition (cond(G_B)),
     // and the basis coefficients E and weights W, each amplified by the Gram matrix it was
     // built against (coefficient_amplification: cond(K) for coefficients that are solves).
     const double amplification =
-        largest / smallest + coefficient_amplification(E, K_B, largest) +
-        coefficient_amplification(op.weights().transpose(), K_samples, largest_eigenvalue(A));
+        largest / smallest + coefficient_amplification(E, basis_kernel_norm, largest) +
+        coefficient_amplification(op.weights().transpose(), sample_kernel_norm, largest_of_A);
     // Each entry of G_B and A sums over the basis points or samples, which may be more than dim
     // (a pseudo-inverse keeps dim < n directions of n samples).
     const double terms = std::max({dim, static_cast<double>(op.sample_count()),
