@@ -1,23 +1,25 @@
-// The rkhs-study command: the command line parsed with CLI11, and one call into the command it
-// names (commands/<command>.cpp; commands/session.cpp sets up what every command shares).
+// The rkhs-study command: the commands assembled (each declares its own options,
+// commands/<command>.cpp), the command line parsed with CLI11, and one call into the command it
+// names (commands/session.cpp sets up what every command shares).
 #include <fmt/format.h>
 #include <malloc.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <streambuf>
+#include <vector>
 
 #include "commands/commands.hpp"
 #include "commands/session.hpp"
 #include "rkhs/core/build_info.hpp"
-#include "rkhs/distributed.hpp"
-#include "rkhs/plugin/builtins.hpp"  // plugin_kind_names(), for `list`
-#include "rkhs/run/run.hpp"
+#include "rkhs/mpi/distributed.hpp"
+#include "rkhs/run/run.hpp"              // trials_abandoned
 #include "rkhs/verify/verification.hpp"  // check_none_selected
 
 namespace {
@@ -34,172 +36,14 @@ int rkhs_study_main(int argc, char** argv) {
                   rkhs::build_info().git_commit, rkhs::build_info().build_type,
                   rkhs::distributed::available() ? "yes" : "no, see docs/cluster.md"));
 
-  RunCommand run_arguments;
-  CheckCommand check_arguments;
+  // The commands, each declaring its own options (commands/<name>.cpp), in the order of
+  // `rkhs-study --help`.
   SessionOptions session;
-  std::string study_file, kind;
-  auto* run =
-      app.add_subcommand("run", "run a study: trials, rates, trials.csv, rates.csv, summary.json");
-  run->add_option("study", run_arguments.study_file, "study definition (TOML)")
-      ->required()
-      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
-  run->add_option("--out", run_arguments.out_dir,
-                  "output directory (default: results/<study name>)");
-  run->add_option("--threads", run_arguments.threads, "worker threads (default: all cores)")
-      ->check(CLI::Range(1, 4096));
-  run->add_flag("--quiet,-q", run_arguments.quiet,
-                "print only the summary line and the verdict lines");
-  auto add_store_options = [&](CLI::App* command, rkhs::pipeline::StoreOptions& store_options) {
-    command->add_option(
-        "--store", store_options.file,
-        "result store (SQLite) shared by studies (default: results/rkhs-study.sqlite)");
-    command->add_flag("--fresh", store_options.fresh,
-                      "run every trial again, ignoring stored results");
-    command->add_flag("--no-store", store_options.disabled,
-                      "neither read nor write a result store");
-  };
-  add_store_options(run, run_arguments.store);
-  run->add_option(
-      "--shard", run_arguments.shard,
-      "K/N (digits only, 1 <= K <= N): run only the K-th of N deterministic subsets into "
-      "the store (job arrays)");
-  std::string merge_into;
-  std::vector<std::string> merge_from;
-  auto* merge = app.add_subcommand(
-      "merge",
-      "combine result stores (e.g. of shards) into one, all or nothing: every source record "
-      "verified, a trial stored with two different results refused unless --prefer says which "
-      "record wins");
-  merge->add_option("into", merge_into, "the store to merge into (created if needed)")->required();
-  merge->add_option("from", merge_from, "stores to copy from")
-      ->required()
-      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
-  std::string merge_prefer;
-  merge
-      ->add_option("--prefer", merge_prefer,
-                   "when a trial is stored with two different results: destination keeps the "
-                   "record already there, source takes the one merged later (default: refuse "
-                   "the merge)")
-      ->check(CLI::IsMember({"source", "destination"}));
-  StoreCommand store_arguments;
-  auto* store = app.add_subcommand(
-      "store",
-      "the result store: check (verify every record), vacuum (remove the records that "
-      "do not verify), export (records as CSV or JSON)");
-  store->add_option("action", store_arguments.action, "check, vacuum or export")
-      ->required()
-      ->check(CLI::IsMember({"check", "vacuum", "export"}));
-  store->add_option("--store", store_arguments.store_file,
-                    "result store (default: results/rkhs-study.sqlite)");
-  store->add_option("--format", store_arguments.format, "export: csv (default) or json")
-      ->check(CLI::IsMember({"csv", "json"}));
-  store->add_option("--out", store_arguments.out_file, "export: write to FILE (default: stdout)");
-  run->add_flag("--mpi", session.use_mpi,
-                "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
-  const auto add_rank_timeout = [&](CLI::App* command) {
-    command
-        ->add_option("--rank-timeout", session.rank_timeout_seconds,
-                     "with --mpi: seconds of silence after which a rank is taken as lost and its "
-                     "trials run elsewhere (0: never; default 60)")
-        ->check(CLI::Range(0.0, 1e9));
-  };
-  add_rank_timeout(run);
-  bool no_plots = false, no_check_plots = false;
-  run->add_flag("--no-plots", no_plots, "do not render plots (gnuplot) into <out>/plots");
-  run->add_flag("--tables", run_arguments.tables,
-                "also print each group's convergence table (they are in rates.md, rates.tex and "
-                "report.html either way)");
-
-  // The kinds `list` accepts come from the table of plugin kinds (plugin_kinds.hpp).
-  std::string list_kinds;
-  std::vector<std::string> list_accepts;
-  for (const auto& name : rkhs::plugin_kind_names()) {
-    list_kinds += (list_kinds.empty() ? "" : ", ") + name.singular;
-    list_accepts.push_back(name.singular);
-    if (name.plural != name.singular) list_accepts.push_back(name.plural);
-  }
-  list_accepts.insert(list_accepts.end(), {"metric", "metrics"});
-  auto* list = app.add_subcommand("list", "list plugins (" + list_kinds + ") or metrics");
-  list->add_option("kind", kind, list_kinds + " or metrics (default: all)")
-      ->check(CLI::IsMember(list_accepts));
-
-  std::string report_dir, report_format = "html";
-  auto* report = app.add_subcommand(
-      "report",
-      "the rate tables of a run again, from the folder's summary.json alone (runs nothing, "
-      "loads no plugin, opens no store): text, Markdown, LaTeX or report.html");
-  report->add_option("directory", report_dir, "a results directory (with summary.json)")
-      ->required()
-      ->check(CLI::ExistingDirectory);
-  report
-      ->add_option("--format", report_format,
-                   "text (the console's tables, every group's), md, tex or html (default html: "
-                   "writes DIR/report.html)")
-      ->check(CLI::IsMember({"text", "md", "tex", "html"}));
-
-  auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
-  validate->add_option("study", study_file, "study definition (TOML)")
-      ->required()
-      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
-
-  auto* check = app.add_subcommand(
-      "check",
-      "run studies and judge their [[expect]] tables: exit 0 all pass, 1 a failure, 2 bad "
-      "input, 3 inconclusive, 5 -k selected nothing");
-  check
-      ->add_option("studies", check_arguments.study_files,
-                   "study definitions (TOML), run and judged in turn")
-      ->required()
-      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
-  check->add_option("--tier", check_arguments.tier,
-                    "run only the entries and expectations of this tier (e.g. quick)");
-  check
-      ->add_option("-k", check_arguments.keyword_expression,
-                   "judge only the test cases whose names match EXPR: case-insensitive "
-                   "substrings with and, or, not and parentheses, as pytest's -k (e.g. \"power "
-                   "and not gaussian\"); a study with none selected is not run")
-      ->type_name("EXPR");
-  auto* strict = check->add_flag("--strict", check_arguments.strict,
-                                 "count inconclusive verdicts and XPASS as failures");
-  check
-      ->add_option("--allow", check_arguments.allow,
-                   "verdicts that do not fail the check: inconclusive (exit 0, not 3)")
-      ->check(CLI::IsMember({"inconclusive"}))
-      ->delimiter(',')
-      ->allow_extra_args(false)
-      ->excludes(strict);
-  check->add_option("--junit", check_arguments.junit_file,
-                    "write JUnit XML: one suite per study, one test case per expectation and "
-                    "group");
-  check->add_option("--out", check_arguments.out_dir,
-                    "also write what `run` writes (trials.csv, rates.csv, summary.json with the "
-                    "verdicts, report.html, plots) here; DIR/<study name> for several studies");
-  check->add_flag("--no-plots", no_check_plots, "with --out: do not render plots");
-  check->add_option("--threads", check_arguments.threads, "worker threads (default: all cores)")
-      ->check(CLI::Range(1, 4096));
-  check->add_flag("--quiet,-q", check_arguments.quiet, "no progress line");
-  add_store_options(check, check_arguments.store);
-  check->add_flag("--mpi", session.use_mpi,
-                  "spread the trials over MPI ranks (under mpirun or srun; rank 0 writes)");
-  add_rank_timeout(check);
-
-  // Plugin modules: --plugin (repeatable) here, RKHS_STUDY_PLUGIN_PATH, `plugins = [...]`.
-  std::string plugin_to_verify;
-  for (auto* command : {run, list, validate, check})
-    command->add_option("--plugin", session.plugin_files, "load a plugin module (.so); repeatable")
-        ->allow_extra_args(false);
-  // The data root that data files in study files are relative to (rkhs/core/data_root.hpp).
-  for (auto* command : {run, validate, check})
-    command
-        ->add_option("--data-dir", session.data_dir,
-                     "data files named in the study are relative to DIR (default: "
-                     "RKHS_STUDY_DATA, else studies/data/)")
-        ->check(CLI::ExistingDirectory);
-  auto* verify =
-      app.add_subcommand("verify-plugin",
-                         "load a plugin module and check its kernels: the kernel contract, and the "
-                         "declared smoothness against the measured power-function rate");
-  verify->add_option("plugin", plugin_to_verify, "plugin module (.so)")->required();
+  const std::vector<Command> commands = {
+      add_run_command(app, session),   add_merge_command(app),
+      add_store_command(app),          add_list_command(app, session),
+      add_report_command(app),         add_validate_command(app, session),
+      add_check_command(app, session), add_verify_plugin_command(app)};
 
   try {
     app.parse(argc, argv);
@@ -208,22 +52,12 @@ int rkhs_study_main(int argc, char** argv) {
     return code == 0 ? exit_ok : exit_bad_input;
   }
 
-  session.runs_trials = *run || *check;
-  session.loads_plugins = !*report;
-  session.shard = !run_arguments.shard.empty();
-  run_arguments.plots = !no_plots;
-  check_arguments.plots = !no_check_plots;
-  return run_command(session, argc, argv, [&](rkhs::pipeline::Executor& executor) {
-    if (*run) return command_run(run_arguments, executor);
-    if (*check) return command_check(check_arguments, executor);
-    if (*verify) return command_verify_plugin(plugin_to_verify);
-    if (*merge) return command_merge(merge_into, merge_from, merge_prefer);
-    if (*store) return command_store(store_arguments);
-    if (*list) return command_list(kind);
-    if (*report) return command_report(report_dir, report_format);
-    if (*validate) return command_validate(study_file);
-    return exit_ok;
-  });
+  // require_subcommand(1): exactly one of them was named.
+  const auto named = std::find_if(commands.begin(), commands.end(),
+                                  [](const Command& command) { return bool(*command.subcommand); });
+  if (named == commands.end()) return exit_bad_input;
+  if (named->prepare) named->prepare(session);
+  return run_command(session, argc, argv, named->action);
 }
 
 // Standard output for std::cout: buffered, written with write(2), and the first failure kept

@@ -7,12 +7,21 @@ the MPI runner (framework/mpi/) and the command (framework/cli/). The built-in p
 to plugin/) and each other's headers (rkhs/integrators/, rkhs/kernels/, rkhs/plants/, rkhs/targets/), and no framework layer
 includes them. docs/architecture.md draws the same picture.
 
-Every `#include "rkhs/<folder>/..."` of every .hpp and .cpp below framework/ and plugins/ is
-checked; a file of layer L may include layer M only when M is L or below it. Also fails when a
-folder exists that the table below does not name (a new layer must be placed), and when a header
-or source lies outside every layer folder.
+Every `#include "rkhs/<folder>/..."` (or `<rkhs/<folder>/...>`) of every C++ file below
+framework/ and plugins/ (.hpp, .cpp, .h, .ipp, .inl, .tpp, .cc, .cxx, .hh) is checked; a file of
+layer L may include layer M only when M is L or below it. Also fails, each with a self-test:
+  - a folder that the table below does not name (a new layer must be placed), or a file outside
+    every layer folder, a header at the root of rkhs/ included;
+  - an include of `rkhs/<file>` with no layer folder;
+  - any other quoted include that climbs (`..`) or does not resolve, from the including file's
+    folder or its layer's root, to a file of the same layer: a private header stays in its layer.
 
-Usage: check_include_direction.py SOURCE_DIR [--self-test]. Standard library only.
+The library's layers are also framework/CMakeLists.txt's RKHS_LAYERS (one object library each,
+linked against the layers below only: the layer check); --cmake-layers "core;kernel;..." checks
+that both name the same layers in the same order.
+
+Usage: check_include_direction.py SOURCE_DIR [--self-test] [--cmake-layers LIST].
+Standard library only.
 """
 import pathlib
 import re
@@ -25,7 +34,12 @@ LAYERS = ["core", "kernel", "approx", "adaptive", "plugin", "rates", "study", "r
 PLUGIN_MAY_USE = LAYERS[: LAYERS.index("plugin") + 1]
 PLUGIN_HEADER_FOLDERS = ["integrators", "kernels", "plants", "targets"]
 
-INCLUDE = re.compile(r'^\s*#\s*include\s+"rkhs/([a-z_0-9]+)/[^"]+"', re.M)
+INCLUDE = re.compile(r'^\s*#\s*include\s+[<"]rkhs/(?:([a-z_0-9]+)/)?([^">]+)[">]', re.M)
+LOCAL_INCLUDE = re.compile(r'^\s*#\s*include\s+"((?!rkhs/)[^"]+)"', re.M)
+# Generated into the build tree's rkhs/ (cmake/version.hpp.in): the project's version, below every
+# layer, the one header at the root of rkhs/.
+GENERATED_ROOT_HEADERS = {"version.hpp"}
+SUFFIXES = (".hpp", ".cpp", ".h", ".ipp", ".inl", ".tpp", ".cc", ".cxx", ".hh")
 
 
 def layer_of(path, source):
@@ -33,6 +47,8 @@ def layer_of(path, source):
     rel = path.relative_to(source).parts
     if rel[0] == "plugins":
         return ("plugins", None)
+    if rel[:4] == ("framework", "mpi", "include", "rkhs"):
+        return ("framework", rel[4]) if len(rel) >= 6 else None
     if rel[:2] == ("framework", "mpi"):
         return ("framework", "mpi")
     if rel[:2] == ("framework", "cli"):
@@ -44,10 +60,22 @@ def layer_of(path, source):
     return None
 
 
+def layer_roots(path, source, placed):
+    """The folders a quoted include of a file of this layer resolves against: its own folder and
+    its layer's roots (headers and sources)."""
+    kind, layer = placed
+    if kind == "plugins":
+        return [path.parent, source / "plugins"]
+    if layer in ("mpi", "cli"):
+        return [path.parent, source / "framework" / layer, source / "framework" / layer / "src"]
+    return [path.parent, source / "framework" / "src" / layer,
+            source / "framework" / "include" / "rkhs" / layer]
+
+
 def violations(source):
     found = []
     files = [p for root in ("framework", "plugins") for p in (source / root).rglob("*")
-             if p.suffix in (".hpp", ".cpp") and p.is_file()]
+             if p.suffix in SUFFIXES and p.is_file()]
     if not files:
         return [f"no sources below {source}/framework"]
     for path in sorted(files):
@@ -55,7 +83,8 @@ def violations(source):
         rel = path.relative_to(source)
         if placed is None:
             found.append(f"{rel}: outside every layer folder (framework/include/rkhs/<layer>/, "
-                         "framework/src/<layer>/, framework/mpi/, framework/cli/, plugins/)")
+                         "framework/src/<layer>/, framework/mpi/, framework/cli/, plugins/; "
+                         "a header at the root of rkhs/ belongs under rkhs/<layer>/)")
             continue
         kind, layer = placed
         if kind == "framework" and layer not in LAYERS:
@@ -65,6 +94,12 @@ def violations(source):
         for match in INCLUDE.finditer(text):
             target = match.group(1)
             line = text.count("\n", 0, match.start()) + 1
+            if target is None and match.group(2) in GENERATED_ROOT_HEADERS:
+                continue
+            if target is None:
+                found.append(f"{rel}:{line}: includes a header at the root of rkhs/, in no layer "
+                             f"folder (rkhs/<layer>/...)")
+                continue
             where = f"{rel}:{line}: includes rkhs/{target}/"
             if target in PLUGIN_HEADER_FOLDERS:
                 if kind != "plugins":
@@ -79,32 +114,87 @@ def violations(source):
                                  f"{', '.join(PLUGIN_MAY_USE)}")
             elif LAYERS.index(target) > LAYERS.index(layer):
                 found.append(f"{where}: layer {layer} includes the higher layer {target}")
+        for match in LOCAL_INCLUDE.finditer(text):
+            name = match.group(1)
+            line = text.count("\n", 0, match.start()) + 1
+            where = f"{rel}:{line}: includes \"{name}\""
+            if ".." in pathlib.PurePosixPath(name).parts:
+                found.append(f"{where}: a relative include that climbs out of its folder; include "
+                             f"another layer's header as rkhs/<layer>/...")
+                continue
+            resolved = [root / name for root in layer_roots(path, source, placed)
+                        if (root / name).is_file()]
+            if not resolved:
+                found.append(f"{where}: not a file of its own layer (a private header stays in "
+                             f"its layer's folder; another layer's header is rkhs/<layer>/...)")
+            elif layer_of(resolved[0], source) != placed:
+                found.append(f"{where}: resolves to {resolved[0].relative_to(source)}, in another "
+                             f"layer than {rel}")
     return found
 
 
 def self_test():
-    """The checker finds a planted upward include and accepts a downward one."""
+    """The checker finds each planted bypass and accepts the downward and local includes."""
     import tempfile
-    with tempfile.TemporaryDirectory() as tmp:
-        root = pathlib.Path(tmp)
-        (root / "framework/include/rkhs/core").mkdir(parents=True)
-        (root / "framework/src/report").mkdir(parents=True)
-        (root / "plugins/kernels").mkdir(parents=True)
-        (root / "framework/include/rkhs/core/a.hpp").write_text('#include "rkhs/report/b.hpp"\n')
-        (root / "framework/src/report/b.cpp").write_text('#include "rkhs/core/a.hpp"\n')
-        (root / "plugins/kernels/k.cpp").write_text('#include "rkhs/run/run.hpp"\n')
-        found = violations(root)
-        assert len(found) == 2, found
-        assert "layer core includes the higher layer report" in found[0], found
-        assert "a built-in plugin may use only" in found[1], found
+
+    def check(files, expected):
+        with tempfile.TemporaryDirectory() as tmp:
+            root = pathlib.Path(tmp)
+            for name, text in files.items():
+                (root / name).parent.mkdir(parents=True, exist_ok=True)
+                (root / name).write_text(text)
+            found = violations(root)
+            assert len(found) == len(expected), (files, found)
+            for message, part in zip(found, expected):
+                assert part in message, (message, part)
+
+    accepted = {"framework/include/rkhs/core/a.hpp": "",
+                "framework/src/report/b.cpp": '#include "rkhs/core/a.hpp"\n#include "c.hpp"\n',
+                "framework/src/report/c.hpp": "#include <rkhs/core/a.hpp>\n",
+                "framework/cli/commands/x.cpp": '#include "commands/y.hpp"\n',
+                "framework/cli/commands/y.hpp": ""}
+    check(accepted, [])
+    # An upward include, quoted and in angle brackets; a built-in plugin above its layers.
+    check({**accepted, "framework/src/core/u.cpp": '#include "rkhs/report/r.hpp"\n'},
+          ["layer core includes the higher layer report"])
+    check({**accepted, "framework/src/core/u.cpp": "#include <rkhs/report/r.hpp>\n"},
+          ["layer core includes the higher layer report"])
+    check({**accepted, "plugins/kernels/k.cpp": '#include "rkhs/run/run.hpp"\n'},
+          ["a built-in plugin may use only"])
+    # A header at the root of rkhs/ (in the MPI runner's tree) and its include.
+    check({**accepted, "framework/mpi/include/rkhs/d.hpp": "",
+           "framework/mpi/src/m.cpp": '#include "rkhs/d.hpp"\n'},
+          ["outside every layer folder", "a header at the root of rkhs/"])
+    # A relative include into another layer's sources, and one that resolves elsewhere.
+    check({**accepted, "framework/src/core/v.cpp": '#include "../report/c.hpp"\n'},
+          ["climbs out of its folder"])
+    check({**accepted, "framework/src/core/w.cpp": '#include "c.hpp"\n'},
+          ["not a file of its own layer"])
+    # Files of other suffixes are checked as well.
+    for suffix in (".ipp", ".h"):
+        check({**accepted, f"framework/include/rkhs/core/t{suffix}": '#include "rkhs/cli/z.hpp"\n'},
+              ["layer core includes the higher layer cli"])
 
 
 def main(argv):
-    if len(argv) not in (2, 3) or (len(argv) == 3 and argv[2] != "--self-test"):
+    arguments = argv[1:]
+    cmake_layers = None
+    if "--cmake-layers" in arguments:
+        at = arguments.index("--cmake-layers")
+        if at + 1 >= len(arguments):
+            raise SystemExit(__doc__)
+        cmake_layers = arguments[at + 1].split(";")
+        del arguments[at:at + 2]
+    if len(arguments) not in (1, 2) or (len(arguments) == 2 and arguments[1] != "--self-test"):
         raise SystemExit(__doc__)
-    if len(argv) == 3:
+    if len(arguments) == 2:
         self_test()
-    found = violations(pathlib.Path(argv[1]).resolve())
+    library_layers = LAYERS[: LAYERS.index("pipeline") + 1]
+    if cmake_layers is not None and cmake_layers != library_layers:
+        print(f"RKHS_LAYERS of framework/CMakeLists.txt ({', '.join(cmake_layers)}) is not LAYERS "
+              f"of {__file__} up to pipeline ({', '.join(library_layers)})", file=sys.stderr)
+        return 1
+    found = violations(pathlib.Path(arguments[0]).resolve())
     if found:
         print("\n".join(found), file=sys.stderr)
         print(f"{len(found)} include(s) against the direction of the layers", file=sys.stderr)

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -15,12 +16,14 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <set>
 #include <stdexcept>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
+#include "commands/options.hpp"
 #include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/study/tiers.hpp"
@@ -312,6 +315,58 @@ class Check {
 
 int command_check(const CheckCommand& arguments, pipeline::Executor& executor) {
   return Check(arguments, executor).run();
+}
+
+Command add_check_command(CLI::App& app, SessionOptions& session) {
+  auto arguments = std::make_shared<CheckCommand>();
+  auto no_plots = std::make_shared<bool>(false);
+  auto* check = app.add_subcommand(
+      "check",
+      "run studies and judge their [[expect]] tables: exit 0 all pass, 1 a failure, 2 bad "
+      "input, 3 inconclusive, 5 -k selected nothing");
+  check
+      ->add_option("studies", arguments->study_files,
+                   "study definitions (TOML), run and judged in turn")
+      ->required()
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
+  check->add_option("--tier", arguments->tier,
+                    "run only the entries and expectations of this tier (e.g. quick)");
+  check
+      ->add_option("-k", arguments->keyword_expression,
+                   "judge only the test cases whose names match EXPR: case-insensitive "
+                   "substrings with and, or, not and parentheses, as pytest's -k (e.g. \"power "
+                   "and not gaussian\"); a study with none selected is not run")
+      ->type_name("EXPR");
+  auto* strict = check->add_flag("--strict", arguments->strict,
+                                 "count inconclusive verdicts and XPASS as failures");
+  check
+      ->add_option("--allow", arguments->allow,
+                   "verdicts that do not fail the check: inconclusive (exit 0, not 3)")
+      ->check(CLI::IsMember({"inconclusive"}))
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->excludes(strict);
+  check->add_option("--junit", arguments->junit_file,
+                    "write JUnit XML: one suite per study, one test case per expectation and "
+                    "group");
+  check->add_option("--out", arguments->out_dir,
+                    "also write what `run` writes (trials.csv, rates.csv, summary.json with the "
+                    "verdicts, report.html, plots) here; DIR/<study name> for several studies");
+  check->add_flag("--no-plots", *no_plots, "with --out: do not render plots");
+  check->add_option("--threads", arguments->threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  check->add_flag("--quiet,-q", arguments->quiet, "no progress line");
+  add_store_options(*check, arguments->store);
+  add_mpi_options(*check, session);
+  add_plugin_option(*check, session);
+  add_data_dir_option(*check, session);
+  return {
+      check,
+      [arguments, no_plots](SessionOptions& options) {
+        options.runs_trials = true;
+        arguments->plots = !*no_plots;
+      },
+      [arguments](pipeline::Executor& executor) { return command_check(*arguments, executor); }};
 }
 
 }  // namespace rkhs::cli

@@ -1,12 +1,20 @@
 #pragma once
-// The commands of rkhs-study, one file each (commands/<name>.cpp); main.cpp parses the command
-// line into these arguments and calls one of them. Each returns the process exit code.
+// The commands of rkhs-study, one file each (commands/<name>.cpp). Each file declares its own
+// subcommand and options (add_<name>_command, CLI11's subcommands in files) and acts on them
+// (command_<name>); main.cpp only assembles the commands, parses, and runs the one named. Each
+// command returns the process exit code.
 
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "commands/session.hpp"
 #include "rkhs/pipeline/executor.hpp"
 #include "rkhs/pipeline/study_pipeline.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace rkhs::cli {
 
@@ -63,5 +71,28 @@ struct StoreCommand {
   std::string out_file;        ///< export: "" or "-" for stdout
 };
 int command_store(const StoreCommand& arguments);
+
+/// A command as main() assembles it: its subcommand of the application, with every option it
+/// owns bound to arguments that `prepare` and `action` keep alive.
+struct Command {
+  CLI::App* subcommand = nullptr;
+  /// After parsing, before the session starts: what the session must know of this command
+  /// (SessionOptions: runs trials, loads plugins, a shard), and options read off flags.
+  std::function<void(SessionOptions&)> prepare;
+  /// The command's work, with the executor the session set up; returns the exit code.
+  std::function<int(pipeline::Executor&)> action;
+};
+
+/// Each declares its subcommand on `app` (in the order main.cpp calls them, the order of
+/// `rkhs-study --help`); options shared with other commands come from commands/options.hpp and
+/// bind into `session`.
+Command add_run_command(CLI::App& app, SessionOptions& session);
+Command add_merge_command(CLI::App& app);
+Command add_store_command(CLI::App& app);
+Command add_list_command(CLI::App& app, SessionOptions& session);
+Command add_report_command(CLI::App& app);
+Command add_validate_command(CLI::App& app, SessionOptions& session);
+Command add_check_command(CLI::App& app, SessionOptions& session);
+Command add_verify_plugin_command(CLI::App& app);
 
 }  // namespace rkhs::cli

@@ -3,11 +3,15 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <CLI/CLI.hpp>
 #include <iostream>
+#include <memory>
 #include <type_traits>
 
 #include "commands/commands.hpp"
+#include "commands/options.hpp"
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/plugin_kinds.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
 #include "rkhs/run/run.hpp"
@@ -91,6 +95,24 @@ int command_list(const std::string& kind) {
                                p.file.string(), p.rkhs_study_version);
   }
   return exit_ok;
+}
+
+Command add_list_command(CLI::App& app, SessionOptions& session) {
+  // The kinds `list` accepts come from the table of plugin kinds (plugin_kinds.hpp).
+  std::string kinds;
+  std::vector<std::string> accepts;
+  for (const auto& name : plugin_kind_names()) {
+    kinds += (kinds.empty() ? "" : ", ") + name.singular;
+    accepts.push_back(name.singular);
+    if (name.plural != name.singular) accepts.push_back(name.plural);
+  }
+  accepts.insert(accepts.end(), {"metric", "metrics"});
+  auto kind = std::make_shared<std::string>();
+  auto* list = app.add_subcommand("list", "list plugins (" + kinds + ") or metrics");
+  list->add_option("kind", *kind, kinds + " or metrics (default: all)")
+      ->check(CLI::IsMember(accepts));
+  add_plugin_option(*list, session);
+  return {list, {}, [kind](pipeline::Executor&) { return command_list(*kind); }};
 }
 
 }  // namespace rkhs::cli

@@ -4,8 +4,10 @@
 // written in one transaction (ResultStore::merge_from).
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "commands/commands.hpp"
@@ -62,6 +64,33 @@ int command_merge(const std::string& into_file, const std::vector<std::string>& 
         "merged trial\n",
         into_file);
   return exit_ok;
+}
+
+Command add_merge_command(CLI::App& app) {
+  struct Arguments {
+    std::string into, prefer;
+    std::vector<std::string> from;
+  };
+  auto arguments = std::make_shared<Arguments>();
+  auto* merge = app.add_subcommand(
+      "merge",
+      "combine result stores (e.g. of shards) into one, all or nothing: every source record "
+      "verified, a trial stored with two different results refused unless --prefer says which "
+      "record wins");
+  merge->add_option("into", arguments->into, "the store to merge into (created if needed)")
+      ->required();
+  merge->add_option("from", arguments->from, "stores to copy from")
+      ->required()
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
+  merge
+      ->add_option("--prefer", arguments->prefer,
+                   "when a trial is stored with two different results: destination keeps the "
+                   "record already there, source takes the one merged later (default: refuse "
+                   "the merge)")
+      ->check(CLI::IsMember({"source", "destination"}));
+  return {merge, {}, [arguments](pipeline::Executor&) {
+            return command_merge(arguments->into, arguments->from, arguments->prefer);
+          }};
 }
 
 }  // namespace rkhs::cli

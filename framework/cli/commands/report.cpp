@@ -1,8 +1,10 @@
 // `rkhs-study report DIR`: the tables of the run in DIR again, from DIR/summary.json alone
 // (read_results_folder). The study file it names is never read, no trial is run, no plugin is
 // loaded and no result store is opened: a results folder is data, whoever sent it.
+#include <CLI/CLI.hpp>
 #include <iostream>
 #include <limits>
+#include <memory>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
@@ -29,6 +31,30 @@ int command_report(const std::string& directory, const std::string& format) {
     std::cout << "wrote " << file.string() << "\n";
   }
   return exit_ok;
+}
+
+Command add_report_command(CLI::App& app) {
+  struct Arguments {
+    std::string directory, format = "html";
+  };
+  auto arguments = std::make_shared<Arguments>();
+  auto* report = app.add_subcommand(
+      "report",
+      "the rate tables of a run again, from the folder's summary.json alone (runs nothing, "
+      "loads no plugin, opens no store): text, Markdown, LaTeX or report.html");
+  report->add_option("directory", arguments->directory, "a results directory (with summary.json)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  report
+      ->add_option("--format", arguments->format,
+                   "text (the console's tables, every group's), md, tex or html (default html: "
+                   "writes DIR/report.html)")
+      ->check(CLI::IsMember({"text", "md", "tex", "html"}));
+  // A results folder is data: no plugin is loaded for it.
+  return {report, [](SessionOptions& options) { options.loads_plugins = false; },
+          [arguments](pipeline::Executor&) {
+            return command_report(arguments->directory, arguments->format);
+          }};
 }
 
 }  // namespace rkhs::cli

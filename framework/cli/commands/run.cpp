@@ -6,14 +6,17 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
+#include "commands/options.hpp"
 #include "progress.hpp"
 #include "rkhs/core/printable.hpp"
 #include "rkhs/pipeline/journal.hpp"
@@ -197,6 +200,39 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   // the verdicts (these also with -q).
   std::cout << console_answer(record, verdicts, quiet);
   return run.failed ? exit_failed_trials : exit_ok;
+}
+
+Command add_run_command(CLI::App& app, SessionOptions& session) {
+  auto arguments = std::make_shared<RunCommand>();
+  auto no_plots = std::make_shared<bool>(false);
+  auto* run =
+      app.add_subcommand("run", "run a study: trials, rates, trials.csv, rates.csv, summary.json");
+  run->add_option("study", arguments->study_file, "study definition (TOML)")
+      ->required()
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
+  run->add_option("--out", arguments->out_dir, "output directory (default: results/<study name>)");
+  run->add_option("--threads", arguments->threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  run->add_flag("--quiet,-q", arguments->quiet,
+                "print only the summary line and the verdict lines");
+  add_store_options(*run, arguments->store);
+  run->add_option("--shard", arguments->shard,
+                  "K/N (digits only, 1 <= K <= N): run only the K-th of N deterministic subsets "
+                  "into the store (job arrays)");
+  add_mpi_options(*run, session);
+  run->add_flag("--no-plots", *no_plots, "do not render plots (gnuplot) into <out>/plots");
+  run->add_flag("--tables", arguments->tables,
+                "also print each group's convergence table (they are in rates.md, rates.tex and "
+                "report.html either way)");
+  add_plugin_option(*run, session);
+  add_data_dir_option(*run, session);
+  return {run,
+          [arguments, no_plots](SessionOptions& options) {
+            options.runs_trials = true;
+            options.shard = !arguments->shard.empty();
+            arguments->plots = !*no_plots;
+          },
+          [arguments](pipeline::Executor& executor) { return command_run(*arguments, executor); }};
 }
 
 }  // namespace rkhs::cli

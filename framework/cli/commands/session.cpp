@@ -8,7 +8,7 @@
 #include "commands/commands.hpp"
 #include "rkhs/core/data_root.hpp"
 #include "rkhs/core/printable.hpp"
-#include "rkhs/distributed.hpp"
+#include "rkhs/mpi/distributed.hpp"
 #include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
 #include "rkhs/run/result_store.hpp"

@@ -4,10 +4,12 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <tuple>
@@ -263,6 +265,23 @@ int command_store(const StoreCommand& arguments) {
   if (arguments.action == "export")
     return store_export(arguments.store_file, arguments.format, arguments.out_file);
   throw std::invalid_argument(fmt::format("unknown store action '{}'", arguments.action));
+}
+
+Command add_store_command(CLI::App& app) {
+  auto arguments = std::make_shared<StoreCommand>();
+  auto* store = app.add_subcommand(
+      "store",
+      "the result store: check (verify every record), vacuum (remove the records that "
+      "do not verify), export (records as CSV or JSON)");
+  store->add_option("action", arguments->action, "check, vacuum or export")
+      ->required()
+      ->check(CLI::IsMember({"check", "vacuum", "export"}));
+  store->add_option("--store", arguments->store_file,
+                    "result store (default: results/rkhs-study.sqlite)");
+  store->add_option("--format", arguments->format, "export: csv (default) or json")
+      ->check(CLI::IsMember({"csv", "json"}));
+  store->add_option("--out", arguments->out_file, "export: write to FILE (default: stdout)");
+  return {store, {}, [arguments](pipeline::Executor&) { return command_store(*arguments); }};
 }
 
 }  // namespace rkhs::cli

@@ -2,10 +2,13 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <CLI/CLI.hpp>
 #include <iostream>
+#include <memory>
 
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
+#include "commands/options.hpp"
 #include "rkhs/run/trial_cost.hpp"
 #include "rkhs/study/tiers.hpp"
 
@@ -52,6 +55,18 @@ int command_validate(const std::string& study_file) {
         study.expectations.size() == 1 ? "" : "s",
         tiers.empty() ? std::string("none") : fmt::format("{}", fmt::join(tiers, ", ")));
   return status;
+}
+
+Command add_validate_command(CLI::App& app, SessionOptions& session) {
+  auto study_file = std::make_shared<std::string>();
+  auto* validate = app.add_subcommand("validate", "check a study file and count its trials");
+  validate->add_option("study", *study_file, "study definition (TOML)")
+      ->required()
+      ->check(CLI::ExistingPath);  // a FIFO or a directory: refused by its type
+  add_plugin_option(*validate, session);
+  add_data_dir_option(*validate, session);
+  return {
+      validate, {}, [study_file](pipeline::Executor&) { return command_validate(*study_file); }};
 }
 
 }  // namespace rkhs::cli

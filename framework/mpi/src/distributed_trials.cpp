@@ -1,4 +1,4 @@
-// Trials across MPI ranks: the study-level layer of rkhs/distributed.hpp over distribute().
+// Trials across MPI ranks: the study-level layer of rkhs/mpi/distributed.hpp over distribute().
 
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/distributed.hpp"
+#include "rkhs/mpi/distributed.hpp"
 #include "rkhs/run/trial_cost.hpp"
 
 namespace rkhs::distributed {

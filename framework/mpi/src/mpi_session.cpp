@@ -1,4 +1,4 @@
-// The MPI side of rkhs/distributed.hpp: the session and the task hand-out protocol.
+// The MPI side of rkhs/mpi/distributed.hpp: the session and the task hand-out protocol.
 //
 // Over 500 lines on purpose: both sides of the protocol (coordinate() on rank 0, serve() on the
 // others) share its tags, message helpers and timeouts, and are kept in one file so that the
@@ -43,7 +43,7 @@
 #include <thread>
 
 #include "rkhs/core/concurrency.hpp"
-#include "rkhs/distributed.hpp"
+#include "rkhs/mpi/distributed.hpp"
 
 namespace rkhs::distributed {
 

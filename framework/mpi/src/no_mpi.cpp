@@ -1,6 +1,6 @@
-// rkhs/distributed.hpp in a build without MPI: nothing can be distributed.
+// rkhs/mpi/distributed.hpp in a build without MPI: nothing can be distributed.
 
-#include "rkhs/distributed.hpp"
+#include "rkhs/mpi/distributed.hpp"
 
 namespace rkhs::distributed {
 

@@ -2,9 +2,27 @@
 
 #include <fmt/format.h>
 
+#include <memory>
+#include <stdexcept>
+#include <string>
+
 #include "rkhs/core/parameters.hpp"
 
 namespace rkhs {
+
+KernelRegistry& kernel_registry() {
+  // Constructed on first use, whatever the order in which the registrars of the built-in and
+  // loaded plugins run.
+  static KernelRegistry registry{std::string(kernel_kind_name)};
+  return registry;
+}
+
+std::unique_ptr<AnyKernel> make_kernel(std::string_view name, const ParameterSet& parameters,
+                                       const Domain& domain) {
+  const auto* entry = kernel_registry().find(name);
+  if (!entry) throw std::invalid_argument("unknown kernel '" + std::string(name) + "'");
+  return entry->factory(parameters, domain);
+}
 
 KernelProperties kernel_properties(std::string_view name, const ParameterSet& parameters,
                                    const Domain& domain) {

@@ -1,4 +1,4 @@
-// Scheduling overhead of the MPI runner per trial (rkhs/distributed.hpp). Run it under mpirun:
+// Scheduling overhead of the MPI runner per trial (rkhs/mpi/distributed.hpp). Run it under mpirun:
 //
 //   mpirun -np 2 --bind-to none build/release/bench/bench_scheduling
 //
@@ -16,7 +16,7 @@
 #include <optional>
 #include <sstream>
 
-#include "rkhs/distributed.hpp"
+#include "rkhs/mpi/distributed.hpp"
 #include "rkhs/plugin/builtins.hpp"
 
 namespace {

@@ -10,6 +10,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rkhs/adaptive/coupled_structure.hpp"
@@ -236,6 +237,8 @@ class Integrator {
 };
 
 using IntegratorRegistry = Registry<Integrator>;
+/// The integrator registry (defined in this layer, registries.cpp), named integrator_kind_name.
+inline constexpr std::string_view integrator_kind_name = "integrator";
 IntegratorRegistry& integrator_registry();
 
 /// Registers integrator type T (static info(), constructor from ParameterSet). Never throws; a

@@ -70,6 +70,8 @@ class Plant {
 };
 
 using PlantRegistry = Registry<Plant>;
+/// The plant registry (defined in this layer, registries.cpp), named plant_kind_name.
+inline constexpr std::string_view plant_kind_name = "plant";
 PlantRegistry& plant_registry();
 
 /// Where a learning law's coefficients live.
@@ -107,6 +109,8 @@ class LearningLaw {
 };
 
 using LawRegistry = Registry<LearningLaw>;
+/// The learning-law registry (defined in this layer, registries.cpp), named law_kind_name.
+inline constexpr std::string_view law_kind_name = "law";
 LawRegistry& law_registry();
 
 /// Parses a matrix written in a study file: "identity" (needs `size`), "diag(a, b, ...)", or

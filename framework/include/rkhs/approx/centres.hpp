@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "rkhs/core/domain.hpp"
@@ -31,6 +32,8 @@ class CentrePlacement {
 };
 
 using CentreRegistry = Registry<CentrePlacement>;
+/// The centre-placement registry (defined in this layer, registries.cpp), named centres_kind_name.
+inline constexpr std::string_view centres_kind_name = "centres";
 CentreRegistry& centre_registry();
 
 /// Registers placement type P (static info(), constructor from ParameterSet). Never throws; a

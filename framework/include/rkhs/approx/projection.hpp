@@ -137,6 +137,8 @@ class Projection {
 };
 
 using ProjectionRegistry = Registry<Projection>;
+/// The projection registry (defined in this layer, registries.cpp), named projection_kind_name.
+inline constexpr std::string_view projection_kind_name = "projection";
 ProjectionRegistry& projection_registry();
 
 /// The name of the projection of studies that declare none: kernel interpolation at the

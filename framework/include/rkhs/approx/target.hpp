@@ -106,6 +106,8 @@ inline void require_track(const Domain& domain, std::string_view target) {
 }
 
 using TargetRegistry = Registry<TargetFunction, const Domain&>;
+/// The target registry (defined in this layer, registries.cpp), named target_kind_name.
+inline constexpr std::string_view target_kind_name = "target";
 TargetRegistry& target_registry();
 
 /// Registers target type T (static info(), constructor from ParameterSet and Domain). Never

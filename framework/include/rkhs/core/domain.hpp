@@ -6,7 +6,7 @@
 //
 // Points. A point has d coordinates; a set of N points travels as a flat span of N d values,
 // point p's coordinates at [p d, p d + d) (row-major, the layout of an N x d matrix). In d = 1 a
-// point set is simply the list of arc lengths, as it always was.
+// point set is the list of arc lengths.
 
 #include <array>
 #include <cmath>

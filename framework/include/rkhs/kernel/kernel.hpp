@@ -25,6 +25,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rkhs/core/domain.hpp"
@@ -250,7 +251,9 @@ class AnyKernel {
 
 using KernelRegistry = Registry<AnyKernel, const Domain&>;
 
-/// The kernel registry (function-local static, defined in the framework library).
+/// The kernel registry (a function-local static defined in this layer, kernel.cpp), named
+/// kernel_kind_name in messages and in the table of plugin kinds.
+inline constexpr std::string_view kernel_kind_name = "kernel";
 KernelRegistry& kernel_registry();
 
 /// Creates a kernel from the registry. Throws std::invalid_argument for an unknown name and

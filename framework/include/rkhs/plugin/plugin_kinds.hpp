@@ -4,7 +4,8 @@
 // Each kind is a descriptor type:
 //   using Product             the interface its plugins implement (AnyKernel, Plant, ...)
 //   using Registry            Registry<Product, FactoryArgs...> (core/registry.hpp)
-//   singular, plural          names: the registry's kind(), the words `rkhs-study list` accepts
+//   singular, plural          names: the registry's kind() (declared with the registry in its
+//                             layer), the words `rkhs-study list` accepts
 //   builtins                  the names every build of rkhs-study registers, sorted
 //   registry()                the kind's registry (the accessor declared in the kind's layer)
 //   loaded (optional)         the member of LoadedPlugin that lists what a module registered of
@@ -16,9 +17,10 @@
 // (builtins.hpp); the plugin loader's snapshot, comparison and roll-back of the registries
 // (plugin_loader.cpp); `rkhs-study list` and its accepted kind names (cli).
 //
-// A new kind needs: its Registry accessor declared in its layer's header and defined in
-// plugin/registry.cpp (one line, registry_of_kind), a descriptor here, and its entry in
-// PluginKinds. Nothing else lists the kinds.
+// A new kind needs: its Registry accessor and kind name declared in its layer's header and the
+// accessor defined in that layer (a function-local static: the layers hold when linked,
+// tests/architecture/check_link_direction.py), a descriptor here, and its entry in PluginKinds.
+// Nothing else lists the kinds.
 //
 // This header names the products of the kernel, approx and adaptive layers, so it lives in the
 // plugin layer, above them; the generic registry and register_plugin<T>() are in core.
@@ -41,7 +43,7 @@ namespace rkhs {
 struct KernelKind {
   using Product = AnyKernel;
   using Registry = KernelRegistry;
-  static constexpr std::string_view singular = "kernel";
+  static constexpr std::string_view singular = kernel_kind_name;
   static constexpr std::string_view plural = "kernels";
   static constexpr std::string_view builtins[] = {"bspline", "gaussian", "matern", "wendland"};
   static constexpr auto loaded = &LoadedPlugin::kernels;
@@ -51,7 +53,7 @@ struct KernelKind {
 struct CentresKind {
   using Product = CentrePlacement;
   using Registry = CentreRegistry;
-  static constexpr std::string_view singular = "centres";
+  static constexpr std::string_view singular = centres_kind_name;
   static constexpr std::string_view plural = "centres";
   static constexpr std::string_view builtins[] = {"halton", "passes", "random", "uniform"};
   static constexpr auto loaded = &LoadedPlugin::centres;
@@ -61,7 +63,7 @@ struct CentresKind {
 struct TargetKind {
   using Product = TargetFunction;
   using Registry = TargetRegistry;
-  static constexpr std::string_view singular = "target";
+  static constexpr std::string_view singular = target_kind_name;
   static constexpr std::string_view plural = "targets";
   static constexpr std::string_view builtins[] = {"csv", "expression", "iso8608", "sine",
                                                   "surface_csv"};
@@ -72,7 +74,7 @@ struct TargetKind {
 struct ProjectionKind {
   using Product = Projection;
   using Registry = ProjectionRegistry;
-  static constexpr std::string_view singular = "projection";
+  static constexpr std::string_view singular = projection_kind_name;
   static constexpr std::string_view plural = "projections";
   static constexpr std::string_view builtins[] = {"interpolation", "l2_projection", "mra_level",
                                                   "quasi_interpolant"};
@@ -82,7 +84,7 @@ struct ProjectionKind {
 struct PlantKind {
   using Product = Plant;
   using Registry = PlantRegistry;
-  static constexpr std::string_view singular = "plant";
+  static constexpr std::string_view singular = plant_kind_name;
   static constexpr std::string_view plural = "plants";
   static constexpr std::string_view builtins[] = {"duffing", "linear", "pendulum", "quarter_car",
                                                   "vehicle_surface"};
@@ -93,7 +95,7 @@ struct PlantKind {
 struct LawKind {
   using Product = LearningLaw;
   using Registry = LawRegistry;
-  static constexpr std::string_view singular = "law";
+  static constexpr std::string_view singular = law_kind_name;
   static constexpr std::string_view plural = "laws";
   static constexpr std::string_view builtins[] = {"gradient", "rkhs", "rkhs_embedding"};
   static constexpr auto loaded = &LoadedPlugin::laws;
@@ -103,7 +105,7 @@ struct LawKind {
 struct IntegratorKind {
   using Product = Integrator;
   using Registry = IntegratorRegistry;
-  static constexpr std::string_view singular = "integrator";
+  static constexpr std::string_view singular = integrator_kind_name;
   static constexpr std::string_view plural = "integrators";
   static constexpr std::string_view builtins[] = {"dopri5", "radau5", "rk4", "rk_fehlberg78",
                                                   "rodas4", "rosenbrock4"};

@@ -65,7 +65,8 @@ struct TrialSpec {
   std::uint64_t seed = 0;
 };
 
-/// What rates are fitted against: ln n (default) or ln h with h the fill distance.
+/// [limits]: what one trial may use (docs/study-files.md); a trial beyond them fails with the
+/// reason, the rest of the study goes on.
 struct StudyLimits {
   double trial_seconds = 0;          ///< a trial running longer fails (0: no limit)
   double matrix_megabytes = 2048;    ///< a trial whose dense matrices exceed this fails up front
