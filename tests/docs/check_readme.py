@@ -10,21 +10,30 @@
   `rkhs-study run` writes, found by running a tiny approximation study and a tiny adaptive
   study; rows whose text starts with "adaptive studies only" name exactly what the adaptive
   study adds.
+- Times: the studies table's `trials, time` column quotes docs/study-times.json (written by
+  tests/bench/time_studies.py, which times each study), and no study file changed since it was
+  timed (its SHA-256 there). `--update-times` rewrites the column from that file instead.
 - Links: every relative link of README and every docs/*.md it names exists.
 - Console excerpts: a fenced block that follows a line `<!-- console: rkhs-study ARGS -->` is
-  what `rkhs-study ARGS` prints on standard output, run in WORK_DIR beside the repository's
-  studies/ (a fresh store): its lines appear in the output in order, a line `...` stands for
-  any number of lines, and a duration (`0.17 s`) matches any duration.
+  what `rkhs-study ARGS` prints on standard output, run in a folder of WORK_DIR beside the
+  repository's files (a fresh store): its lines appear in the output in order, a line `...`
+  stands for any number of lines, and a duration (`0.17 s`) matches any duration
+  (tests/docs/console_excerpts.py, which docs/writing-a-kernel.md's excerpts share).
 
 Usage: check_readme.py RKHS_STUDY_EXECUTABLE SOURCE_DIR WORK_DIR
+       check_readme.py --update-times SOURCE_DIR
 Exit status 0 when README is current; otherwise 1, with one line per problem naming what is
 missing or extra and where.
 """
 import pathlib
+import hashlib
+import json
 import re
 import shutil
 import subprocess
 import sys
+
+import console_excerpts
 
 APPROXIMATION_STUDY = """[study]
 name = "readme_approximation"
@@ -197,6 +206,70 @@ def check_outputs(readme, executable, work, problems):
     return len(written)
 
 
+STUDY_TIMES = "docs/study-times.json"
+
+
+def duration_text(seconds):
+    """Two significant digits below 10 s, whole seconds below 2 min, then minutes."""
+    if seconds < 10:
+        return f"{seconds:.2g} s"
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.1f} min"
+
+
+def time_cell(entry):
+    return f"{entry['trials']} trials, {duration_text(entry['wall_seconds'])}"
+
+
+def study_times(source):
+    path = source / STUDY_TIMES
+    if not path.exists():
+        raise RuntimeError(f"no {STUDY_TIMES}: run tests/bench/time_studies.py RKHS_STUDY {source}")
+    return json.loads(path.read_text())["studies"]
+
+
+def check_times(readme, source, problems):
+    """The studies table's time column against docs/study-times.json (module docstring)."""
+    times = study_times(source)
+    checked = 0
+    for cells in table_rows(section(readme, "Studies"))[2:]:
+        named = re.findall(r"`studies/([^`]+)\.toml`", cells[0]) if cells else []
+        if not named:
+            continue
+        name = named[0]
+        entry = times.get(name)
+        if entry is None:
+            problems.append(f"README.md: {STUDY_TIMES} has no time of studies/{name}.toml; run "
+                            f"tests/bench/time_studies.py RKHS_STUDY . --study {name}")
+            continue
+        sha = hashlib.sha256((source / "studies" / f"{name}.toml").read_bytes()).hexdigest()
+        if sha != entry["study_sha256"]:
+            problems.append(f"README.md: studies/{name}.toml changed since {STUDY_TIMES} timed it; "
+                            f"run tests/bench/time_studies.py RKHS_STUDY . --study {name} and "
+                            f"check_readme.py --update-times .")
+        if len(cells) < 3 or cells[2] != time_cell(entry):
+            found = cells[2] if len(cells) >= 3 else "no such column"
+            problems.append(f"README.md: the studies table gives studies/{name}.toml "
+                            f"'{found}', {STUDY_TIMES} '{time_cell(entry)}' (run check_readme.py "
+                            f"--update-times .)")
+        checked += 1
+    return checked
+
+
+def update_times(source):
+    """Rewrites the last cell of each row of the studies table from docs/study-times.json."""
+    path = source / "README.md"
+    times = study_times(source)
+    lines = path.read_text(encoding="utf-8").split("\n")
+    for i, line in enumerate(lines):
+        named = re.match(r"^\| `studies/([^`]+)\.toml`", line)
+        if named and named.group(1) in times:
+            body = re.sub(r"(?<!\\)\|[^|]*\|\s*$", "|", line.rstrip())
+            lines[i] = f"{body} {time_cell(times[named.group(1)])} |"
+    path.write_text("\n".join(lines), encoding="utf-8")
+
+
 def check_links(readme, source, problems):
     targets = set()
     for target in re.findall(r"\]\(([^)\s]+)\)", readme):
@@ -210,51 +283,10 @@ def check_links(readme, source, problems):
     return len(targets)
 
 
-CONSOLE_MARKER = re.compile(r"^<!-- console: rkhs-study (.+?) -->\n```[^\n]*\n(.*?)^```",
-                            re.MULTILINE | re.DOTALL)
-DURATION = re.compile(r"\d+(?:\.\d+)? s\b")
-
-
-def excerpt_line_matches(excerpt, printed):
-    """Whether a line of an excerpt says what a printed line says, durations aside."""
-    pattern = r"\d+(?:\.\d+)? s\b".join(re.escape(part) for part in DURATION.split(excerpt))
-    return re.fullmatch(pattern, printed.rstrip()) is not None
-
-
-def check_console_excerpts(readme, executable, source, work, problems):
-    """Each console excerpt against a real run of its command (see the module docstring)."""
-    excerpts = CONSOLE_MARKER.findall(readme)
-    for arguments, block in excerpts:
-        folder = work / "console"
-        shutil.rmtree(folder, ignore_errors=True)
-        folder.mkdir(parents=True)
-        (folder / "studies").symlink_to((source / "studies").resolve())
-        result = subprocess.run([executable, *arguments.split()], cwd=folder, capture_output=True,
-                                text=True, timeout=300)
-        printed = result.stdout.splitlines()
-        at, skipping = 0, False
-        for line in block.rstrip("\n").split("\n"):
-            if line.strip() == "...":
-                skipping = True
-                continue
-            found = next((i for i in range(at, len(printed) if skipping else min(at + 1,
-                                                                                 len(printed)))
-                          if excerpt_line_matches(line, printed[i])), None)
-            if found is None:
-                near = printed[at] if at < len(printed) else "the end of the output"
-                problems.append(f"README.md: the console excerpt of `rkhs-study {arguments}` "
-                                f"says\n    {line}\n  where the command prints\n    {near}")
-                break
-            at, skipping = found + 1, False
-        else:
-            if not skipping and at < len(printed):
-                problems.append(f"README.md: the console excerpt of `rkhs-study {arguments}` "
-                                f"ends before the output does (next: {printed[at]}); end it "
-                                f"with `...`")
-    return len(excerpts)
-
-
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--update-times":
+        update_times(pathlib.Path(sys.argv[2]))
+        return 0
     if len(sys.argv) != 4:
         print(__doc__, file=sys.stderr)
         return 2
@@ -267,15 +299,17 @@ def main():
     studies = check_studies(readme, source, problems)
     commands = check_commands(readme, executable, problems)
     outputs = check_outputs(readme, executable, work, problems)
+    times = check_times(readme, source, problems)
     links = check_links(readme, source, problems)
-    excerpts = check_console_excerpts(readme, executable, source, work, problems)
+    console_excerpts.self_test()
+    excerpts = console_excerpts.check("README.md", readme, executable, source, work, problems)
     if problems:
         print("\n".join(problems))
         print(f"{len(problems)} problem{'s' if len(problems) > 1 else ''}: README.md does not "
               f"match the repository or `rkhs-study`")
         return 1
     print(f"README.md is current: {studies} studies, {commands} subcommands, {outputs} outputs, "
-          f"{links} links and {excerpts} console excerpt{'s' if excerpts != 1 else ''} checked")
+          f"{times} study times, {links} links and {excerpts} console excerpt{'s' if excerpts != 1 else ''} checked")
     return 0
 
 

@@ -11,13 +11,17 @@
 # plugin is built once more with -mavx where the build is for generic x86-64 and the processor has
 # AVX: the installed rkhs-study refuses it, naming both configurations.
 #
-# Usage: install_and_build_plugin.sh BUILD_DIR SOURCE_DIR [CMAKE [CXX_COMPILER]]
+# Last, the console excerpts of docs/writing-a-kernel.md are compared with what this package prints
+# for the plugin (tests/docs/check_console_excerpts.py), also after the page's "Try lying" edit.
+#
+# Usage: install_and_build_plugin.sh BUILD_DIR SOURCE_DIR [CMAKE [CXX_COMPILER [PYTHON]]]
 set -euo pipefail
 build=$1
 source=$2
 cmake=${3:-cmake}
 compiler=()
 [[ -n ${4:-} ]] && compiler=(-DCMAKE_CXX_COMPILER="$4")
+python=${5:-python3}
 work=$(mktemp -d "${TMPDIR:-/tmp}/rkhs_install_test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 prefix=$work/prefix
@@ -95,4 +99,22 @@ if grep -q "SSE2" <<<"$("$rkhs" verify-plugin "$plugin" 2>&1)" && grep -qw avx /
 else
   echo "(skipped: this build is not for generic x86-64 with SSE2, or the processor has no AVX)"
 fi
-echo "installed package, out-of-tree plugin, verify-plugin and study: ok"
+step "docs/writing-a-kernel.md's console excerpts against this package and plugin"
+# The page shows the output of a release build (its `built for` line); another build (clang, a
+# sanitizer) prints other configuration lines, so the page is compared only where they agree.
+checker=("${python}" "$source/tests/docs/check_console_excerpts.py" "$rkhs" "$source/docs/writing-a-kernel.md"
+         "$work/kernel-plugin" "$work/console" --replace "/home/you/kernel-plugin=$(cd "$work/kernel-plugin" && pwd -P)")
+page_build=$(grep -m1 "^  built for " "$source/docs/writing-a-kernel.md" || true)
+this_build=$(grep -m1 "^  built for " "$work/verify.txt" || true)
+if [[ $page_build == "$this_build" ]]; then
+  "${checker[@]}" || fail "docs/writing-a-kernel.md's console excerpts do not match the output"
+  # "Try lying" (section 9): declare a Sobolev order instead of analyticity and rebuild.
+  sed -i 's/^  p.analytic = true;  /  p.sobolev_order = 3.0;/' "$work/kernel-plugin/inverse_multiquadric.cpp"
+  grep -q "^  p.sobolev_order = 3.0;" "$work/kernel-plugin/inverse_multiquadric.cpp" \
+    || fail "inverse_multiquadric.cpp has no line 'p.analytic = true;' for the page's lie"
+  "$cmake" --build "$work/kernel-plugin/build" -j 2 > "$work/build-lie.log" || { cat "$work/build-lie.log"; fail "build the lie"; }
+  "${checker[@]}" --variant lying || fail "the page's 'Try lying' excerpt does not match the output"
+else
+  echo "(skipped: this build prints '${this_build# *}', the page shows '${page_build# *}')"
+fi
+echo "installed package, out-of-tree plugin, verify-plugin, study and tutorial console: ok"
