@@ -33,11 +33,13 @@ class Radau5 final : public AdaptiveStepIntegrator {
     return {"radau5",
             "Radau IIA of order 5 (3 stages, L-stable, stiffly accurate) with RADAU5's error "
             "estimate and step control; structured stage solves",
-            implicit_parameters(),
-            {{"implicit", "yes, one real and one complex factorisation per step"}}};
+            implicit_parameters()};
   }
   explicit Radau5(const ParameterSet& p)
       : AdaptiveStepIntegrator(p), solver_(linear_solver_from_name(p.text("linear_solver"))) {}
+  IntegratorProperties properties() const noexcept override {
+    return {2, solver_ == LinearSolver::structured};  // one real, one complex
+  }
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
       std::span<const double> breakpoints,
@@ -157,11 +159,13 @@ class Rodas4 final : public AdaptiveStepIntegrator {
     return {"rodas4",
             "RODAS4 (order 4, L-stable, stiffly accurate Rosenbrock), the method of "
             "rosenbrock4, with structured stage solves",
-            implicit_parameters(),
-            {{"implicit", "yes, one factorisation per step"}}};
+            implicit_parameters()};
   }
   explicit Rodas4(const ParameterSet& p)
       : AdaptiveStepIntegrator(p), solver_(linear_solver_from_name(p.text("linear_solver"))) {}
+  IntegratorProperties properties() const noexcept override {
+    return {1, solver_ == LinearSolver::structured};
+  }
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
       std::span<const double> breakpoints,

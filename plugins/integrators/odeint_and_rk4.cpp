@@ -84,10 +84,12 @@ class Rosenbrock4 final : public AdaptiveStepIntegrator {
   static PluginInfo info() {
     return {"rosenbrock4",
             "4th-order L-stable Rosenbrock method with the exact Jacobian (for stiff systems)",
-            adaptive_step_parameters(),
-            {{"implicit", "yes, one LU factorisation per step"}}};
+            adaptive_step_parameters()};
   }
   explicit Rosenbrock4(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
+  IntegratorProperties properties() const noexcept override {
+    return {1, false};  // one dense LU factorisation per step
+  }
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
       std::span<const double> breakpoints,
@@ -109,6 +111,7 @@ class ExplicitAdaptive final : public AdaptiveStepIntegrator {
  public:
   static PluginInfo info() { return Describe::info(); }
   explicit ExplicitAdaptive(const ParameterSet& p) : AdaptiveStepIntegrator(p) {}
+  IntegratorProperties properties() const noexcept override { return {0, false}; }
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
       std::span<const double> breakpoints,
@@ -125,18 +128,14 @@ class ExplicitAdaptive final : public AdaptiveStepIntegrator {
 
 struct Dopri5 {
   static PluginInfo info() {
-    return {"dopri5",
-            "Dormand-Prince 5(4), adaptive explicit (non-stiff checks, short horizons)",
-            adaptive_step_parameters(),
-            {{"implicit", "no"}}};
+    return {"dopri5", "Dormand-Prince 5(4), adaptive explicit (non-stiff checks, short horizons)",
+            adaptive_step_parameters()};
   }
 };
 struct Fehlberg78 {
   static PluginInfo info() {
-    return {"rk_fehlberg78",
-            "Runge-Kutta-Fehlberg 7(8), adaptive explicit, high order",
-            adaptive_step_parameters(),
-            {{"implicit", "no"}}};
+    return {"rk_fehlberg78", "Runge-Kutta-Fehlberg 7(8), adaptive explicit, high order",
+            adaptive_step_parameters()};
   }
 };
 using Dopri5Integrator = ExplicitAdaptive<odeint::runge_kutta_dopri5<State>, Dopri5>;
@@ -170,14 +169,14 @@ class Rk4 final : public Integrator {
             {positive_parameter("step", 1e-3, "step size, s"),
              integer_parameter("max_steps", 20'000'000, "step budget of a trial", 1, 1LL << 40),
              boolean_parameter("restart_at_kinks", true,
-                               "stop and restart where phi(s(t)) or f(s(t)) has kinks")},
-            {{"implicit", "no"}}};
+                               "stop and restart where phi(s(t)) or f(s(t)) has kinks")}};
   }
   explicit Rk4(const ParameterSet& p)
       : step_(p.real("step")),
         max_steps_(p.integer("max_steps")),
         restart_(p.boolean("restart_at_kinks")) {}
   bool restarts_at_kinks() const noexcept override { return restart_; }
+  IntegratorProperties properties() const noexcept override { return {0, false}; }
   IntegrationStats integrate(
       AdaptiveSystem& system, Eigen::Ref<Eigen::VectorXd> state,
       std::span<const double> breakpoints,

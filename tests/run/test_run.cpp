@@ -1,13 +1,14 @@
 // The scheduler: bit-identical results for any thread count; failures recorded, study goes on.
-#include <catch2/catch.hpp>
-
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <numeric>
 #include <thread>
 
+#include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/gram_solver.hpp"
 #include "rkhs/core/cancellation.hpp"
@@ -265,6 +266,64 @@ laps = )" + laps + "\n",
   auto timed = study;
   timed.adaptive.final_time = study.domain.length / 10.0;
   CHECK(adaptive_trial_shape(timed, trials[0]).laps == Approx(1.0));
+}
+
+TEST_CASE("integrators declare what they do per step, and the cost estimate reads it",
+          "[run][cost]") {
+  // name -> factorisations per step, structured stage solves (at the defaults).
+  const std::map<std::string, std::pair<int, bool>> declared = {
+      {"rk4", {0, false}},         {"dopri5", {0, false}}, {"rk_fehlberg78", {0, false}},
+      {"rosenbrock4", {1, false}}, {"rodas4", {1, true}},  {"radau5", {2, true}}};
+  for (const auto& name : integrator_registry().names()) {
+    INFO(name);
+    const auto* entry = integrator_registry().find(name);
+    const auto properties =
+        entry->factory(ParameterSet::resolve(entry->info.parameters, {}))->properties();
+    REQUIRE(declared.count(name) == 1);  // a new built-in integrator is declared here too
+    CHECK(properties.factorisations_per_step == declared.at(name).first);
+    CHECK(properties.structured_stage_solves == declared.at(name).second);
+    CHECK(properties.implicit() == (declared.at(name).first > 0));
+  }
+  CHECK(describe_integrator({0, false}) == "explicit");
+  CHECK(describe_integrator({2, true}) ==
+        "implicit, 2 factorisations per step, structured stage solves");
+  CHECK(describe_integrator({1, false}) ==
+        "implicit, 1 factorisation per step, dense stage solves");
+
+  // The scheduler reads them per trial, with the trial's own parameters: rodas4's dense stage
+  // solves cost an N^3 factorisation per step, its structured ones do not.
+  const auto study = parse_study(R"([study]
+name = "integrator_costs"
+kind = "adaptive"
+evaluation_points = 64
+[domain]
+radius = 4.0
+[grid]
+n = [20]
+[[kernel]]
+name = "gaussian"
+[[law]]
+name = "rkhs"
+[[plant]]
+name = "linear"
+[[integrator]]
+name = "rodas4"
+linear_solver = ["structured", "dense"]
+[[integrator]]
+name = "dopri5"
+[adaptive]
+laps = 2
+)",
+                                 "integrator_costs.toml");
+  const auto trials = study.trials();
+  REQUIRE(trials.size() == 3);
+  for (const auto& trial : trials) {
+    INFO(trial.key);
+    const auto shape = adaptive_trial_shape(study, trial);
+    const bool dense = trial.key.find("dense") != std::string::npos;
+    CHECK(shape.implicit_integrator == (trial.integrator.name == "rodas4"));
+    CHECK(shape.structured_solves == (trial.integrator.name == "rodas4" && !dense));
+  }
 }
 
 namespace {

@@ -66,6 +66,18 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
         out << fmt::format("    [declares] unavailable: {}\n", e.what());
       }
     }
+    if constexpr (std::is_same_v<RegistryType, IntegratorRegistry>) {
+      // What an integrator declares it does per step (the scheduler's cost estimate reads it).
+      try {
+        out << fmt::format(
+            "    [declares] {}\n",
+            describe_integrator(registry.find(name)
+                                    ->factory(ParameterSet::resolve(info.parameters, {}))
+                                    ->properties()));
+      } catch (const std::exception& e) {
+        out << fmt::format("    [declares] unavailable: {}\n", e.what());
+      }
+    }
     for (const auto& [key, value] : info.traits) out << fmt::format("    [{}] {}\n", key, value);
   }
   out << "\n";

@@ -23,6 +23,14 @@
 
 namespace rkhs {
 
+std::string describe_integrator(const IntegratorProperties& properties) {
+  if (!properties.implicit()) return "explicit";
+  return fmt::format("implicit, {} factorisation{} per step, {} stage solves",
+                     properties.factorisations_per_step,
+                     properties.factorisations_per_step == 1 ? "" : "s",
+                     properties.structured_stage_solves ? "structured" : "dense");
+}
+
 const std::vector<std::string>& adaptive_metric_names() {
   static const std::vector<std::string> names = metric_table_names<AdaptiveMetric>();
   return names;

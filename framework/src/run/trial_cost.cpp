@@ -30,22 +30,17 @@ std::size_t plant_dimension(const PluginChoice& plant) {
   }
 }
 
-// Whether the integrator says it factorises a matrix per step (trait "implicit" = "yes, ...");
-// one that does not say is taken as implicit, the dearer guess.
-bool implicit_integrator(const PluginChoice& integrator) {
+// What the trial's integrator declares it does per step (Integrator::properties()); the dearer
+// default (implicit, dense) when it cannot be made (the trial fails at once then).
+IntegratorProperties integrator_properties(const PluginChoice& integrator) {
   const auto* entry = integrator_registry().find(integrator.name);
-  if (!entry) return true;
-  for (const auto& [trait, value] : entry->info.traits)
-    if (trait == "implicit") return std::string_view(value).substr(0, 2) != "no";
-  return true;
-}
-
-// Whether the integrator solves its stages with the structure of the Jacobian (parameter
-// linear_solver = "structured"): O(N) per stage instead of O(N^3).
-bool structured_solves(const PluginChoice& integrator) {
-  for (const auto& [name, value] : integrator.parameters.values())
-    if (name == "linear_solver") return std::get<std::string>(value) == "structured";
-  return false;
+  if (!entry) return {};
+  try {
+    const auto made = entry->factory(integrator.parameters);
+    return made ? made->properties() : IntegratorProperties{};
+  } catch (const std::exception&) {
+    return {};
+  }
 }
 
 // Laps of the coupled system the engine integrates: the horizon when it steps through time, one
@@ -83,8 +78,9 @@ AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const Tria
   shape.n = trial.n;
   shape.plant_dimension = plant_dimension(trial.plant);
   const auto settings = trial_adaptive_settings(study, trial);
-  shape.implicit_integrator = implicit_integrator(trial.integrator);
-  shape.structured_solves = structured_solves(trial.integrator);
+  const auto integrator = integrator_properties(trial.integrator);
+  shape.implicit_integrator = integrator.implicit();
+  shape.structured_solves = integrator.structured_stage_solves;
   try {
     shape.lap_map = adaptive_engine_for(settings, static_cast<Eigen::Index>(
                                                       2 * shape.plant_dimension + shape.n)) ==

@@ -225,6 +225,22 @@ struct IntegrationStats {
 /// The state is the caller's storage, of fixed size (system.dimension()): an integrator reads
 /// the initial state from it and writes the final state into it, and works on copies it owns
 /// (nothing it allocates is freed by the caller, nor the reverse: plugin/module.hpp).
+/// What an integrator does per step, declared by the integrator (typed, like a kernel's
+/// KernelProperties): the trial scheduler's cost estimate reads it (run/trial_cost.hpp) and
+/// `rkhs-study list integrators` prints it.
+struct IntegratorProperties {
+  /// Matrices of the coupled system factorised per step: 0 for an explicit method, 1 for a
+  /// Rosenbrock method, 2 for Radau IIA (one real, one complex).
+  int factorisations_per_step = 1;
+  /// Stage systems solved with the Jacobian's structure (block and rank-one: O(d^2 + n) per
+  /// stage, rkhs/adaptive/stage_solves.hpp) rather than as the dense (2d + n)^2 matrix.
+  bool structured_stage_solves = false;
+  bool implicit() const noexcept { return factorisations_per_step > 0; }
+};
+
+/// "explicit"; "implicit, 1 factorisation per step, structured stage solves".
+std::string describe_integrator(const IntegratorProperties& properties);
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -234,6 +250,9 @@ class Integrator {
       const std::function<void(std::size_t, const double*)>& observe) const = 0;
   /// Whether to stop and restart at the kinks of phi(s(t)) and f(s(t)).
   virtual bool restarts_at_kinks() const noexcept = 0;
+  /// What it does per step. The default is the dearer guess for an integrator that does not
+  /// say: implicit, one dense factorisation per step.
+  virtual IntegratorProperties properties() const noexcept { return {}; }
 };
 
 using IntegratorRegistry = Registry<Integrator>;

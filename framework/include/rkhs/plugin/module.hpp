@@ -76,7 +76,9 @@
 // 11: AnyKernel::gradient_point and has_exact_gradient
 // 12: KernelModel and its bases count their work (count_kernel_evaluations,
 //     count_kernel_derivative_evaluations: core/work_counters.hpp)
-#define RKHS_PLUGIN_ABI_VERSION 12
+// 13: Integrator::properties (IntegratorProperties: factorisations per step, structured stage
+//     solves), which the trial scheduler reads instead of a trait string
+#define RKHS_PLUGIN_ABI_VERSION 13
 
 #define RKHS_PLUGIN_EXPORT extern "C" [[gnu::visibility("default"), gnu::used]]
 

@@ -13,14 +13,13 @@
 //
 // where d is the plant's state dimension (the system is z = [x, xhat, alpha]), step_cost is
 // N^3 + N^2 for an implicit integrator with dense stage solves (one LU of the N x N Jacobian
-// per step, trait "implicit" = "yes..."), and N^2 for an explicit one or one with structured
-// stage solves (parameter linear_solver = "structured": right-hand sides with a dense learning
-// map dominate), and laps_integrated depends on the engine (adaptive_engine_for): the horizon
-// in laps (laps, or final_time v / L) when the trial steps through time, about N laps with a
-// lap map (one lap of the state and its N sensitivities; the map is then iterated at a cost
-// independent of the horizon).
-// Steps per lap are taken as the same for every integrator (they depend on tolerances and
-// stiffness, which the estimate does not model).
+// per step), and N^2 for an explicit one or one with structured stage solves (right-hand sides
+// with a dense learning map dominate), as the integrator declares them
+// (Integrator::properties(), rkhs/adaptive/adaptive.hpp), and laps_integrated depends on the engine
+// (adaptive_engine_for): the horizon in laps (laps, or final_time v / L) when the trial steps
+// through time, about N laps with a lap map (one lap of the state and its N sensitivities; the map
+// is then iterated at a cost independent of the horizon). Steps per lap are taken as the same for
+// every integrator (they depend on tolerances and stiffness, which the estimate does not model).
 
 #include <cstddef>
 #include <vector>
