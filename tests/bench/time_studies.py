@@ -12,13 +12,13 @@ SOURCE_DIR/docs/study-times.json, beside the figures of the studies not run:
   wall_seconds  the wall time of the whole command (start-up, every trial, fits and outputs)
   cpu_seconds   the processor time of the command, summed over its threads
   study_sha256  the study file's SHA-256 when it was timed
-
   rkhs_study    `rkhs-study --version` of the binary timed
   date          the day it was timed
 
-and, for the file as a whole, the command, the processor and the core count. tests/docs/check_readme.py checks that README's "time" column quotes these
-figures and that no study file changed since it was timed (its SHA-256), so a timing cannot
-drift from the study it describes: after changing a study, run this script with --study NAME.
+and, for the file as a whole, the command, the processor and the core count.
+tests/docs/check_readme.py checks that README's "time" column quotes these figures and that no
+study file changed since it was timed (its SHA-256), so a timing cannot drift from the study it
+describes: after changing a study, run this script with --study NAME.
 
 Time it on an otherwise idle machine: the figures are of one run, not a benchmark's median,
 and say so in the README. Standard library only.
@@ -97,14 +97,14 @@ def main():
     times = figures.setdefault("studies", {})
     with tempfile.TemporaryDirectory(prefix="rkhs_time_studies.") as work:
         for study in studies:
-            times[study.stem] = time_study(executable, version.stdout.strip(), study,
-                                           arguments.threads,
-                                           pathlib.Path(work))
-            entry = times[study.stem]
+            entry = time_study(executable, version.stdout.strip(), study, arguments.threads,
+                               pathlib.Path(work))
+            times[study.stem] = entry
             print(f"{study.stem}: {entry['trials']} trials, {entry['wall_seconds']:.2f} s wall, "
                   f"{entry['cpu_seconds']:.2f} s cpu", flush=True)
-            figures["studies"] = dict(sorted(times.items()))
-            output.write_text(json.dumps(figures, indent=2) + "\n")  # after each: nothing lost
+            # Written after each study, so nothing measured is lost; the studies in name order.
+            output.write_text(json.dumps({**figures, "studies": dict(sorted(times.items()))},
+                                         indent=2) + "\n")
     return 0
 
 

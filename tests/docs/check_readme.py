@@ -25,9 +25,9 @@ Usage: check_readme.py RKHS_STUDY_EXECUTABLE SOURCE_DIR WORK_DIR
 Exit status 0 when README is current; otherwise 1, with one line per problem naming what is
 missing or extra and where.
 """
-import pathlib
 import hashlib
 import json
+import pathlib
 import re
 import shutil
 import subprocess

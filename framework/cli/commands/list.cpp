@@ -30,6 +30,19 @@ std::string describe_parameter(const ParameterSpec& spec) {
   return fmt::format("    {:<14} {} ({})", spec.name, spec.doc, detail);
 }
 
+// "[declares] ...": the properties() of the plugin made with its default parameters, in words;
+// "unavailable" with the reason when it cannot be made.
+template <class Entry, class Describe>
+void print_declared(const Entry& entry, Describe describe, std::ostream& out) {
+  try {
+    out << fmt::format(
+        "    [declares] {}\n",
+        describe(entry.factory(ParameterSet::resolve(entry.info.parameters, {}))->properties()));
+  } catch (const std::exception& e) {
+    out << fmt::format("    [declares] unavailable: {}\n", e.what());
+  }
+}
+
 template <class RegistryType>
 void list_registry(const RegistryType& registry, std::ostream& out) {
   out << registry.kind() << " plugins:\n";
@@ -54,30 +67,12 @@ void list_registry(const RegistryType& registry, std::ostream& out) {
         out << fmt::format("    [properties at the defaults] unavailable: {}\n", e.what());
       }
     }
-    if constexpr (std::is_same_v<RegistryType, ProjectionRegistry>) {
-      // What a projection declares (its contract test checks each claim).
-      try {
-        out << fmt::format(
-            "    [declares] {}\n",
-            describe_projection(registry.find(name)
-                                    ->factory(ParameterSet::resolve(info.parameters, {}))
-                                    ->properties()));
-      } catch (const std::exception& e) {
-        out << fmt::format("    [declares] unavailable: {}\n", e.what());
-      }
-    }
-    if constexpr (std::is_same_v<RegistryType, IntegratorRegistry>) {
-      // What an integrator declares it does per step (the scheduler's cost estimate reads it).
-      try {
-        out << fmt::format(
-            "    [declares] {}\n",
-            describe_integrator(registry.find(name)
-                                    ->factory(ParameterSet::resolve(info.parameters, {}))
-                                    ->properties()));
-      } catch (const std::exception& e) {
-        out << fmt::format("    [declares] unavailable: {}\n", e.what());
-      }
-    }
+    // What a projection declares (its contract test checks each claim), and what an integrator
+    // does per step (the scheduler's cost estimate reads it).
+    if constexpr (std::is_same_v<RegistryType, ProjectionRegistry>)
+      print_declared(*registry.find(name), describe_projection, out);
+    if constexpr (std::is_same_v<RegistryType, IntegratorRegistry>)
+      print_declared(*registry.find(name), describe_integrator, out);
     for (const auto& [key, value] : info.traits) out << fmt::format("    [{}] {}\n", key, value);
   }
   out << "\n";
