@@ -88,11 +88,11 @@ int command_list(const std::string& kind) {
       list_registry(Kind::registry(), std::cout);
   });
   if (all || kind == "metric" || kind == "metrics") {
-    for (const auto study_kind : study_kinds) {
-      std::cout << "metrics (" << study_kind_name(study_kind) << " trials):\n";
-      for (const auto& name : metric_names(study_kind))
-        std::cout << fmt::format("  {:<28} floor: {}\n", name,
-                                 floor_rule_name(metric_floor_rule(study_kind, name)));
+    for (const auto* study_kind : study_kind_table()) {
+      std::cout << "metrics (" << study_kind->name() << " trials):\n";
+      for (const auto& metric : study_kind->metrics())
+        std::cout << fmt::format("  {:<28} floor: {}\n", metric.name,
+                                 floor_rule_name(metric.floor));
     }
   }
   if (const auto plugins = loaded_plugins(); all && !plugins.empty()) {

@@ -7,34 +7,50 @@
 #include <cmath>
 #include <limits>
 
+#include "rkhs/approx/metrics.hpp"
 #include "rkhs/core/parameters.hpp"
 
 namespace rkhs {
 
 const std::vector<std::string>& theory_metrics() {
-  static const std::vector<std::string> names{"power_function_sup", "projection_norm_H_to_C",
-                                              "sup_error", "l2_error", "gram_min_eigenvalue",
-                                              "gram_condition_number"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const auto& row : MetricTable<ApproximationMetric>::rows)
+      if (row.theory != TheoryLaw::none) out.emplace_back(row.name);
+    return out;
+  }();
   return names;
 }
 
 std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
                                       std::string* why) {
+  for (const auto& row : MetricTable<ApproximationMetric>::rows)
+    if (row.name == metric && row.theory != TheoryLaw::none)
+      return theory_rate(row, properties, why);
+  if (why)
+    *why = fmt::format("no theory rate for metric '{}' (theory covers {})", metric,
+                       fmt::join(theory_metrics(), ", "));
+  return std::nullopt;
+}
+
+std::optional<TheoryRate> theory_rate(const MetricInfo& row, const KernelProperties& properties,
+                                      std::string* why) {
   const int dimension = properties.dimension;
+  const std::string_view metric = row.name;
+  const TheoryLaw law = row.theory;
   auto none = [&](std::string reason) -> std::optional<TheoryRate> {
     if (why) *why = std::move(reason);
     return std::nullopt;
   };
-  const auto& known = theory_metrics();
-  if (std::find(known.begin(), known.end(), metric) == known.end())
+  if (law == TheoryLaw::none)
     return none(fmt::format("no theory rate for metric '{}' (theory covers {})", metric,
-                            fmt::join(known, ", ")));
+                            fmt::join(theory_metrics(), ", ")));
   TheoryRate theory;
   theory.dimension = dimension;
   if (properties.analytic) {
     theory.model = RateModel::exponential;
     theory.sharp = false;
-    theory.direction = metric == "gram_condition_number" ? +1 : -1;
+    theory.direction = law == TheoryLaw::gram_condition_number ? +1 : -1;
     theory.statement = fmt::format("{} {} at least exponentially in n (analytic kernel)", metric,
                                    theory.direction < 0 ? "decays" : "grows");
     return theory;
@@ -44,25 +60,26 @@ std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelPrope
                 "sobolev_order), so theory predicts no rate");
   const double tau = *properties.sobolev_order, d = dimension;
   const auto given = fmt::format("tau = {}, d = {}", format_real(tau), dimension);
-  theory.holds_for_any_centres =
-      metric == "power_function_sup" || metric == "sup_error" || metric == "l2_error";
-  if (metric == "power_function_sup" || metric == "sup_error") {
+  theory.holds_for_any_centres = law == TheoryLaw::power_function ||
+                                 law == TheoryLaw::error_sup_bound ||
+                                 law == TheoryLaw::error_l2_bound;
+  if (law == TheoryLaw::power_function || law == TheoryLaw::error_sup_bound) {
     theory.h_exponent = tau - d / 2;
-    theory.sharp = metric == "power_function_sup";
+    theory.sharp = law == TheoryLaw::power_function;
     theory.statement = fmt::format("{} {} h^(tau - d/2) = h^{} ({})", metric,
                                    theory.sharp ? "~" : "<= C", format_real(theory.h_exponent), given);
-  } else if (metric == "projection_norm_H_to_C") {
+  } else if (law == TheoryLaw::projection_norm) {
     // ||I - Pi||_{H -> C}: the power function for the H-orthogonal projection; within constants
     // of it for a uniformly bounded local projection onto a space of mesh h (docs/projections.md).
     theory.h_exponent = tau - d / 2;
     theory.statement = fmt::format(
         "{} ~ h^(tau - d/2) = h^{} ({}; a uniformly bounded projection onto a space of mesh h)",
         metric, format_real(theory.h_exponent), given);
-  } else if (metric == "l2_error") {
+  } else if (law == TheoryLaw::error_l2_bound) {
     theory.h_exponent = tau;
     theory.sharp = false;
     theory.statement = fmt::format("{} <= C h^tau = h^{} ({})", metric, format_real(tau), given);
-  } else if (metric == "gram_min_eigenvalue") {
+  } else if (law == TheoryLaw::gram_min_eigenvalue) {
     theory.h_exponent = 2 * tau - d;
     theory.statement = fmt::format("{} ~ q^(2 tau - d) = q^{} ({}; q ~ h)", metric,
                                    format_real(theory.h_exponent), given);

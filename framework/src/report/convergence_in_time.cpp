@@ -39,9 +39,7 @@ bool asks_for(const StudyDefinition& study, std::string_view metric) {
 std::vector<TimeConvergence> time_convergence(const RunRecord& run) {
   std::vector<TimeConvergence> out;
   const auto& study = run.study;
-  if (study.kind != StudyKind::adaptive || !asks_for(study, "gap_to_projection") ||
-      !asks_for(study, "interpolant_l2_error"))
-    return out;
+  if (!asks_for(study, "gap_to_projection") || !asks_for(study, "interpolant_l2_error")) return out;
   const bool laps_asked = asks_for(study, "laps_to_limit");
   const auto labels = group_labels(run.trials);
   for (const auto& gap : run.rates) {

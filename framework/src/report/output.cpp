@@ -167,13 +167,12 @@ namespace {
 // The flags of `result` that concern what the study reports: every flag but the floor flag
 // "<metric>_at_floor" of a metric the study does not report (a trial flags every metric it
 // computes; rows' own flags, such as power_function_at_floor, are always written).
-template <class Metric>
-std::vector<std::string> reported_flags_of(const StudyDefinition& study,
-                                           const std::vector<std::string>& flags) {
+std::vector<std::string> reported_flags(const StudyDefinition& study,
+                                        const std::vector<std::string>& flags) {
   std::vector<std::string> out;
   for (const auto& flag : flags) {
     bool unreported = false;
-    for (const auto& row : MetricTable<Metric>::rows)
+    for (const auto& row : study.kind_descriptor().metrics())
       if (flag == floor_flag(row) && flag != row.flag &&
           std::find(study.metrics.begin(), study.metrics.end(), row.name) == study.metrics.end())
         unreported = true;
@@ -182,13 +181,18 @@ std::vector<std::string> reported_flags_of(const StudyDefinition& study,
   return out;
 }
 
-std::vector<std::string> reported_flags(const StudyDefinition& study,
-                                        const std::vector<std::string>& flags) {
-  return study.kind == StudyKind::adaptive ? reported_flags_of<AdaptiveMetric>(study, flags)
-                                           : reported_flags_of<ApproximationMetric>(study, flags);
-}
-
 }  // namespace
+
+// The value of a trials.csv column a study kind declares (StudyKindOutputs::trial_columns).
+std::string kind_column_value(std::string_view column, const TrialResult& result) {
+  static const std::map<std::string_view, std::string (*)(const TrialResult&)> columns{
+      {"engine", [](const TrialResult& r) { return r.engine; }},
+  };
+  const auto it = columns.find(column);
+  if (it == columns.end())
+    throw std::logic_error(fmt::format("no writer for the trials.csv column '{}'", column));
+  return it->second(result);
+}
 
 std::string trials_csv(const RunRecord& run) {
   const auto columns = axis_columns(run.trials);
@@ -196,8 +200,8 @@ std::string trials_csv(const RunRecord& run) {
   header.push_back("n");
   header.insert(header.end(), run.study.metrics.begin(), run.study.metrics.end());
   for (const char* extra : {"status", "reason", "solve", "flags"}) header.push_back(extra);
-  const bool adaptive = run.study.kind == StudyKind::adaptive;
-  if (adaptive) header.push_back("engine");
+  const auto& kind_columns = run.study.kind_descriptor().outputs().trial_columns;
+  header.insert(header.end(), kind_columns.begin(), kind_columns.end());
   // The floors of the metrics that have one (MetricRow::floor), after the other columns.
   std::vector<std::string> floored;
   for (const auto& metric : run.study.metrics)
@@ -216,7 +220,7 @@ std::string trials_csv(const RunRecord& run) {
     row.push_back(result.reason);
     row.push_back(result.solve_method);
     row.push_back(fmt::format("{}", fmt::join(reported_flags(run.study, result.flags), ";")));
-    if (adaptive) row.push_back(result.engine);
+    for (const auto column : kind_columns) row.push_back(kind_column_value(column, result));
     for (const auto& metric : floored) {
       const auto position = run.study.metric_index(metric);
       row.push_back(position < result.floors.size() ? csv_number(result.floors[position]) : "");
@@ -369,10 +373,6 @@ std::string rates_csv(const RunRecord& run) {
 
 namespace {
 
-// The integration counts of an adaptive trial that its metrics hold already: reported with
-// the work counters, not counted twice.
-constexpr std::array<std::string_view, 2> adaptive_work_metrics = {"steps", "rhs_evaluations"};
-
 // Per trial: the work counters as a JSON object, or null. `source` says whether they were
 // counted in this run or when the stored record was written (the same code: a trial's hash
 // includes the code version, docs/results.md).
@@ -389,10 +389,11 @@ std::string trial_work_json(const StudyDefinition& study, const TrialResult& res
       json_string(result.reused ? "store" : "run"), w.kernel_evaluations,
       w.kernel_derivative_evaluations, w.factorisations, tracked(w.allocations),
       tracked(w.allocated_bytes), tracked(w.peak_bytes));
-  if (study.kind == StudyKind::adaptive)
-    for (const auto metric : adaptive_work_metrics)
-      out += fmt::format(", {}: {}", json_string(metric),
-                         json_number(result.metrics[study.metric_index(metric)]));
+  // The counts of work the kind's metrics hold already (an adaptive trial's steps): reported
+  // with the work counters, not counted twice.
+  for (const auto metric : study.kind_descriptor().outputs().work_metrics)
+    out += fmt::format(", {}: {}", json_string(metric),
+                       json_number(result.metrics[study.metric_index(metric)]));
   return out + "}";
 }
 
@@ -411,7 +412,8 @@ std::string study_work_json(const StudyDefinition& study, const std::vector<Tria
   WorkCounts total;
   total.allocations_tracked = true;
   std::size_t counted = 0, from_store = 0;
-  double steps = 0, rhs = 0;
+  const auto& work_metrics = study.kind_descriptor().outputs().work_metrics;
+  std::vector<double> sums(work_metrics.size(), 0.0);
   for (const auto& r : results) {
     if (!r.work) continue;
     ++counted;
@@ -423,11 +425,9 @@ std::string study_work_json(const StudyDefinition& study, const std::vector<Tria
     total.allocations += r.work->allocations;
     total.allocated_bytes += r.work->allocated_bytes;
     total.peak_bytes = std::max(total.peak_bytes, r.work->peak_bytes);
-    if (study.kind == StudyKind::adaptive) {
-      const double s = r.metrics[study.metric_index("steps")];
-      const double e = r.metrics[study.metric_index("rhs_evaluations")];
-      steps += std::isfinite(s) ? s : 0;
-      rhs += std::isfinite(e) ? e : 0;
+    for (std::size_t i = 0; i < work_metrics.size(); ++i) {
+      const double value = r.metrics[study.metric_index(work_metrics[i])];
+      sums[i] += std::isfinite(value) ? value : 0;
     }
   }
   total.allocations_tracked = total.allocations_tracked && counted > 0;
@@ -442,9 +442,8 @@ std::string study_work_json(const StudyDefinition& study, const std::vector<Tria
       counted, from_store, results.size() - counted, total.kernel_evaluations,
       total.kernel_derivative_evaluations, total.factorisations, tracked(total.allocations),
       tracked(total.allocated_bytes), tracked(total.peak_bytes));
-  if (study.kind == StudyKind::adaptive)
-    out += fmt::format(", \"steps\": {}, \"rhs_evaluations\": {}", json_number(steps),
-                       json_number(rhs));
+  for (std::size_t i = 0; i < work_metrics.size(); ++i)
+    out += fmt::format(", {}: {}", json_string(work_metrics[i]), json_number(sums[i]));
   return out + "}";
 }
 
@@ -705,10 +704,7 @@ std::vector<std::string> output_file_names(const RunRecord& run, bool with_repor
                                            bool with_plots) {
   std::vector<std::string> names{"trials.csv", "rates.csv", "summary.json", "rates.md",
                                  "rates.tex"};
-  if (run.study.kind == StudyKind::adaptive) {
-    names.push_back("estimates.csv");
-    names.push_back("timeseries.csv");
-  }
+  for (const auto file : run.study.kind_descriptor().outputs().files) names.emplace_back(file);
   if (with_plots) names.push_back("plots/");
   if (with_report) names.push_back("report.html");
   return names;
@@ -743,9 +739,16 @@ void write_outputs(const RunRecord& run, const std::filesystem::path& directory)
   write_file_atomically(directory / "summary.json", summary_json(run));
   write_file_atomically(directory / "rates.md", markdown_tables(run));
   write_file_atomically(directory / "rates.tex", latex_tables(run));
-  if (run.study.kind == StudyKind::adaptive) {
-    write_file_atomically(directory / "estimates.csv", estimates_csv(run));
-    write_file_atomically(directory / "timeseries.csv", timeseries_csv(run));
+  // The files a study kind declares (StudyKindOutputs::files), each by its writer.
+  static const std::map<std::string_view, std::string (*)(const RunRecord&)> kind_files{
+      {"estimates.csv", estimates_csv},
+      {"timeseries.csv", timeseries_csv},
+  };
+  for (const auto file : run.study.kind_descriptor().outputs().files) {
+    const auto writer = kind_files.find(file);
+    if (writer == kind_files.end())
+      throw std::logic_error(fmt::format("no writer for the output file '{}'", file));
+    write_file_atomically(directory / file, writer->second(run));
   }
 }
 

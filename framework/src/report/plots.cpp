@@ -1045,7 +1045,7 @@ PlotPlan plot_scripts(const RunRecord& run) {
   PlotPlan plan;
   auto& out = plan.scripts;
   for (const auto& metric : plotted_metrics(run.study)) convergence_scripts(run, metric, plan);
-  if (run.study.kind != StudyKind::adaptive) return plan;
+  if (!run.study.kind_descriptor().outputs().time_series_plots) return plan;
   if (!run.study.reference.name.empty()) work_precision_scripts(run, plan);
 
   // Per group: the estimates at each snapshot lap (largest n of the group) against the road,

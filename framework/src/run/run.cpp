@@ -14,8 +14,8 @@
 
 #include "rkhs/adaptive/finite_to_infinite.hpp"
 #include "rkhs/adaptive/metrics.hpp"
-#include "rkhs/adaptive/reference_resolution.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/adaptive/reference_resolution.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/centres.hpp"
 #include "rkhs/approx/metrics.hpp"
@@ -24,6 +24,7 @@
 #include "rkhs/core/concurrency.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/run/trial_cost.hpp"
+#include "rkhs/run/trial_kinds.hpp"
 
 namespace rkhs {
 
@@ -45,21 +46,11 @@ TrialResult stopped_while_running() {
   return result;
 }
 
-// Whether metric `position` (in metric_names(kind) order) is allowed to be NaN.
-bool metric_may_be_nan(StudyKind kind, std::size_t position) {
-  if (kind == StudyKind::adaptive) return MetricTable<AdaptiveMetric>::rows[position].may_be_nan;
-  return MetricTable<ApproximationMetric>::rows[position].may_be_nan;
-}
-
-// Whether an infinite value of metric `position` means something: only where the trial raised
-// the metric row's own flag (a singular Gram matrix's condition number is +inf, flagged
-// gram_singular). Any other infinity is an overflow of the trial's arithmetic.
-bool infinity_is_documented(StudyKind kind, std::size_t position,
-                            const std::vector<std::string>& flags) {
-  const std::string_view flag = kind == StudyKind::adaptive
-                                    ? MetricTable<AdaptiveMetric>::rows[position].flag
-                                    : MetricTable<ApproximationMetric>::rows[position].flag;
-  return !flag.empty() && std::find(flags.begin(), flags.end(), flag) != flags.end();
+// Whether an infinite value of `metric` means something: only where the trial raised the
+// metric's own flag (a singular Gram matrix's condition number is +inf, flagged gram_singular).
+// Any other infinity is an overflow of the trial's arithmetic.
+bool infinity_is_documented(const MetricInfo& metric, const std::vector<std::string>& flags) {
+  return !metric.flag.empty() && std::find(flags.begin(), flags.end(), metric.flag) != flags.end();
 }
 
 // The floor of a count N of the integrator's work (FloorRule::step_controller):
@@ -76,9 +67,7 @@ double step_controller_floor(double count) {
 // every value at or below its floor with floor_flag (once). Every metric the trial computed is
 // flagged, reported or not: what a trial computes is its identity, what it reports is not
 // (trials.csv writes the flags of the reported metrics, rkhs/report/output.hpp).
-template <class Metric>
-void apply_floors(TrialResult& result) {
-  const auto& rows = MetricTable<Metric>::rows;
+void apply_floors(const std::vector<MetricInfo>& rows, TrialResult& result) {
   result.floors.resize(result.metrics.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t i = 0; i < rows.size() && i < result.metrics.size(); ++i) {
     const auto& row = rows[i];
@@ -145,106 +134,25 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     const auto placement = centre_registry().find(trial.centres.name)->factory(trial.centres.parameters);
     const auto centres = placement->place(trial.n, study.domain, trial.seed);
     check_cancelled();
-    if (study.kind == StudyKind::adaptive) {
-      const auto plant = plant_registry().find(trial.plant.name)->factory(trial.plant.parameters);
-      const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
-      const auto integrator =
-          integrator_registry().find(trial.integrator.name)->factory(trial.integrator.parameters);
-      // The reference integrator of integration_error, when the study has one.
-      std::unique_ptr<Integrator> reference;
-      if (!study.reference.name.empty())
-        reference = integrator_registry().find(study.reference.name)->factory(
-            study.reference.parameters);
-      // rkhs_embedding with a kernel without features: H_N at the law's reference resolution
-      // stands in for H (rkhs/adaptive/reference_resolution.hpp).
-      std::unique_ptr<ReferenceResolvedKernel> resolved;
-      if (law->coordinates() == LawCoordinates::features && kernel->feature_count() == 0 &&
-          law->reference_resolution() > 0)
-        resolved = std::make_unique<ReferenceResolvedKernel>(*kernel, law->reference_resolution());
-      const AnyKernel& law_kernel = resolved ? *resolved : *kernel;
-      // The study's settings with this trial's lap count (a laps axis).
-      auto measured = measure_adaptive(law_kernel, *target, centres, *plant, *law, *integrator,
-                                       trial_adaptive_settings(study, trial),
-                                       study.evaluation_points, study.solver, reference.get(),
-                                       lap_maps, lap_maps ? lap_map_key(trial) : std::string());
-      if (!trial.projection.name.empty()) {
-        // Theorem 4.1: the finite estimator of the trial's projection beside the law's own
-        // (infinite-dimensional) one, on the same breakpoints.
-        const ProjectionRequest request{*kernel, trial.n, centres, study.solver};
-        const auto op =
-            build_projection(trial.projection.name, trial.projection.parameters, request);
-        check_cancelled();
-        const auto gaps = measure_estimate_gaps(law_kernel, *target, op, *plant, *law, *integrator,
-                                                trial_adaptive_settings(study, trial),
-                                                study.evaluation_points);
-        record_estimate_gaps(gaps, measured);
-      }
-      if (resolved) {
-        const auto grid = study.domain.uniform_points(study.evaluation_points);
-        measured.metrics[AdaptiveMetric::reference_norm_H_to_C] = resolved->norm_H_to_C(grid);
-        measured.floors[AdaptiveMetric::reference_norm_H_to_C] =
-            projection_norm_floor(*kernel, law->reference_resolution(), grid);
-      }
-      // integration_error is the integrator's actual error, which follows its step sequence:
-      // across processors and glibc's code paths it moved by up to a factor of 2 (1.07e-7
-      // against 5.26e-8), so it is known to its order of magnitude (a floor of 0.9 times its
-      // value, which flags nothing), and not below the reference's own tolerance (flagged).
-      if (reference) {
-        double& floor = measured.floors[AdaptiveMetric::integration_error];
-        floor = 0.9 * measured.metrics[AdaptiveMetric::integration_error];
-        for (const auto& [name, value] : study.reference.parameters.values())
-          if (name == "rtol") floor = std::max(floor, study.reference.parameters.real(name));
-      }
-      result.metrics = std::move(measured.metrics).values();
-      result.floors = std::move(measured.floors).values();
-      result.solve_method = std::move(measured.solve_method);
-      result.engine = std::move(measured.engine);
-      result.flags = std::move(measured.flags);
-      result.samples = std::move(measured.samples);
-      result.road = std::move(measured.road);
-      result.snapshots = std::move(measured.snapshots);
-      reference_seconds = measured.reference_seconds;
-    } else {
-      const std::string_view projection =
-          trial.projection.name.empty() ? default_projection : trial.projection.name;
-      ApproximationMeasurement measured;
-      if (projection == default_projection) {
-        // Interpolation at the centres: one Gram factorisation serves the interpolant, the
-        // power function (its norm ||I - Pi||_{H -> C}) and the operator, when asked for.
-        measured = measure_approximation(*kernel, *target, centres, study.evaluation_points,
-                                         study.solver, computed);
-      } else {
-        const ProjectionRequest request{*kernel, trial.n, centres, study.solver};
-        const auto op = build_projection(projection, trial.projection.parameters, request);
-        check_cancelled();
-        measured = measure_projection(*kernel, *target, op, study.evaluation_points,
-                                      study.solver, computed);
-      }
-      result.metrics = std::move(measured.metrics).values();
-      result.floors = std::move(measured.floors).values();
-      result.solve_method = std::move(measured.solve_method);
-      result.flags = std::move(measured.flags);
-    }
-    if (study.kind == StudyKind::adaptive)
-      apply_floors<AdaptiveMetric>(result);
-    else
-      apply_floors<ApproximationMetric>(result);
+    const TrialInputs inputs{study, trial, computed, *kernel, *target, centres, lap_maps};
+    reference_seconds = trial_kind(study.kind).measure(inputs, result);
+    const auto& catalogue = study.kind_descriptor().metrics();
+    apply_floors(catalogue, result);
     check_cancelled();
-    // Metrics that are undefined by design in some trials (MetricRow::may_be_nan: a single
+    // Metrics that are undefined by design in some trials (MetricInfo::may_be_nan: a single
     // centre has no separation; coefficient and Lyapunov metrics need a road in H_n).
-    const auto& names = study.all_metrics();
     // A value that overflowed is no measurement either: the trial fails rather than report it
     // ok. Every metric the trial computed is judged, reported or not, so that its status does
     // not depend on which of them a study prints.
-    for (std::size_t i = 0; i < names.size(); ++i) {
+    for (std::size_t i = 0; i < catalogue.size(); ++i) {
       if (!computed[i]) continue;
       const double value = result.metrics[i];
-      if (std::isnan(value) && !metric_may_be_nan(study.kind, i))
-        throw std::runtime_error(fmt::format("{} is NaN", names[i]));
-      if (std::isinf(value) && !infinity_is_documented(study.kind, i, result.flags))
+      if (std::isnan(value) && !catalogue[i].may_be_nan)
+        throw std::runtime_error(fmt::format("{} is NaN", catalogue[i].name));
+      if (std::isinf(value) && !infinity_is_documented(catalogue[i], result.flags))
         throw std::runtime_error(fmt::format(
             "{} overflowed to {}: the trial's values exceed the range of a double (1.8e308)",
-            names[i], value > 0 ? "+inf" : "-inf"));
+            catalogue[i].name, value > 0 ? "+inf" : "-inf"));
     }
     result.ok = true;
   } catch (const TrialCancelled&) {

@@ -9,6 +9,7 @@
 
 #include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/run/trial_kinds.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
@@ -95,9 +96,7 @@ AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const Tria
 }
 
 double estimated_trial_cost(const StudyDefinition& study, const TrialSpec& trial) {
-  if (study.kind != StudyKind::adaptive)
-    return approximation_trial_cost(trial.n, study.evaluation_points);
-  return adaptive_trial_cost(adaptive_trial_shape(study, trial), study.evaluation_points);
+  return trial_kind(study.kind).cost(study, trial, nullptr);
 }
 
 std::string lap_map_key(const TrialSpec& trial) {
@@ -115,17 +114,9 @@ std::string lap_map_key(const TrialSpec& trial) {
 std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
                                              const std::vector<TrialSpec>& trials) {
   std::vector<double> cost(trials.size());
-  std::set<std::string> mapped;  // lap maps already counted
-  for (std::size_t i = 0; i < trials.size(); ++i) {
-    cost[i] = estimated_trial_cost(study, trials[i]);
-    if (study.kind != StudyKind::adaptive) continue;
-    auto shape = adaptive_trial_shape(study, trials[i]);
-    if (shape.lap_map && !mapped.insert(lap_map_key(trials[i])).second) {
-      shape.lap_map = false;
-      shape.laps = 2;  // the first and the last lap, integrated; the map is shared
-      cost[i] = adaptive_trial_cost(shape, study.evaluation_points);
-    }
-  }
+  std::set<std::string> shared;  // work shared by several trials, already counted (lap maps)
+  const auto& kind = trial_kind(study.kind);
+  for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = kind.cost(study, trials[i], &shared);
   std::vector<std::size_t> order(trials.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(),

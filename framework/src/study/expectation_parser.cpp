@@ -17,6 +17,14 @@
 namespace rkhs::detail {
 namespace {
 
+// "approximation": the kinds of study whose metrics have a theory rate, for messages.
+std::string theory_kind_names() {
+  std::string names;
+  for (const auto* kind : study_kind_table())
+    if (kind->has_theory()) names += (names.empty() ? "" : ", ") + std::string(kind->name());
+  return names;
+}
+
 bool valid_tier_name(const std::string& name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
@@ -189,10 +197,11 @@ class ExpectationReader {
 
     if (theory) {
       e.kind = ExpectationKind::theory;
-      if (study_.kind != StudyKind::approximation)
+      if (!study_.kind_descriptor().has_theory())
         fail(src, theory->source(), "expect.theory",
-             fmt::format("theory rates are known for approximation studies only (this study is "
-                         "kind = \"{}\")", study_kind_name(study_.kind)));
+             fmt::format("theory rates are known for {} studies only (this study is "
+                         "kind = \"{}\")",
+                         theory_kind_names(), study_kind_name(study_.kind)));
     } else if (rate) {
       e.kind = ExpectationKind::rate;
       read_rate(*rate, tolerance != nullptr, e);

@@ -9,8 +9,6 @@
 #include <stdexcept>
 
 #include "rkhs/adaptive/adaptive.hpp"
-#include "rkhs/adaptive/metrics.hpp"
-#include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/random.hpp"
 
 namespace rkhs {
@@ -26,12 +24,11 @@ std::string PluginChoice::given_label() const {
 }
 
 std::string_view study_kind_name(StudyKind kind) noexcept {
-  return kind == StudyKind::adaptive ? "adaptive" : "approximation";
+  return describe(kind).name();
 }
 
 std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept {
-  for (const auto kind : study_kinds)
-    if (study_kind_name(kind) == name) return kind;
+  if (const auto* descriptor = find_study_kind(name)) return descriptor->kind();
   return std::nullopt;
 }
 
@@ -52,39 +49,20 @@ std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) n
 }
 
 const std::vector<std::string>& metric_names(StudyKind kind) {
-  return kind == StudyKind::adaptive ? adaptive_metric_names() : approximation_metric_names();
+  return describe(kind).metric_names();
 }
-
-namespace {
-template <class Metric>
-FloorRule floor_rule_in(std::string_view metric) {
-  for (const auto& row : MetricTable<Metric>::rows)
-    if (row.name == metric) return row.floor;
-  return FloorRule::exact;
-}
-}  // namespace
 
 FloorRule metric_floor_rule(StudyKind kind, std::string_view metric) {
-  return kind == StudyKind::adaptive ? floor_rule_in<AdaptiveMetric>(metric)
-                                     : floor_rule_in<ApproximationMetric>(metric);
+  const auto* row = describe(kind).find_metric(metric);
+  return row ? row->floor : FloorRule::exact;
 }
-
-namespace {
-template <class Metric>
-std::string axis_label_in(std::string_view metric) {
-  for (const auto& row : MetricTable<Metric>::rows)
-    if (row.name == metric) {
-      const bool physical =
-          row.unit == "m" || row.unit == "s" || row.unit == "1/s" || row.unit == "laps";
-      return physical ? fmt::format("{} ({})", row.label, row.unit) : std::string(row.label);
-    }
-  return std::string(metric);
-}
-}  // namespace
 
 std::string metric_axis_label(StudyKind kind, std::string_view metric) {
-  return kind == StudyKind::adaptive ? axis_label_in<AdaptiveMetric>(metric)
-                                     : axis_label_in<ApproximationMetric>(metric);
+  const auto* row = describe(kind).find_metric(metric);
+  if (!row) return std::string(metric);
+  const bool physical =
+      row->unit == "m" || row->unit == "s" || row->unit == "1/s" || row->unit == "laps";
+  return physical ? fmt::format("{} ({})", row->label, row->unit) : std::string(row->label);
 }
 
 const std::vector<std::string>& PlotStyle::legend_positions() {
@@ -102,42 +80,12 @@ std::size_t StudyDefinition::metric_index(std::string_view metric) const {
   return static_cast<std::size_t>(it - names.begin());
 }
 
-namespace {
-// The rules of computed_metrics(), once: calls need(metric, reason) for every metric an
-// approximation study's trials compute, reason "" for those of study.metrics.
-template <class Need>
-void for_each_needed_metric(const StudyDefinition& study, Need&& need) {
-  for (const auto& metric : study.metrics) need(metric, "");
-  if (study.abscissa == Abscissa::fill_distance) need("fill_distance", "abscissa = \"h\"");
-  for (const auto& expectation : study.expectations)
-    if (expectation.kind == ExpectationKind::theory) {
-      need("fill_distance", "theory expectations (quasi-uniformity)");
-      need("separation_distance", "theory expectations (quasi-uniformity)");
-    }
-}
-}  // namespace
-
 MetricSelection StudyDefinition::computed_metrics() const {
-  const auto& names = all_metrics();
-  if (kind == StudyKind::adaptive) return MetricSelection(names.size(), true);
-  MetricSelection computed(names.size(), false);
-  for_each_needed_metric(*this, [&](std::string_view metric, std::string_view) {
-    const auto it = std::find(names.begin(), names.end(), metric);
-    if (it != names.end()) computed[static_cast<std::size_t>(it - names.begin())] = true;
-  });
-  return computed;
+  return kind_descriptor().computed_metrics(*this);
 }
 
 std::vector<std::string> StudyDefinition::computed_metric_reasons() const {
-  std::vector<std::string> reasons;
-  if (kind == StudyKind::adaptive) return reasons;
-  for_each_needed_metric(*this, [&](std::string_view metric, std::string_view reason) {
-    const bool asked = std::find(metrics.begin(), metrics.end(), metric) != metrics.end();
-    if (!asked && !reason.empty() &&
-        std::find(reasons.begin(), reasons.end(), reason) == reasons.end())
-      reasons.emplace_back(reason);
-  });
-  return reasons;
+  return kind_descriptor().computed_metric_reasons(*this);
 }
 
 std::vector<std::string> StudyDefinition::computed_metric_names() const {

@@ -16,31 +16,21 @@ namespace rkhs {
 
 namespace {
 
-template <class Metric>
-std::string_view excluding_flag_in(std::string_view metric) {
-  for (const auto& row : MetricTable<Metric>::rows)
-    if (row.name == metric) return row.flag_excludes_from_fits ? row.flag : std::string_view();
-  return {};
-}
-
 // The row's flag and its floor flag, where they leave a value out of fits.
-template <class Metric>
-std::vector<std::string> excluding_flags_in(std::string_view metric) {
+std::vector<std::string> excluding_flags_of(const MetricInfo* row) {
   std::vector<std::string> flags;
-  for (const auto& row : MetricTable<Metric>::rows) {
-    if (row.name != metric || !row.flag_excludes_from_fits) continue;
-    if (!row.flag.empty()) flags.emplace_back(row.flag);
-    if (auto floor = floor_flag(row); !floor.empty() && floor != row.flag)
-      flags.push_back(std::move(floor));
-  }
+  if (!row || !row->flag_excludes_from_fits) return flags;
+  if (!row->flag.empty()) flags.emplace_back(row->flag);
+  if (auto floor = floor_flag(*row); !floor.empty() && floor != row->flag)
+    flags.push_back(std::move(floor));
   return flags;
 }
 
 }  // namespace
 
 std::string_view excluding_flag(StudyKind kind, std::string_view metric) {
-  return kind == StudyKind::adaptive ? excluding_flag_in<AdaptiveMetric>(metric)
-                                     : excluding_flag_in<ApproximationMetric>(metric);
+  const auto* row = describe(kind).find_metric(metric);
+  return row && row->flag_excludes_from_fits ? row->flag : std::string_view();
 }
 
 void fit_series(MetricSeries& series, const FitWindow& window) {
@@ -129,9 +119,7 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
               [&](auto a, auto b) { return trials[a].n < trials[b].n; });
     for (const auto& metric : study.metrics) {
       const std::size_t m = study.metric_index(metric);
-      const auto flags = study.kind == StudyKind::adaptive
-                             ? excluding_flags_in<AdaptiveMetric>(metric)
-                             : excluding_flags_in<ApproximationMetric>(metric);
+      const auto flags = excluding_flags_of(study.kind_descriptor().find_metric(metric));
       std::vector<std::string> seen;  // the flags found, in the order of `flags`
       MetricSeries series;
       series.metric = metric;

@@ -54,10 +54,22 @@ constexpr std::string_view floor_rule_name(FloorRule rule) {
   return "";
 }
 
-/// One row of a metric table; `id` is the row's position (checked at compile time).
-template <class Metric>
-struct MetricRow {
-  Metric id;
+/// What the approximation theory of the Sobolev and analytic kernels says about a metric
+/// (rkhs/rates/theory.hpp turns it into a rate for a kernel's properties; docs/verification.md).
+enum class TheoryLaw {
+  none,                   ///< no theory rate
+  power_function,         ///< ~ h^(tau - d/2), attained, for any centres
+  error_sup_bound,        ///< <= C h^(tau - d/2) (|f - Pi f| <= P ||f||_H), for any centres
+  error_l2_bound,         ///< <= C h^tau, for any centres
+  projection_norm,        ///< ~ h^(tau - d/2) for a uniformly bounded projection of mesh h
+  gram_min_eigenvalue,    ///< ~ q^(2 tau - d)
+  gram_condition_number,  ///< ~ n q^-(2 tau - d) = h^(-2 tau); grows
+};
+
+/// One metric of a study kind: everything the framework knows about it, in one place. The
+/// catalogue of a study kind (rkhs/study/study_kind.hpp) is its table's rows; `rkhs-study list
+/// metrics` prints them and docs/metrics.md is checked against that listing.
+struct MetricInfo {
   std::string_view name;  ///< column of trials.csv, key of study.metrics in study files
   /// A plot's axis label: a few words, no unit (the plots add physical units: m, s, laps), in
   /// gnuplot's enhanced text ("L^2 error": ^ and _ raise and lower the next character or {group})
@@ -77,7 +89,22 @@ struct MetricRow {
   /// work enum (ApproximationWork for approximation trials); 0 for a kind whose trials compute
   /// every metric (adaptive trials).
   unsigned needs = 0;
+  /// Taken on the evaluation grid s_m (a sup or an L2 norm over the domain): a study whose
+  /// grid is no finer than its centres is refused when it asks for one (docs/metrics.md).
+  bool on_grid = false;
+  TheoryLaw theory = TheoryLaw::none;  ///< what theory predicts for it (approximation trials)
 };
+
+/// One row of a metric table: the metric's facts and its identifier, the row's position
+/// (checked at compile time).
+template <class Metric>
+struct MetricRow : MetricInfo {
+  Metric id;
+};
+
+/// The rows of a table as MetricInfo, in table (output) order.
+template <class Metric>
+std::vector<MetricInfo> metric_infos();
 
 /// Specialised per metric enum with `static constexpr std::array<MetricRow<Metric>, N> rows`.
 template <class Metric>
@@ -97,13 +124,11 @@ constexpr const MetricRow<Metric>& metric_row(Metric metric) {
   return MetricTable<Metric>::rows[static_cast<std::size_t>(metric)];
 }
 
-/// The names of a table, in table (output) order.
 /// The flag a value of `row` at or below its floor carries: the row's own flag when it is a
 /// floor flag of this metric ("<stem>_at_floor" with the metric's name starting with <stem>:
 /// power_function_at_floor for power_function_sup), else "<name>_at_floor" ("" for an exact
 /// metric).
-template <class Metric>
-std::string floor_flag(const MetricRow<Metric>& row) {
+inline std::string floor_flag(const MetricInfo& row) {
   if (row.floor == FloorRule::exact) return {};
   constexpr std::string_view suffix = "_at_floor";
   if (row.flag.ends_with(suffix) &&
@@ -112,11 +137,18 @@ std::string floor_flag(const MetricRow<Metric>& row) {
   return std::string(row.name) + std::string(suffix);
 }
 
+/// The names of a table, in table (output) order.
 template <class Metric>
 std::vector<std::string> metric_table_names() {
   std::vector<std::string> names;
   for (const auto& row : MetricTable<Metric>::rows) names.emplace_back(row.name);
   return names;
+}
+
+template <class Metric>
+std::vector<MetricInfo> metric_infos() {
+  const auto& rows = MetricTable<Metric>::rows;
+  return std::vector<MetricInfo>(rows.begin(), rows.end());
 }
 
 /// The values of one trial's metrics, NaN until set. Written by identifier
@@ -203,45 +235,45 @@ struct MetricTable<ApproximationMetric> {
   using M = ApproximationMetric;
   using F = FloorRule;
   static constexpr std::array<MetricRow<M>, 13> rows{{
-      {M::fill_distance, "fill_distance", "fill distance h", F::exact, "m", "h = sup_x min_i |x - c_i|", false, "", true,
-       work_fill},
-      {M::separation_distance, "separation_distance", "separation distance q", F::exact, "m",
+      { {"fill_distance", "fill distance h", F::exact, "m", "h = sup_x min_i |x - c_i|", false, "", true,
+       work_fill}, M::fill_distance},
+      { {"separation_distance", "separation distance q", F::exact, "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, "", true,
-       work_separation},
-      {M::gram_condition_number, "gram_condition_number", "condition number of the Gram matrix", F::round_off, "1",
+       work_separation}, M::separation_distance},
+      { {"gram_condition_number", "condition number of the Gram matrix", F::round_off, "1",
        "lambda_max / lambda_min of G, +inf when singular", false, "gram_singular", true,
-       work_spectrum},
-      {M::gram_min_eigenvalue, "gram_min_eigenvalue", "smallest eigenvalue of the Gram matrix", F::round_off, "[k]", "lambda_min(G)", false,
+       work_spectrum, false, TheoryLaw::gram_condition_number}, M::gram_condition_number},
+      { {"gram_min_eigenvalue", "smallest eigenvalue of the Gram matrix", F::round_off, "[k]", "lambda_min(G)", false,
        "gram_singular", true,
-       work_spectrum},
-      {M::gram_max_eigenvalue, "gram_max_eigenvalue", "largest eigenvalue of the Gram matrix", F::round_off, "[k]", "lambda_max(G)", false, "", true,
-       work_spectrum},
-      {M::power_function_sup, "power_function_sup", "power function, sup norm", F::round_off, "sqrt([k])",
+       work_spectrum, false, TheoryLaw::gram_min_eigenvalue}, M::gram_min_eigenvalue},
+      { {"gram_max_eigenvalue", "largest eigenvalue of the Gram matrix", F::round_off, "[k]", "lambda_max(G)", false, "", true,
+       work_spectrum}, M::gram_max_eigenvalue},
+      { {"power_function_sup", "power function, sup norm", F::round_off, "sqrt([k])",
        "max_m P_n(s_m) = ||I - Pi_n||_{H -> C} on the grid", false, "power_function_at_floor", true,
-       work_power | work_cardinal},
-      {M::power_function_floor, "power_function_floor", "round-off level of the power function", F::round_off, "sqrt([k])",
+       work_power | work_cardinal, true, TheoryLaw::power_function}, M::power_function_sup},
+      { {"power_function_floor", "round-off level of the power function", F::round_off, "sqrt([k])",
        "round-off level of P_n: max_m sqrt(n eps lambda_max |G^-1 k_X(s_m)|^2)", false, "", true,
-       work_power | work_cardinal},
-      {M::l2_error, "l2_error", "L^2 error", F::round_off, "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
+       work_power | work_cardinal, true}, M::power_function_floor},
+      { {"l2_error", "L^2 error", F::round_off, "[f] sqrt(m)", "||f - Pi_n f|| in L2(Omega)", false,
        "l2_error_at_floor", true,
-       work_interpolant | work_residual | work_cardinal},
-      {M::sup_error, "sup_error", "sup-norm error", F::round_off, "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
+       work_interpolant | work_residual | work_cardinal, true, TheoryLaw::error_l2_bound}, M::l2_error},
+      { {"sup_error", "sup-norm error", F::round_off, "[f]", "max_m |f(s_m) - Pi_n f(s_m)|", false,
        "sup_error_at_floor", true,
-       work_interpolant | work_residual | work_cardinal},
-      {M::error_floor, "error_floor", "round-off level of the error", F::round_off, "[f]",
+       work_interpolant | work_residual | work_cardinal, true, TheoryLaw::error_sup_bound}, M::sup_error},
+      { {"error_floor", "round-off level of the error", F::round_off, "[f]",
        "round-off level of Pi_n f: max_m n eps lambda_max |G^-1 k_X(s_m)| |alpha|", false, "", true,
-       work_interpolant | work_cardinal},
-      {M::interpolant_native_norm, "interpolant_native_norm", "native norm of the interpolant", F::round_off, "[f] / sqrt([k])",
+       work_interpolant | work_cardinal, true}, M::error_floor},
+      { {"interpolant_native_norm", "native norm of the interpolant", F::round_off, "[f] / sqrt([k])",
        "||Pi_n f||_H = sqrt(alpha^T G alpha)", false, "", true,
-       work_interpolant},
-      {M::projection_norm_H_to_C, "projection_norm_H_to_C", "norm of I - Π from H to C", F::round_off, "sqrt([k])",
+       work_interpolant}, M::interpolant_native_norm},
+      { {"projection_norm_H_to_C", "norm of I - Π from H to C", F::round_off, "sqrt([k])",
        "max_m ||(I - Pi)^* k(s_m, .)||_H = ||I - Pi||_{H -> C} on the grid, from the "
        "projection's own definition (the power function for interpolation)",
        false, "projection_norm_at_floor", true,
-       work_projection_residual},
-      {M::projection_operator_norm, "projection_operator_norm", "norm of Π on H", F::round_off, "1",
+       work_projection_residual, false, TheoryLaw::projection_norm}, M::projection_norm_H_to_C},
+      { {"projection_operator_norm", "norm of Π on H", F::round_off, "1",
        "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
-       work_operator_norm},
+       work_operator_norm}, M::projection_operator_norm},
   }};
 };
 static_assert(table_in_enum_order<ApproximationMetric>());

@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include "rkhs/approx/metrics.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/rates/rates.hpp"
 
@@ -57,7 +58,13 @@ struct TheoryRate {
 std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
                                       std::string* why = nullptr);
 
-/// The metrics theory_rate knows.
+/// The same for a metric's catalogue row: its TheoryLaw (rkhs/approx/metrics.hpp) is what
+/// theory says about it; the name above looks up the approximation trials' row.
+std::optional<TheoryRate> theory_rate(const MetricInfo& metric, const KernelProperties& properties,
+                                      std::string* why = nullptr);
+
+/// The metrics theory_rate knows: the approximation metrics whose row has a TheoryLaw, in
+/// table order.
 const std::vector<std::string>& theory_metrics();
 
 /// The interval accepted for the fitted power-law slope against the study's abscissa, for an

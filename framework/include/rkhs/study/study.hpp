@@ -19,6 +19,7 @@
 #include "rkhs/core/parameters.hpp"
 #include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/study/expectation.hpp"
+#include "rkhs/study/study_kind.hpp"
 
 namespace rkhs {
 
@@ -72,15 +73,7 @@ struct StudyLimits {
   double matrix_megabytes = 2048;    ///< a trial whose dense matrices exceed this fails up front
 };
 
-/// What the trials of a study do: approximate a target by kernel interpolation at n centres,
-/// or learn it with an adaptive estimator driven along the track (docs/model.md).
-enum class StudyKind { approximation, adaptive };
-
-/// Every study kind, in the order `rkhs-study list metrics` prints them.
-inline constexpr StudyKind study_kinds[] = {StudyKind::approximation, StudyKind::adaptive};
-
-/// "approximation", "adaptive": the name study files (`kind = ...`), summary.json and
-/// report.html use.
+/// "approximation", "adaptive": the name of `kind` (describe(kind).name()).
 std::string_view study_kind_name(StudyKind kind) noexcept;
 
 /// The kind `name` stands for; std::nullopt for an unknown name.
@@ -126,7 +119,7 @@ struct StudyDefinition {
   std::string name;
   std::string description;
   std::string source;  ///< the file it was read from
-  StudyKind kind = StudyKind::approximation;
+  StudyKind kind{};    ///< the first kind of study_kind_table(), approximation, by default
   Domain domain;
   std::vector<std::size_t> n_values;  ///< increasing, distinct
   std::size_t evaluation_points = 4096;
@@ -144,7 +137,7 @@ struct StudyDefinition {
   double constant_within = default_constant_within;
   SolverOptions solver;
   StudyLimits limits;
-  AdaptiveSettings adaptive;  ///< StudyKind::adaptive only
+  AdaptiveSettings adaptive;  ///< adaptive studies only
   /// [adaptive] laps given as a list: the values of the laps axis, in the file's order
   /// (+infinity for "limit"), nested just outside n. Empty when laps is one value, which is
   /// then adaptive.laps; with the axis, adaptive.laps is NaN and each trial's lap count is
@@ -163,6 +156,9 @@ struct StudyDefinition {
   /// The Cartesian product kernels x targets x centres [x projections] [x plants x laws x
   /// integrators] [x laps] x n, n varying fastest.
   std::vector<TrialSpec> trials() const;
+
+  /// What this study's kind is (rkhs/study/study_kind.hpp).
+  const StudyKindDescriptor& kind_descriptor() const noexcept { return describe(kind); }
 
   /// One axis of the trial grid: what it is called (singular and plural) and how many values
   /// it has. grid_axes() lists the axes this study's kind has, in the order trials() nests
@@ -205,7 +201,7 @@ AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const Tri
 /// Every metric a trial of `kind` measures, in output order.
 const std::vector<std::string>& metric_names(StudyKind kind);
 
-/// How the floor of `metric` (a metric of a `kind` trial) is estimated (MetricRow::floor);
+/// How the floor of `metric` (a metric of a `kind` trial) is estimated (MetricInfo::floor);
 /// FloorRule::exact for an unknown name.
 FloorRule metric_floor_rule(StudyKind kind, std::string_view metric);
 
