@@ -88,11 +88,22 @@ int command_list(const std::string& kind) {
       list_registry(Kind::registry(), std::cout);
   });
   if (all || kind == "metric" || kind == "metrics") {
+    // One row per metric of each kind's catalogue (rkhs/approx/metrics.hpp, MetricInfo);
+    // columns are separated by at least two spaces (docs/metrics.md, "The catalogue", is
+    // checked against this listing).
     for (const auto* study_kind : study_kind_table()) {
       std::cout << "metrics (" << study_kind->name() << " trials):\n";
+      const auto row = [](auto name, auto unit, auto floor, auto nan, auto grid, auto theory,
+                          auto flag) {
+        return fmt::format("  {:<28}  {:<16}  {:<15}  {:<3}  {:<4}  {:<21}  {}\n", name, unit,
+                           floor, nan, grid, theory, flag);
+      };
+      std::cout << row("metric", "unit", "floor", "NaN", "grid", "theory", "flag");
       for (const auto& metric : study_kind->metrics())
-        std::cout << fmt::format("  {:<28} floor: {}\n", metric.name,
-                                 floor_rule_name(metric.floor));
+        std::cout << row(metric.name, metric.unit, floor_rule_name(metric.floor),
+                         metric.may_be_nan ? "yes" : "no", metric.on_grid ? "yes" : "no",
+                         theory_law_name(metric.theory),
+                         metric.flag.empty() ? std::string_view("-") : metric.flag);
     }
   }
   if (const auto plugins = loaded_plugins(); all && !plugins.empty()) {

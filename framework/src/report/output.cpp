@@ -202,7 +202,7 @@ std::string trials_csv(const RunRecord& run) {
   for (const char* extra : {"status", "reason", "solve", "flags"}) header.push_back(extra);
   const auto& kind_columns = run.study.kind_descriptor().outputs().trial_columns;
   header.insert(header.end(), kind_columns.begin(), kind_columns.end());
-  // The floors of the metrics that have one (MetricRow::floor), after the other columns.
+  // The floors of the metrics that have one (MetricInfo::floor), after the other columns.
   std::vector<std::string> floored;
   for (const auto& metric : run.study.metrics)
     if (metric_floor_rule(run.study.kind, metric) != FloorRule::exact) {

@@ -62,7 +62,7 @@ double step_controller_floor(double count) {
   return 0.02 * std::abs(count) + 3 * std::sqrt(std::abs(count));
 }
 
-// Completes a measured trial's floors by their rules (MetricRow::floor): none for an exact
+// Completes a measured trial's floors by their rules (MetricInfo::floor): none for an exact
 // metric or a NaN value, step_controller_floor for the step controller's counts, and flags
 // every value at or below its floor with floor_flag (once). Every metric the trial computed is
 // flagged, reported or not: what a trial computes is its identity, what it reports is not

@@ -40,7 +40,7 @@ const std::vector<std::string>& approximation_metric_names();
 
 struct ApproximationMeasurement {
   MetricValues<ApproximationMetric> metrics;  ///< in approximation_metric_names() order
-  /// The floor of each metric (MetricRow::floor; NaN: exact, or not estimated by this trial).
+  /// The floor of each metric (MetricInfo::floor; NaN: exact, or not estimated by this trial).
   MetricValues<ApproximationMetric> floors;
   std::string solve_method;     ///< GramSolver::method()
   std::vector<std::string> flags;  ///< gram_singular, power_function_at_floor, sup_error_at_floor, ...
@@ -53,7 +53,7 @@ double solve_round_off(const GramSpectrum& spectrum, Eigen::Index n);
 
 /// Measures Pi_n for `kernel` at `centres` on `evaluation_points` uniform points of the
 /// kernel's domain: the metrics `selection` names (empty: all), computing only what they need
-/// (MetricRow::needs; the others are NaN). The Gram matrix is assembled and factorised once;
+/// (MetricInfo::needs; the others are NaN). The Gram matrix is assembled and factorised once;
 /// the power function, the errors and their floors come from one blocked pass over the points
 /// (rkhs/core/concurrency.hpp run_parts: blocks run on idle threads of the caller's arena,
 /// with results independent of how they are scheduled); projection_norm_H_to_C is the power

@@ -66,6 +66,21 @@ enum class TheoryLaw {
   gram_condition_number,  ///< ~ n q^-(2 tau - d) = h^(-2 tau); grows
 };
 
+/// The law's identifier ("power_function", ...), as `rkhs-study list metrics` prints it; "-"
+/// for none.
+constexpr std::string_view theory_law_name(TheoryLaw law) {
+  switch (law) {
+    case TheoryLaw::none: return "-";
+    case TheoryLaw::power_function: return "power_function";
+    case TheoryLaw::error_sup_bound: return "error_sup_bound";
+    case TheoryLaw::error_l2_bound: return "error_l2_bound";
+    case TheoryLaw::projection_norm: return "projection_norm";
+    case TheoryLaw::gram_min_eigenvalue: return "gram_min_eigenvalue";
+    case TheoryLaw::gram_condition_number: return "gram_condition_number";
+  }
+  return "-";
+}
+
 /// One metric of a study kind: everything the framework knows about it, in one place. The
 /// catalogue of a study kind (rkhs/study/study_kind.hpp) is its table's rows; `rkhs-study list
 /// metrics` prints them and docs/metrics.md is checked against that listing.
@@ -174,7 +189,7 @@ class MetricValues {
 };
 
 /// The parts of an approximation trial's work, as bits: a trial computes the union of the needs
-/// of the metrics it is asked for (MetricRow::needs, approximation_work()) and nothing else.
+/// of the metrics it is asked for (MetricInfo::needs, approximation_work()) and nothing else.
 enum ApproximationWork : unsigned {
   /// The fill distance of the centres (a branch and bound over the domain in d > 1).
   work_fill = 1u << 0,
@@ -203,7 +218,7 @@ enum ApproximationWork : unsigned {
 /// every metric.
 using MetricSelection = std::vector<bool>;
 
-/// The union of MetricRow::needs over the metrics `selection` names (every metric when empty).
+/// The union of MetricInfo::needs over the metrics `selection` names (every metric when empty).
 template <class Metric>
 unsigned work_needed(const MetricSelection& selection) {
   unsigned work = 0;

@@ -192,7 +192,7 @@ AsymptoticWindow detect_asymptotic_window(std::span<const double> u, std::span<c
 /// std::invalid_argument when the sizes differ or confidence is not in (0, 1). A non-empty
 /// `window` restricts the points (h_from and h_to apply to x) and replaces the automatic
 /// window; fewer than 2 points in it leave both models without a fit. `floors` (empty, or one
-/// absolute floor per point: MetricRow::floor) give the fits' FitFloors and the evidence's.
+/// absolute floor per point: MetricInfo::floor) give the fits' FitFloors and the evidence's.
 /// `constant_within` is the relative band of detect_constant.
 SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
                               std::span<const double> y, const std::vector<bool>& usable,

@@ -26,7 +26,7 @@ struct TrialResult {
   bool ok = false;
   std::string reason;             ///< why the trial failed (empty when ok)
   std::vector<double> metrics;    ///< aligned with study.all_metrics(); NaN if not measured
-  /// The floor of each metric, aligned with `metrics` (MetricRow::floor, docs/metrics.md
+  /// The floor of each metric, aligned with `metrics` (MetricInfo::floor, docs/metrics.md
   /// "Floors"); NaN for an exact metric or one whose floor the trial did not estimate. Empty for
   /// a result stored before floors were recorded.
   std::vector<double> floors;

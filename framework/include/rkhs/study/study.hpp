@@ -179,7 +179,7 @@ struct StudyDefinition {
   /// approximation study `metrics`, with the fill distance when rates are fitted against h and
   /// the fill and separation distances when an expectation compares with theory (which judges
   /// the centres' quasi-uniformity); a trial then does only the work these need
-  /// (MetricRow::needs) and leaves the others NaN. Every metric for an adaptive study, whose
+  /// (MetricInfo::needs) and leaves the others NaN. Every metric for an adaptive study, whose
   /// trials compute all of them.
   MetricSelection computed_metrics() const;
   /// The names of computed_metrics(), in output order.
@@ -206,7 +206,7 @@ const std::vector<std::string>& metric_names(StudyKind kind);
 FloorRule metric_floor_rule(StudyKind kind, std::string_view metric);
 
 /// The y axis label of `metric` (a metric of a `kind` trial) in its plots: the metric table's
-/// label (MetricRow::label, gnuplot enhanced text) with the unit in parentheses when it is a
+/// label (MetricInfo::label, gnuplot enhanced text) with the unit in parentheses when it is a
 /// physical one (m, s, 1/s, laps); the name itself for an unknown metric.
 std::string metric_axis_label(StudyKind kind, std::string_view metric);
 
