@@ -92,12 +92,6 @@ constexpr bool table_in_enum_order() {
   return true;
 }
 
-template <class Metric>
-constexpr const MetricRow<Metric>& metric_row(Metric metric) {
-  return MetricTable<Metric>::rows[static_cast<std::size_t>(metric)];
-}
-
-/// The names of a table, in table (output) order.
 /// The flag a value of `row` at or below its floor carries: the row's own flag when it is a
 /// floor flag of this metric ("<stem>_at_floor" with the metric's name starting with <stem>:
 /// power_function_at_floor for power_function_sup), else "<name>_at_floor" ("" for an exact
@@ -112,6 +106,7 @@ std::string floor_flag(const MetricRow<Metric>& row) {
   return std::string(row.name) + std::string(suffix);
 }
 
+/// The names of a table, in table (output) order.
 template <class Metric>
 std::vector<std::string> metric_table_names() {
   std::vector<std::string> names;
