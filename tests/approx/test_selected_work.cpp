@@ -54,7 +54,7 @@ TEST_CASE("a metric's needs include what its round-off flag needs", "[approximat
   // The flags of the power function and the errors compare with floors that need
   // |G^-1 k_X(s)|^2: a second triangular solve per point.
   for (const auto m : {M::power_function_sup, M::l2_error, M::sup_error})
-    CHECK((metric_row(m).needs & work_cardinal) != 0);
+    CHECK((MetricTable<M>::rows[static_cast<std::size_t>(m)].needs & work_cardinal) != 0);
   CHECK(work_needed<M>(only({M::fill_distance})) == work_fill);
   CHECK((work_needed<M>(only({M::gram_condition_number})) & work_power) == 0);
   // Every metric needs something, and every part of the work serves some metric.

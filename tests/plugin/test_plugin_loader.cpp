@@ -64,9 +64,9 @@ TEST_CASE("the example plugin loads, registers its kernel once and says what it 
   CHECK(plugin.abi_version == RKHS_PLUGIN_ABI_VERSION);
   CHECK(plugin.rkhs_study_version == build_info().version);
   CHECK(plugin.file == fs::canonical(module("inverse_multiquadric")));
-  CHECK(plugin.kernels == std::vector<std::string>{"inverse_multiquadric"});
-  CHECK(plugin.centres.empty());
-  CHECK(plugin.targets.empty());
+  CHECK(plugin.registered.at("kernel") == std::vector<std::string>{"inverse_multiquadric"});
+  CHECK(plugin.registered.at("centres").empty());
+  CHECK(plugin.registered.at("target").empty());
   REQUIRE(kernel_registry().find("inverse_multiquadric"));
   CHECK(registration_errors().empty());
 
@@ -227,7 +227,7 @@ TEST_CASE("a plugin unloaded by a test leaves the registries as they were and lo
   const auto kernels = kernel_registry().names();
   for (int round = 0; round < 2; ++round) {
     const auto plugin = load_plugin(module("inverse_multiquadric"));
-    CHECK(plugin.kernels == std::vector<std::string>{"inverse_multiquadric"});
+    CHECK(plugin.registered.at("kernel") == std::vector<std::string>{"inverse_multiquadric"});
     CHECK(kernel_registry().find("inverse_multiquadric"));
     CHECK(unload_plugin(module("inverse_multiquadric")));
     CHECK(kernel_registry().names() == kernels);
@@ -240,10 +240,10 @@ TEST_CASE("a module may register plants and learning laws: a study runs with the
   const auto plants = plant_registry().names();
   const auto laws = law_registry().names();
   const auto plugin = load_plugin(module("adaptive_parts"));
-  CHECK(plugin.plants == std::vector<std::string>{"test_mass_spring"});
-  CHECK(plugin.laws == std::vector<std::string>{"test_scaled_gradient"});
-  CHECK(plugin.kernels.empty());
-  CHECK(plugin.integrators.empty());
+  CHECK(plugin.registered.at("plant") == std::vector<std::string>{"test_mass_spring"});
+  CHECK(plugin.registered.at("law") == std::vector<std::string>{"test_scaled_gradient"});
+  CHECK(plugin.registered.at("kernel").empty());
+  CHECK(plugin.registered.at("integrator").empty());
   // The plugin's plant and law are the built-in linear plant and gradient law with the same A,
   // B and Gamma: the trials must agree bit for bit.
   const std::string common = R"(
@@ -305,7 +305,7 @@ TEST_CASE("a plugin module's projection runs in a study like the built-in one", 
   const auto plugin = load_plugin(module("projection_part"));
   CHECK(plugin.registered.at("projection") ==
         std::vector<std::string>{"test_plain_interpolation"});
-  CHECK(plugin.kernels.empty());
+  CHECK(plugin.registered.at("kernel").empty());
   const std::string common = R"(
 [study]
 name = "plugin_projection"

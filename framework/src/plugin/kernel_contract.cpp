@@ -7,248 +7,13 @@
 #include <cmath>
 #include <limits>
 
+#include "contract_checks.hpp"
 #include "rkhs/core/random.hpp"
 #include "rkhs/kernel/kernel_algorithms.hpp"
 
 namespace rkhs {
 
-namespace {
-
-constexpr double epsilon = std::numeric_limits<double>::epsilon();
-
-std::string g(double value) {
-  return fmt::format("{:.3g}", value);
-}
-
-class Checks {
- public:
-  explicit Checks(ContractReport& report) : report_(report) {}
-  void add(std::string name, bool passed, std::string detail) {
-    report_.checks.push_back({std::move(name), passed, false, std::move(detail)});
-  }
-  void skip(std::string name, std::string why) {
-    report_.checks.push_back({std::move(name), true, true, std::move(why)});
-  }
-  /// "measured <= tolerance" checks.
-  void at_most(std::string name, std::string what, double measured, double tolerance) {
-    add(std::move(name), measured <= tolerance,
-        fmt::format("{} = {} (tolerance {})", what, g(measured), g(tolerance)));
-  }
-
- private:
-  ContractReport& report_;
-};
-
-// Smallest eigenvalue of G relative to round-off: PSD to working precision when
-// lambda_min >= -64 n eps lambda_max (eigenvalue error of a symmetric solver ~ n eps ||G||).
-struct Spectrum {
-  Eigen::VectorXd lambda;
-  double allowed_negative = 0;
-};
-Spectrum spectrum_of(const Eigen::MatrixXd& gram) {
-  Spectrum s;
-  s.lambda =
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(gram, Eigen::EigenvaluesOnly).eigenvalues();
-  s.allowed_negative = 64 * static_cast<double>(gram.rows()) * epsilon * s.lambda.maxCoeff();
-  return s;
-}
-
-// Distance from s to the nearest of the sorted points `kinks` (periodic distance on a periodic
-// domain); infinity when there are none.
-double distance_to_nearest(const Domain& domain, const std::vector<double>& kinks, double s) {
-  double nearest = std::numeric_limits<double>::infinity();
-  if (kinks.empty()) return nearest;
-  const double x = domain.wrap(s);
-  const auto next = std::lower_bound(kinks.begin(), kinks.end(), x);
-  if (next != kinks.end()) nearest = std::min(nearest, domain.distance(x, *next));
-  if (next != kinks.begin()) nearest = std::min(nearest, domain.distance(x, *(next - 1)));
-  if (domain.periodic) {
-    nearest = std::min(nearest, domain.distance(x, kinks.front()));
-    nearest = std::min(nearest, domain.distance(x, kinks.back()));
-  }
-  return nearest;
-}
-
-// The derivative checks (header): derivative() against Richardson extrapolation, and a basis'
-// derivatives against derivative().
-void check_derivatives(const AnyKernel& kernel, double scale, Checks& checks) {
-  const Domain& domain = kernel.domain();
-  const double length = domain.length;
-  const double radius = kernel.properties().support_radius;
-  auto kinks = kernel.kink_points();
-  std::sort(kinks.begin(), kinks.end());
-  const auto centres = golden_ratio_points(7, length, 0.42);
-  const auto points = golden_ratio_points(29, length, 0.17);
-
-  // Where k(c, .) may not be smooth: the kernel's kink points, s = c, |s - c| = radius (a
-  // stationary kernel's profile may have kinks there), and an interval's ends. The reference
-  // needs a smooth stretch around s; pairs closer than 1e-6 L to one are left out.
-  struct Pair {
-    double centre, point, derivative, reference;
-  };
-  std::vector<Pair> pairs;
-  int left_out = 0;
-  double largest_slope = 0;
-  for (double c : centres) {
-    for (double s : points) {
-      double gap = std::min(distance_to_nearest(domain, kinks, s), domain.distance(s, c));
-      if (radius > 0)
-        gap = std::min({gap, domain.distance(s, c + radius), domain.distance(s, c - radius)});
-      if (!domain.periodic) gap = std::min({gap, s, length - s});
-      if (gap < 1e-6 * length) {
-        ++left_out;
-        continue;
-      }
-      double error = 0;
-      const double reference =
-          richardson_derivative([&](double t) { return kernel.evaluate(c, t); }, s,
-                                std::min(0.5 * gap, 0.05 * length), error);
-      pairs.push_back({c, s, kernel.derivative(c, s), reference});
-      largest_slope = std::max(largest_slope, std::abs(reference));
-    }
-  }
-  // A slope scale with the units of dk/ds, nonzero for a kernel whose sections are flat.
-  const double slope_scale = std::max(largest_slope, scale / length);
-  double worst = 0;
-  std::string worst_at = "";
-  for (const auto& pair : pairs) {
-    const double deviation = std::abs(pair.derivative - pair.reference) / slope_scale;
-    if (!(deviation <= worst)) {  // NaN too
-      worst = std::isnan(deviation) ? std::numeric_limits<double>::infinity() : deviation;
-      worst_at = fmt::format(" at c = {}, s = {}: {} against {}", g(pair.centre), g(pair.point),
-                             g(pair.derivative), g(pair.reference));
-    }
-  }
-  if (pairs.empty()) {
-    checks.skip("derivative", "every sample point is within 1e-6 L of a possible kink");
-  } else {
-    checks.at_most(
-        "derivative",
-        fmt::format("{} ({}) at {} pairs (c, s), max |dk/ds - Richardson| / "
-                    "max(max |dk/ds|, max k / L){}",
-                    kernel.has_exact_derivative() ? "closed form" : "difference quotient",
-                    kernel.name(), pairs.size(), worst_at),
-        worst, 1e-6);
-  }
-
-  // A basis' derivatives: evaluate_derivative against derivative(c_i, s), at scattered points
-  // and at the centres themselves; evaluate_mapped_derivative against T dphi(s).
-  const auto basis_centres = golden_ratio_points(12, length, 0.63);
-  const auto basis = kernel.basis(basis_centres);
-  Random random(hash64(kernel.name() + " derivative"));
-  Eigen::MatrixXd map(5, 12);
-  for (Eigen::Index i = 0; i < map.rows(); ++i)
-    for (Eigen::Index j = 0; j < map.cols(); ++j) map(i, j) = 2 * random.uniform() - 1;
-  basis->set_map(map);
-  const double map_norm = map.cwiseAbs().rowwise().sum().maxCoeff();
-  Eigen::VectorXd dphi(12), mapped(5);
-  double basis_error = 0, mapped_error = 0;
-  auto compare_at = [&](double s) {
-    basis->evaluate_derivative(s, dphi.data());
-    for (Eigen::Index i = 0; i < 12; ++i)
-      basis_error = std::max(
-          basis_error, std::abs(dphi(i) - kernel.derivative(basis_centres[i], s)) / slope_scale);
-    basis->evaluate_mapped_derivative(s, mapped.data());
-    mapped_error = std::max(mapped_error,
-                            (mapped - map * dphi).cwiseAbs().maxCoeff() / (slope_scale * map_norm));
-    if (std::isnan(dphi.sum() + mapped.sum()))
-      basis_error = std::numeric_limits<double>::infinity();
-  };
-  for (double s : points) compare_at(s);
-  for (double c : basis_centres) compare_at(c);
-  // Closed forms: the same products summed in another order, ~n eps. Difference quotients of a
-  // feature basis difference Phi_c f(s) (or T Phi_c f(s)), rounded unlike k(c, s): the quotient
-  // amplifies that rounding by 1 / h, so up to ~16 eps max k / h more.
-  const double step = DerivativeStencil::relative_step * length;
-  const double tolerance =
-      1e-12 + (kernel.has_exact_derivative() ? 0.0 : 16 * epsilon * scale / (step * slope_scale));
-  checks.at_most("basis derivative",
-                 "max |evaluate_derivative - derivative(c_i, s)|, |evaluate_mapped_derivative - "
-                 "T dphi| / slope scale, at 29 points and the 12 centres",
-                 std::max(basis_error, mapped_error), tolerance);
-}
-
-// The gradient check (d > 1): each component of gradient_point(c, y) against Richardson
-// extrapolation of k(c, .) along that axis, where the section is smooth along the stretch.
-void check_gradient(const AnyKernel& kernel, double scale, Checks& checks,
-                    const std::function<std::vector<double>(std::size_t, double)>& scatter) {
-  const Domain& domain = kernel.domain();
-  const auto d = static_cast<std::size_t>(domain.dimension);
-  const double radius = kernel.properties().support_radius;
-  auto kinks = kernel.kink_points();  // along axis 0; axis a has them scaled by L_a / L
-  std::sort(kinks.begin(), kinks.end());
-  const auto centres = scatter(5, 0.42), points = scatter(19, 0.17);
-  double largest_slope = 0, worst = 0;
-  std::string worst_at;
-  struct Component {
-    std::size_t centre, point, axis;
-    double gradient, reference;
-  };
-  std::vector<Component> components;
-  std::vector<double> c(d), y(d), gradient(d), moved(d);
-  int left_out = 0;
-  for (std::size_t i = 0; i < centres.size() / d; ++i)
-    for (std::size_t m = 0; m < points.size() / d; ++m) {
-      std::copy_n(centres.begin() + static_cast<std::ptrdiff_t>(i * d), d, c.begin());
-      std::copy_n(points.begin() + static_cast<std::ptrdiff_t>(m * d), d, y.begin());
-      kernel.gradient_point(c, y, gradient);
-      double distance2 = 0;
-      for (std::size_t a = 0; a < d; ++a) {
-        const double t = domain.difference(c[a], y[a], static_cast<int>(a));
-        distance2 += t * t;
-      }
-      const double distance = std::sqrt(distance2);
-      for (std::size_t a = 0; a < d; ++a) {
-        const auto axis = static_cast<int>(a);
-        const double extent = domain.extent(axis);
-        // Smooth along axis a near y: away from the centre, the support's sphere, the axis'
-        // kinks and (on a box) its faces.
-        double gap = distance;
-        if (radius > 0) gap = std::min(gap, std::abs(distance - radius));
-        for (double kink : kinks) {
-          const double position = kink * extent / domain.length;
-          gap = std::min(gap, std::abs(domain.difference(position, y[a], axis)));
-        }
-        if (!domain.periodic) gap = std::min({gap, y[a], extent - y[a]});
-        if (gap < 1e-6 * extent) {
-          ++left_out;
-          continue;
-        }
-        double error = 0;
-        const double reference = richardson_derivative(
-            [&](double t) {
-              moved = y;
-              moved[a] = t;
-              return kernel.evaluate_point(c, moved);
-            },
-            y[a], std::min(0.5 * gap, 0.05 * extent), error);
-        components.push_back({i, m, a, gradient[a], reference});
-        largest_slope = std::max(largest_slope, std::abs(reference));
-      }
-    }
-  const double slope_scale = std::max(largest_slope, scale / domain.length);
-  for (const auto& component : components) {
-    const double deviation = std::abs(component.gradient - component.reference) / slope_scale;
-    if (!(deviation <= worst)) {
-      worst = std::isnan(deviation) ? std::numeric_limits<double>::infinity() : deviation;
-      worst_at = fmt::format(" at centre {}, point {}, axis {}: {} against {}", component.centre,
-                             component.point, component.axis + 1, g(component.gradient),
-                             g(component.reference));
-    }
-  }
-  if (components.empty()) {
-    checks.skip("gradient", "every sample point is within 1e-6 L of a possible kink");
-    return;
-  }
-  checks.at_most("gradient",
-                 fmt::format("{} ({}) at {} components (centre, point, axis), max |dk/dy_a - "
-                             "Richardson| / max(max |dk/dy_a|, max k / L){}",
-                             kernel.has_exact_gradient() ? "closed form" : "difference quotient",
-                             kernel.name(), components.size(), worst_at),
-                 worst, 1e-6);
-}
-
-}  // namespace
+using namespace contract_detail;
 
 double richardson_derivative(const std::function<double(double)>& f, double s, double largest_step,
                              double& error) {
@@ -367,23 +132,11 @@ std::vector<double> scattered_points(const Domain& domain, std::size_t count, do
   return out;
 }
 
-ContractReport check_kernel_contract(const AnyKernel& kernel) {
-  ContractReport report;
-  Checks checks(report);
-  const Domain& domain = kernel.domain();
-  const double length = domain.length;
-  const auto d_points = static_cast<std::size_t>(domain.dimension);
-  const auto points = scattered_points(domain, 61, 0.1234);
-  const std::size_t point_count = domain.point_count(points);
-  // Point p of a flat set, and k of two such points.
-  auto at = [d_points](const std::vector<double>& set, std::size_t p) {
-    return std::span<const double>(set).subspan(p * d_points, d_points);
-  };
-  auto k = [&](std::span<const double> x, std::span<const double> y) {
-    return kernel.evaluate_point(x, y);
-  };
-  const auto props = kernel.properties();
+namespace {
 
+// The declared properties, consistent with each other and with the domain.
+void check_metadata(const AnyKernel& kernel, Checks& checks) {
+  const auto props = kernel.properties();
   std::vector<std::string> metadata_problems;
   if (props.analytic && props.sobolev_order)
     metadata_problems.push_back("both analytic and a Sobolev order");
@@ -401,13 +154,22 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
         props.dimension, d));
   checks.add("metadata", metadata_problems.empty(),
              metadata_problems.empty() ? "consistent" : fmt::format("{}", fmt::join(metadata_problems, "; ")));
+}
 
-  // k(x, x) scale for relative tolerances.
-  const Eigen::VectorXd diagonal = kernel.diagonal(points);
-  const double scale = diagonal.maxCoeff();
-  checks.add("diagonal", scale > 0 && diagonal.minCoeff() >= 0,
-             fmt::format("k(x, x) in [{}, {}]", g(diagonal.minCoeff()), g(scale)));
-  if (!(scale > 0)) return report;  // every other tolerance is relative to it
+// Symmetry, periodicity, compact support, stationarity on pairs of `points` (scale: max k).
+void check_pairs(const AnyKernel& kernel, const std::vector<double>& points, double scale,
+                 Checks& checks) {
+  const Domain& domain = kernel.domain();
+  const std::size_t point_count = domain.point_count(points);
+  const auto d_points = static_cast<std::size_t>(domain.dimension);
+  // Point p of a flat set, and k of two such points.
+  auto at = [d_points](const std::vector<double>& set, std::size_t p) {
+    return std::span<const double>(set).subspan(p * d_points, d_points);
+  };
+  auto k = [&](std::span<const double> x, std::span<const double> y) {
+    return kernel.evaluate_point(x, y);
+  };
+  const auto props = kernel.properties();
 
   // Symmetry, periodicity, compact support, stationarity on pairs of scattered points. In
   // d > 1 the periods are shifts along each axis, the stationarity shift is 0.3 of every extent.
@@ -468,6 +230,49 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
                    1e-11);
   else
     checks.skip("stationarity", "not declared stationary");
+}
+
+// Random point sets: no structure a kernel could accidentally be kind to.
+void check_random_gram(const AnyKernel& kernel, Checks& checks) {
+  const Domain& domain = kernel.domain();
+  const auto d_points = static_cast<std::size_t>(domain.dimension);
+  Random random(hash64(kernel.name()));
+  double worst = 0;  // most negative lambda_min / allowed
+  std::string where = "none negative";
+  for (std::size_t count : {10u, 25u, 50u}) {
+    for (int set = 0; set < 3; ++set) {
+      std::vector<double> random_points(count * d_points);
+      for (std::size_t c = 0; c < random_points.size(); ++c)
+        random_points[c] = random.uniform() * domain.extent(static_cast<int>(c % d_points));
+      const auto random_spectrum = spectrum_of(kernel.gram(random_points));
+      const double ratio = -random_spectrum.lambda.minCoeff() / random_spectrum.allowed_negative;
+      if (ratio > worst) {
+        worst = ratio;
+        where = fmt::format("lambda_min = {} at {} points (tolerance -{})",
+                            g(random_spectrum.lambda.minCoeff()), count,
+                            g(random_spectrum.allowed_negative));
+      }
+    }
+  }
+  checks.add("Gram positive semidefinite on random point sets", worst <= 1.0,
+             fmt::format("9 sets of 10, 25, 50 points: {}", where));
+}
+
+// The Gram and cross matrices against evaluate() and diagonal(), the Gram matrix positive
+// semidefinite and of at most the feature map's rank. False when a matrix has the wrong size
+// (the checks stop there).
+bool check_matrices(const AnyKernel& kernel, const std::vector<double>& points, double scale,
+                    Checks& checks) {
+  const Domain& domain = kernel.domain();
+  const std::size_t point_count = domain.point_count(points);
+  const auto d_points = static_cast<std::size_t>(domain.dimension);
+  // Point p of a flat set, and k of two such points.
+  auto at = [d_points](const std::vector<double>& set, std::size_t p) {
+    return std::span<const double>(set).subspan(p * d_points, d_points);
+  };
+  auto k = [&](std::span<const double> x, std::span<const double> y) {
+    return kernel.evaluate_point(x, y);
+  };
 
   // Gram matrix: symmetric positive semidefinite, diagonal = diagonal(), entries = evaluate().
   const auto centres = scattered_points(domain, 40, 0.77);
@@ -475,7 +280,7 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
   if (gram.rows() != 40 || gram.cols() != 40) {
     checks.add("Gram matrix size", false,
                fmt::format("{} x {} for 40 centres", gram.rows(), gram.cols()));
-    return report;
+    return false;
   }
   checks.at_most("Gram symmetric", "max |G - G^T|", (gram - gram.transpose()).cwiseAbs().maxCoeff(),
                  0.0);
@@ -484,29 +289,7 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
   checks.add("Gram positive semidefinite", lambda.minCoeff() >= -spectrum.allowed_negative,
              fmt::format("40 scattered points: eigenvalues {} .. {} (tolerance -{})",
                          g(lambda.minCoeff()), g(lambda.maxCoeff()), g(spectrum.allowed_negative)));
-  {
-    // Random point sets: no structure a kernel could accidentally be kind to.
-    Random random(hash64(kernel.name()));
-    double worst = 0;  // most negative lambda_min / allowed
-    std::string where = "none negative";
-    for (std::size_t count : {10u, 25u, 50u}) {
-      for (int set = 0; set < 3; ++set) {
-        std::vector<double> random_points(count * d_points);
-        for (std::size_t c = 0; c < random_points.size(); ++c)
-          random_points[c] = random.uniform() * domain.extent(static_cast<int>(c % d_points));
-        const auto random_spectrum = spectrum_of(kernel.gram(random_points));
-        const double ratio = -random_spectrum.lambda.minCoeff() / random_spectrum.allowed_negative;
-        if (ratio > worst) {
-          worst = ratio;
-          where = fmt::format("lambda_min = {} at {} points (tolerance -{})",
-                              g(random_spectrum.lambda.minCoeff()), count,
-                              g(random_spectrum.allowed_negative));
-        }
-      }
-    }
-    checks.add("Gram positive semidefinite on random point sets", worst <= 1.0,
-               fmt::format("9 sets of 10, 25, 50 points: {}", where));
-  }
+  check_random_gram(kernel, checks);
   checks.at_most("Gram diagonal", "max |G_ii - k(c_i, c_i)| / max k",
                  (gram.diagonal() - kernel.diagonal(centres)).cwiseAbs().maxCoeff() / scale, 1e-14);
   if (kernel.feature_count() > 0 && kernel.feature_count() < 40) {
@@ -523,7 +306,7 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
   const Eigen::MatrixXd cross = kernel.cross(points, centres);
   if (cross.rows() != static_cast<Eigen::Index>(point_count) || cross.cols() != 40) {
     checks.add("cross matrix size", false, fmt::format("{} x {}", cross.rows(), cross.cols()));
-    return report;
+    return false;
   }
   double cross_error = 0;
   for (Eigen::Index m = 0; m < cross.rows(); ++m)
@@ -532,17 +315,15 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
           cross_error, std::abs(cross(m, i) - k(at(points, static_cast<std::size_t>(m)),
                                                 at(centres, static_cast<std::size_t>(i)))));
   checks.at_most("cross matrix", "max |K_mi - k(s_m, c_i)| / max k", cross_error / scale, 1e-14);
+  return true;
+}
 
-  if (domain.dimension == 1) {
-    check_derivatives(kernel, scale, checks);
-  } else {
-    checks.skip("derivative", "defined for sections along a track (d = 1)");
-    checks.skip("basis derivative", "defined for sections along a track (d = 1)");
-    check_gradient(kernel, scale, checks, [&](std::size_t count, double start) {
-      return scattered_points(domain, count, start);
-    });
-  }
-
+// The power function on nested centres: >= 0, ~0 at the centres, non-increasing.
+void check_power_function(const AnyKernel& kernel, double scale, Checks& checks,
+                          ContractReport& report) {
+  const Domain& domain = kernel.domain();
+  const double length = domain.length;
+  const auto d_points = static_cast<std::size_t>(domain.dimension);
   // Power function on nested centres 4 -> 8 -> 16 (uniform in d = 1, the first n scattered
   // points in d > 1): >= 0, ~0 at the centres, non-increasing as centres are added.
   auto evaluation = scattered_points(domain, 257, 0.31);
@@ -609,6 +390,38 @@ ContractReport check_kernel_contract(const AnyKernel& kernel) {
     checks.skip("power function non-increasing",
                 "round-off makes the nested comparison meaningless (" + skipped_because + ")");
   }
+}
+
+}  // namespace
+
+ContractReport check_kernel_contract(const AnyKernel& kernel) {
+  ContractReport report;
+  Checks checks(report);
+  const Domain& domain = kernel.domain();
+  const auto points = scattered_points(domain, 61, 0.1234);
+  check_metadata(kernel, checks);
+
+  // k(x, x) scale for relative tolerances.
+  const Eigen::VectorXd diagonal = kernel.diagonal(points);
+  const double scale = diagonal.maxCoeff();
+  checks.add("diagonal", scale > 0 && diagonal.minCoeff() >= 0,
+             fmt::format("k(x, x) in [{}, {}]", g(diagonal.minCoeff()), g(scale)));
+  if (!(scale > 0)) return report;  // every other tolerance is relative to it
+
+  check_pairs(kernel, points, scale, checks);
+  if (!check_matrices(kernel, points, scale, checks)) return report;
+
+  if (domain.dimension == 1) {
+    check_derivatives(kernel, scale, checks);
+  } else {
+    checks.skip("derivative", "defined for sections along a track (d = 1)");
+    checks.skip("basis derivative", "defined for sections along a track (d = 1)");
+    check_gradient(kernel, scale, checks, [&](std::size_t count, double start) {
+      return scattered_points(domain, count, start);
+    });
+  }
+
+  check_power_function(kernel, scale, checks, report);
   return report;
 }
 

@@ -286,7 +286,6 @@ LoadedPlugin load_plugin(const fs::path& file) {
     const std::string key(Kind::singular);
     auto names = added(before.names.at(key), after.names.at(key));
     registered = registered || !names.empty();
-    if constexpr (requires { Kind::loaded; }) plugin.*Kind::loaded = names;
     plugin.registered[key] = std::move(names);
   });
   if (!registered) {

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "summary_reader.hpp"
+
 namespace rkhs {
 
 RunSummary read_run_summary(const std::filesystem::path& file) {
@@ -43,93 +45,7 @@ RunRecord ResultsFolder::record() const {
 
 namespace {
 
-using Json = nlohmann::ordered_json;
-
-// The text of a JSON value's type, for messages.
-std::string type_text(const Json& value) {
-  if (value.is_null()) return "null";
-  if (value.is_boolean()) return "a boolean";
-  if (value.is_number()) return "a number";
-  if (value.is_string()) return "a string";
-  if (value.is_array()) return "an array";
-  return "an object";
-}
-
-// Reads typed values out of summary.json, naming the file and the key's JSON path in every
-// refusal.
-class Reader {
- public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
-
-  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
-    throw std::runtime_error(fmt::format("{}: {}: {}", file_, path, what));
-  }
-
-  const Json& member(const Json& object, const std::string& path, const char* key) const {
-    if (!object.is_object()) fail(path, "expected an object; found " + type_text(object));
-    const auto found = object.find(key);
-    if (found == object.end())
-      fail(path.empty() ? key : path + "." + key, "missing (not a summary.json of this version?)");
-    return *found;
-  }
-
-  std::string text(const Json& value, const std::string& path) const {
-    if (!value.is_string()) fail(path, "expected a string; found " + type_text(value));
-    return value.get<std::string>();
-  }
-  std::string text(const Json& object, const std::string& path, const char* key) const {
-    return text(member(object, path, key), join(path, key));
-  }
-  // A string or null ("" for null).
-  std::string optional_text(const Json& object, const std::string& path, const char* key) const {
-    if (!object.is_object() || !object.contains(key) || object[key].is_null()) return {};
-    return text(object[key], join(path, key));
-  }
-
-  // A number as json_number writes it: a number, "inf", "-inf", or null for NaN.
-  double number(const Json& value, const std::string& path) const {
-    if (value.is_number()) return value.get<double>();
-    if (value.is_null()) return std::numeric_limits<double>::quiet_NaN();
-    if (value.is_string()) {
-      const auto& s = value.get_ref<const std::string&>();
-      if (s == "inf") return std::numeric_limits<double>::infinity();
-      if (s == "-inf") return -std::numeric_limits<double>::infinity();
-    }
-    fail(path, "expected a number, \"inf\", \"-inf\" or null; found " + type_text(value));
-  }
-  double number(const Json& object, const std::string& path, const char* key) const {
-    return number(member(object, path, key), join(path, key));
-  }
-
-  std::size_t count(const Json& value, const std::string& path,
-                    std::size_t most = std::numeric_limits<std::uint32_t>::max()) const {
-    if (!value.is_number_unsigned() || value.get<std::uint64_t>() > most)
-      fail(path, fmt::format("expected an integer in [0, {}]; found {}", most,
-                             value.is_number() ? value.dump() : type_text(value)));
-    return static_cast<std::size_t>(value.get<std::uint64_t>());
-  }
-  std::size_t count(const Json& object, const std::string& path, const char* key) const {
-    return count(member(object, path, key), join(path, key));
-  }
-
-  const Json& array(const Json& value, const std::string& path) const {
-    if (!value.is_array()) fail(path, "expected an array; found " + type_text(value));
-    return value;
-  }
-  const Json& array(const Json& object, const std::string& path, const char* key) const {
-    return array(member(object, path, key), join(path, key));
-  }
-
-  static std::string join(const std::string& path, const char* key) {
-    return path.empty() ? std::string(key) : path + "." + key;
-  }
-  static std::string at(const std::string& path, std::size_t index) {
-    return fmt::format("{}[{}]", path, index);
-  }
-
- private:
-  std::string file_;
-};
+using namespace report_detail;
 
 // The file's text, refused by type and size before it is read.
 std::string read_bounded(const std::filesystem::path& file) {
@@ -384,14 +300,10 @@ StudyDefinition read_study(const Reader& reader, const Json& json) {
   return study;
 }
 
-}  // namespace
-
-ResultsFolder read_results_folder(const std::filesystem::path& directory) {
-  const auto file = directory / "summary.json";
-  const auto text = read_bounded(file);
-  Json json;
+// summary.json's text as JSON; refused with the line and column where parsing stopped.
+Json parse_summary(const std::filesystem::path& file, const std::string& text) {
   try {
-    json = Json::parse(text);
+    return Json::parse(text);
   } catch (const Json::parse_error& e) {
     // Line and column of the byte where parsing stopped.
     const auto offset = std::min<std::size_t>(e.byte ? e.byte - 1 : 0, text.size());
@@ -404,6 +316,183 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
                     "rkhs-study)",
                     file.string(), line, column));
   }
+}
+
+// Trial `t` of summary.json's "trials": its plugins, n and key, and its result aligned with
+// `all`, the metrics of the study's kind. Trial 0 sets study.metrics; the others must match it.
+std::pair<TrialSpec, TrialResult> read_trial(const Reader& reader, const Json& trials,
+                                             std::size_t t, const std::vector<std::string>& all,
+                                             StudyDefinition& study) {
+  const auto path = Reader::at("trials", t);
+  const auto& entry = trials[t];
+  TrialSpec trial;
+  trial.index = reader.count(entry, path, "index");
+  if (trial.index != t)
+    reader.fail(Reader::join(path, "index"),
+                fmt::format("{} where {} was expected", trial.index, t));
+  trial.key = reader.text(entry, path, "key");
+  trial.kernel =
+      read_plugin(reader, reader.member(entry, path, "kernel"), Reader::join(path, "kernel"));
+  trial.target =
+      read_plugin(reader, reader.member(entry, path, "target"), Reader::join(path, "target"));
+  trial.centres =
+      read_plugin(reader, reader.member(entry, path, "centres"), Reader::join(path, "centres"));
+  trial.n = reader.count(entry, path, "n");
+  const auto suffix = fmt::format(" | n={}", trial.n);
+  if (!trial.key.ends_with(suffix))
+    reader.fail(Reader::join(path, "key"), fmt::format("does not end in \"{}\"", suffix));
+  trial.group_key = trial.key.substr(0, trial.key.size() - suffix.size());
+  read_key_axes(trial);
+
+  TrialResult result;
+  const auto status = reader.text(entry, path, "status");
+  if (status != "ok" && status != "failed")
+    reader.fail(Reader::join(path, "status"), fmt::format("\"{}\"; ok or failed", status));
+  result.ok = status == "ok";
+  result.reason = reader.text(entry, path, "reason");
+  result.solve_method = reader.text(entry, path, "solve");
+  result.engine = reader.optional_text(entry, path, "engine");
+  result.seconds = reader.number(entry, path, "seconds");
+  const auto& flags = reader.array(entry, path, "flags");
+  for (std::size_t k = 0; k < flags.size(); ++k)
+    result.flags.push_back(reader.text(flags[k], Reader::at(Reader::join(path, "flags"), k)));
+  result.metrics.assign(all.size(), std::numeric_limits<double>::quiet_NaN());
+  result.floors = result.metrics;
+  const auto& metrics = reader.member(entry, path, "metrics");
+  const auto metrics_path = Reader::join(path, "metrics");
+  if (!metrics.is_object())
+    reader.fail(metrics_path, "expected an object; found " + type_text(metrics));
+  std::vector<std::string> names;
+  for (const auto& [name, value] : metrics.items()) {
+    const auto position = std::find(all.begin(), all.end(), name);
+    if (position == all.end())
+      reader.fail(metrics_path + "." + name,
+                  fmt::format("not a metric of an {} study", study_kind_name(study.kind)));
+    result.metrics[static_cast<std::size_t>(position - all.begin())] =
+        reader.number(value, metrics_path + "." + name);
+    names.push_back(name);
+  }
+  if (t == 0)
+    study.metrics = names;
+  else if (names != study.metrics)
+    reader.fail(metrics_path, "names other metrics than trials[0].metrics");
+  if (entry.contains("floors") && entry["floors"].is_object())
+    for (const auto& [name, value] : entry["floors"].items()) {
+      const auto position = std::find(all.begin(), all.end(), name);
+      if (position != all.end())
+        result.floors[static_cast<std::size_t>(position - all.begin())] =
+            reader.number(value, Reader::join(path, "floors") + "." + name);
+    }
+  return {std::move(trial), std::move(result)};
+}
+
+// The "constant" member of a rates entry: the series' value, band and the points they hold on.
+ConstantSeries read_constant(const Reader& reader, const Json& entry, const std::string& path,
+                             const std::vector<double>& n) {
+  const auto where = Reader::join(path, "constant");
+  const auto& object = reader.member(entry, path, "constant");
+  ConstantSeries constant;
+  constant.value = reader.number(object, where, "value");
+  constant.band = reader.number(object, where, "band");
+  constant.floor = reader.number(object, where, "floor");
+  constant.within = reader.number(object, where, "within");
+  const auto& within_floors = reader.member(object, where, "within_floors");
+  if (!within_floors.is_boolean())
+    reader.fail(Reader::join(where, "within_floors"),
+                "expected true or false; found " + type_text(within_floors));
+  constant.within_floors = within_floors.get<bool>();
+  constant.points = positions_of(reader, reader.member(object, where, "window"),
+                                 Reader::join(where, "window"), n);
+  constant.head = positions_of(reader, reader.member(object, where, "head"),
+                               Reader::join(where, "head"), n);
+  if (constant.points.empty())
+    reader.fail(Reader::join(where, "window"), "a constant needs its points");
+  return constant;
+}
+
+// Series `s` of summary.json's "rates": one group and metric, its trials those of the group
+// (`group_trials`) in increasing n; `groups` numbers the groups in order of first appearance.
+MetricSeries read_series(const Reader& reader, const Json& rates, std::size_t s,
+                         const ResultsFolder& folder, const std::vector<std::string>& all,
+                         const std::map<std::string, std::vector<std::size_t>>& group_trials,
+                         std::map<std::string, std::size_t>& groups) {
+  const auto& study = folder.study;
+  const auto path = Reader::at("rates", s);
+  const auto& entry = rates[s];
+  MetricSeries series;
+  const auto group = reader.text(entry, path, "group");
+  series.metric = reader.text(entry, path, "metric");
+  if (std::find(study.metrics.begin(), study.metrics.end(), series.metric) == study.metrics.end())
+    reader.fail(Reader::join(path, "metric"),
+                fmt::format("\"{}\" is not a metric of the trials", series.metric));
+  // The group's number, in order of first appearance.
+  const auto [position, added] = groups.emplace(group, groups.size());
+  series.group = position->second;
+  if (const auto members = group_trials.find(group); members != group_trials.end())
+    series.trials = members->second;
+  if (series.trials.empty()) reader.fail(Reader::join(path, "group"), "no trial of this group");
+  std::stable_sort(series.trials.begin(), series.trials.end(),
+                   [&](auto a, auto b) { return folder.trials[a].n < folder.trials[b].n; });
+  const auto metric =
+      static_cast<std::size_t>(std::find(all.begin(), all.end(), series.metric) - all.begin());
+  const auto fill = std::find(all.begin(), all.end(), "fill_distance");
+  for (const auto index : series.trials) {
+    const auto& result = folder.results[index];
+    series.n.push_back(static_cast<double>(folder.trials[index].n));
+    series.abscissa.push_back(study.abscissa == Abscissa::n || fill == all.end()
+                                  ? series.n.back()
+                                  : result.metrics[static_cast<std::size_t>(fill - all.begin())]);
+    series.values.push_back(result.metrics[metric]);
+    series.floors.push_back(result.floors[metric]);
+    series.failed.push_back(!result.ok);
+  }
+  series.flagged.assign(series.trials.size(), false);
+  for (const auto k : positions_of(reader, reader.member(entry, path, "flagged"),
+                                   Reader::join(path, "flagged"), series.n))
+    series.flagged[k] = true;
+  const auto& pairwise = reader.array(entry, path, "pairwise");
+  if (pairwise.size() + 1 != series.trials.size())
+    reader.fail(Reader::join(path, "pairwise"),
+                fmt::format("{} rates for {} trials; expected one fewer", pairwise.size(),
+                            series.trials.size()));
+  for (std::size_t k = 0; k < pairwise.size(); ++k)
+    series.pairwise.push_back(
+        reader.number(pairwise[k], Reader::at(Reader::join(path, "pairwise"), k)));
+  auto reported = read_model_analysis(reader, entry, path, series.n);
+  auto alternative = read_model_analysis(reader, reader.member(entry, path, "alternative"),
+                                         Reader::join(path, "alternative"), series.n);
+  if (alternative.model == reported.model)
+    reader.fail(Reader::join(path, "alternative.model"), "the same model as the reported fit");
+  series.analysis.reported = reported.model;
+  series.fit = reported.fit;
+  const auto preferred = reader.member(entry, path, "preferred");
+  if (!preferred.is_null())
+    series.analysis.preferred = read_model(reader, entry, path, "preferred");
+  series.analysis.note = reader.text(entry, path, "model_note");
+  (reported.model == RateModel::power_law ? series.analysis.power_law
+                                          : series.analysis.exponential) = std::move(reported);
+  (alternative.model == RateModel::power_law ? series.analysis.power_law
+                                             : series.analysis.exponential) =
+      std::move(alternative);
+  series.note = reader.text(entry, path, "note");
+  // A constant series (the optional member "constant"): its value and band replace the fit, as
+  // fit_series does.
+  if (entry.is_object() && entry.contains("constant") && !entry["constant"].is_null()) {
+    series.analysis.constant = read_constant(reader, entry, path, series.n);
+    series.fit.reset();
+    series.no_fit_reason =
+        fmt::format("constant {}: not a rate", series.analysis.constant->text(series.n));
+  }
+  if (!series.fit && !series.constant()) series.no_fit_reason = no_fit_reason(series);
+  return series;
+}
+
+}  // namespace
+
+ResultsFolder read_results_folder(const std::filesystem::path& directory) {
+  const auto file = directory / "summary.json";
+  const auto text = read_bounded(file);
+  const Json json = parse_summary(file, text);
   const Reader reader(file.string());
   if (!json.is_object()) reader.fail("(top level)", "expected an object; found " + type_text(json));
 
@@ -423,66 +512,7 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
   const auto& all = metric_names(study.kind);
   const auto& trials = reader.array(json, "", "trials");
   for (std::size_t t = 0; t < trials.size(); ++t) {
-    const auto path = Reader::at("trials", t);
-    const auto& entry = trials[t];
-    TrialSpec trial;
-    trial.index = reader.count(entry, path, "index");
-    if (trial.index != t)
-      reader.fail(Reader::join(path, "index"),
-                  fmt::format("{} where {} was expected", trial.index, t));
-    trial.key = reader.text(entry, path, "key");
-    trial.kernel =
-        read_plugin(reader, reader.member(entry, path, "kernel"), Reader::join(path, "kernel"));
-    trial.target =
-        read_plugin(reader, reader.member(entry, path, "target"), Reader::join(path, "target"));
-    trial.centres =
-        read_plugin(reader, reader.member(entry, path, "centres"), Reader::join(path, "centres"));
-    trial.n = reader.count(entry, path, "n");
-    const auto suffix = fmt::format(" | n={}", trial.n);
-    if (!trial.key.ends_with(suffix))
-      reader.fail(Reader::join(path, "key"), fmt::format("does not end in \"{}\"", suffix));
-    trial.group_key = trial.key.substr(0, trial.key.size() - suffix.size());
-    read_key_axes(trial);
-
-    TrialResult result;
-    const auto status = reader.text(entry, path, "status");
-    if (status != "ok" && status != "failed")
-      reader.fail(Reader::join(path, "status"), fmt::format("\"{}\"; ok or failed", status));
-    result.ok = status == "ok";
-    result.reason = reader.text(entry, path, "reason");
-    result.solve_method = reader.text(entry, path, "solve");
-    result.engine = reader.optional_text(entry, path, "engine");
-    result.seconds = reader.number(entry, path, "seconds");
-    const auto& flags = reader.array(entry, path, "flags");
-    for (std::size_t k = 0; k < flags.size(); ++k)
-      result.flags.push_back(reader.text(flags[k], Reader::at(Reader::join(path, "flags"), k)));
-    result.metrics.assign(all.size(), std::numeric_limits<double>::quiet_NaN());
-    result.floors = result.metrics;
-    const auto& metrics = reader.member(entry, path, "metrics");
-    const auto metrics_path = Reader::join(path, "metrics");
-    if (!metrics.is_object())
-      reader.fail(metrics_path, "expected an object; found " + type_text(metrics));
-    std::vector<std::string> names;
-    for (const auto& [name, value] : metrics.items()) {
-      const auto position = std::find(all.begin(), all.end(), name);
-      if (position == all.end())
-        reader.fail(metrics_path + "." + name,
-                    fmt::format("not a metric of an {} study", study_kind_name(study.kind)));
-      result.metrics[static_cast<std::size_t>(position - all.begin())] =
-          reader.number(value, metrics_path + "." + name);
-      names.push_back(name);
-    }
-    if (t == 0)
-      study.metrics = names;
-    else if (names != study.metrics)
-      reader.fail(metrics_path, "names other metrics than trials[0].metrics");
-    if (entry.contains("floors") && entry["floors"].is_object())
-      for (const auto& [name, value] : entry["floors"].items()) {
-        const auto position = std::find(all.begin(), all.end(), name);
-        if (position != all.end())
-          result.floors[static_cast<std::size_t>(position - all.begin())] =
-              reader.number(value, Reader::join(path, "floors") + "." + name);
-      }
+    auto [trial, result] = read_trial(reader, trials, t, all, study);
     folder.trials.push_back(std::move(trial));
     folder.results.push_back(std::move(result));
   }
@@ -492,179 +522,10 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
   for (const auto& trial : folder.trials) group_trials[trial.group_key].push_back(trial.index);
   std::map<std::string, std::size_t> groups;
   const auto& rates = reader.array(json, "", "rates");
-  for (std::size_t s = 0; s < rates.size(); ++s) {
-    const auto path = Reader::at("rates", s);
-    const auto& entry = rates[s];
-    MetricSeries series;
-    const auto group = reader.text(entry, path, "group");
-    series.metric = reader.text(entry, path, "metric");
-    if (std::find(study.metrics.begin(), study.metrics.end(), series.metric) == study.metrics.end())
-      reader.fail(Reader::join(path, "metric"),
-                  fmt::format("\"{}\" is not a metric of the trials", series.metric));
-    // The group's number, in order of first appearance.
-    const auto [position, added] = groups.emplace(group, groups.size());
-    series.group = position->second;
-    if (const auto members = group_trials.find(group); members != group_trials.end())
-      series.trials = members->second;
-    if (series.trials.empty()) reader.fail(Reader::join(path, "group"), "no trial of this group");
-    std::stable_sort(series.trials.begin(), series.trials.end(),
-                     [&](auto a, auto b) { return folder.trials[a].n < folder.trials[b].n; });
-    const auto metric =
-        static_cast<std::size_t>(std::find(all.begin(), all.end(), series.metric) - all.begin());
-    const auto fill = std::find(all.begin(), all.end(), "fill_distance");
-    for (const auto index : series.trials) {
-      const auto& result = folder.results[index];
-      series.n.push_back(static_cast<double>(folder.trials[index].n));
-      series.abscissa.push_back(study.abscissa == Abscissa::n || fill == all.end()
-                                    ? series.n.back()
-                                    : result.metrics[static_cast<std::size_t>(fill - all.begin())]);
-      series.values.push_back(result.metrics[metric]);
-      series.floors.push_back(result.floors[metric]);
-      series.failed.push_back(!result.ok);
-    }
-    series.flagged.assign(series.trials.size(), false);
-    for (const auto k : positions_of(reader, reader.member(entry, path, "flagged"),
-                                     Reader::join(path, "flagged"), series.n))
-      series.flagged[k] = true;
-    const auto& pairwise = reader.array(entry, path, "pairwise");
-    if (pairwise.size() + 1 != series.trials.size())
-      reader.fail(Reader::join(path, "pairwise"),
-                  fmt::format("{} rates for {} trials; expected one fewer", pairwise.size(),
-                              series.trials.size()));
-    for (std::size_t k = 0; k < pairwise.size(); ++k)
-      series.pairwise.push_back(
-          reader.number(pairwise[k], Reader::at(Reader::join(path, "pairwise"), k)));
-    auto reported = read_model_analysis(reader, entry, path, series.n);
-    auto alternative = read_model_analysis(reader, reader.member(entry, path, "alternative"),
-                                           Reader::join(path, "alternative"), series.n);
-    if (alternative.model == reported.model)
-      reader.fail(Reader::join(path, "alternative.model"), "the same model as the reported fit");
-    series.analysis.reported = reported.model;
-    series.fit = reported.fit;
-    const auto preferred = reader.member(entry, path, "preferred");
-    if (!preferred.is_null())
-      series.analysis.preferred = read_model(reader, entry, path, "preferred");
-    series.analysis.note = reader.text(entry, path, "model_note");
-    (reported.model == RateModel::power_law ? series.analysis.power_law
-                                            : series.analysis.exponential) = std::move(reported);
-    (alternative.model == RateModel::power_law ? series.analysis.power_law
-                                               : series.analysis.exponential) =
-        std::move(alternative);
-    series.note = reader.text(entry, path, "note");
-    // A constant series (absent from summary.json files written before constants): its value
-    // and band replace the fit, as fit_series does.
-    if (entry.is_object() && entry.contains("constant") && !entry["constant"].is_null()) {
-      const auto where = Reader::join(path, "constant");
-      const auto& object = reader.member(entry, path, "constant");
-      ConstantSeries constant;
-      constant.value = reader.number(object, where, "value");
-      constant.band = reader.number(object, where, "band");
-      constant.floor = reader.number(object, where, "floor");
-      constant.within = reader.number(object, where, "within");
-      const auto& within_floors = reader.member(object, where, "within_floors");
-      if (!within_floors.is_boolean())
-        reader.fail(Reader::join(where, "within_floors"),
-                    "expected true or false; found " + type_text(within_floors));
-      constant.within_floors = within_floors.get<bool>();
-      constant.points = positions_of(reader, reader.member(object, where, "window"),
-                                     Reader::join(where, "window"), series.n);
-      constant.head = positions_of(reader, reader.member(object, where, "head"),
-                                   Reader::join(where, "head"), series.n);
-      if (constant.points.empty())
-        reader.fail(Reader::join(where, "window"), "a constant needs its points");
-      series.analysis.constant = std::move(constant);
-      series.fit.reset();
-      series.no_fit_reason =
-          fmt::format("constant {}: not a rate", series.analysis.constant->text(series.n));
-    }
-    if (!series.fit && !series.constant()) series.no_fit_reason = no_fit_reason(series);
-    folder.rates.push_back(std::move(series));
-  }
+  for (std::size_t s = 0; s < rates.size(); ++s)
+    folder.rates.push_back(read_series(reader, rates, s, folder, all, group_trials, groups));
 
-  // The verdicts, each with an Expectation of its own location.
-  if (json.contains("expectations") && !json["expectations"].is_null()) {
-    const auto& expectations = json["expectations"];
-    folder.judged = true;
-    folder.deselected = reader.count(reader.member(expectations, "expectations", "counts"),
-                                     "expectations.counts", "deselected");
-    const auto& outcomes = reader.array(expectations, "expectations", "outcomes");
-    std::map<std::pair<std::string, std::string>, std::size_t> series_of;  // (group, metric)
-    for (std::size_t s = 0; s < folder.rates.size(); ++s)
-      series_of.emplace(std::pair{folder.trials[folder.rates[s].trials.front()].group_key,
-                                  folder.rates[s].metric},
-                        s);
-    std::vector<std::string> locations;
-    for (std::size_t k = 0; k < outcomes.size(); ++k) {
-      const auto path = Reader::at("expectations.outcomes", k);
-      const auto location = reader.text(outcomes[k], path, "location");
-      if (std::find(locations.begin(), locations.end(), location) != locations.end()) continue;
-      locations.push_back(location);
-      Expectation e;
-      e.number = locations.size();
-      e.location = location;
-      e.name = reader.optional_text(outcomes[k], path, "expectation_name");
-      e.metric = reader.text(outcomes[k], path, "metric");
-      e.xfail = reader.optional_text(outcomes[k], path, "xfail");
-      const auto kind = reader.text(outcomes[k], path, "kind");
-      bool known = false;
-      for (auto candidate : {ExpectationKind::rate, ExpectationKind::theory, ExpectationKind::model,
-                             ExpectationKind::bound})
-        if (expectation_kind_name(candidate) == kind) {
-          e.kind = candidate;
-          known = true;
-        }
-      if (!known)
-        reader.fail(
-            Reader::join(path, "kind"),
-            fmt::format("\"{}\" is not an expectation kind; rate, theory, model or bound", kind));
-      study.expectations.push_back(std::move(e));
-    }
-    for (std::size_t k = 0; k < outcomes.size(); ++k) {
-      const auto path = Reader::at("expectations.outcomes", k);
-      const auto& entry = outcomes[k];
-      ExpectationOutcome o;
-      const auto location = reader.text(entry, path, "location");
-      o.expectation = &study.expectations[static_cast<std::size_t>(
-          std::find(locations.begin(), locations.end(), location) - locations.begin())];
-      o.name = reader.text(entry, path, "name");
-      o.group = reader.text(entry, path, "group");
-      o.group_label = reader.text(entry, path, "group_label");
-      const auto verdict = reader.text(entry, path, "verdict");
-      if (verdict == "pass")
-        o.verdict = Verdict::pass;
-      else if (verdict == "fail")
-        o.verdict = Verdict::fail;
-      else if (verdict == "inconclusive")
-        o.verdict = Verdict::inconclusive;
-      else
-        reader.fail(Reader::join(path, "verdict"),
-                    fmt::format("\"{}\"; pass, fail or inconclusive", verdict));
-      o.rate = reader.number(entry, path, "rate");
-      o.ci_low = reader.number(entry, path, "ci_low");
-      o.ci_high = reader.number(entry, path, "ci_high");
-      o.accepted_low = reader.number(entry, path, "accepted_low");
-      o.accepted_high = reader.number(entry, path, "accepted_high");
-      o.effectivity_min = reader.number(entry, path, "effectivity_min");
-      o.effectivity_max = reader.number(entry, path, "effectivity_max");
-      const auto& window = reader.member(entry, path, "window");
-      const auto window_path = Reader::join(path, "window");
-      o.window_points = reader.count(window, window_path, "points");
-      const auto n_or_zero = [&](const char* key) -> std::size_t {
-        const auto& value = reader.member(window, window_path, key);
-        return value.is_null() ? 0 : reader.count(value, Reader::join(window_path, key));
-      };
-      o.window_from = n_or_zero("from");
-      o.window_to = n_or_zero("to");
-      o.expected = reader.text(entry, path, "expected");
-      o.found = reader.text(entry, path, "found");
-      o.reason = reader.text(entry, path, "reason");
-      o.advice = reader.optional_text(entry, path, "advice");
-      o.seconds = reader.number(entry, path, "seconds");
-      if (const auto s = series_of.find({o.group, o.expectation->metric}); s != series_of.end())
-        o.series = s->second;
-      folder.verdicts.push_back(std::move(o));
-    }
-  }
+  read_summary_verdicts(reader, json, folder);
   return folder;
 }
 

@@ -128,8 +128,8 @@ std::string study_settings_text(const StudyDefinition& study) {
 namespace {
 
 // " | modules=kernel:imq=<sha256>,..." for the trial's plugins that a loaded module registered,
-// in the order of TrialSpec's fields; "" when every one is built in, so that the identity of a
-// trial of built-in plugins is what it was before modules entered it.
+// in the order of TrialSpec's fields; "" when every one is built in: the identity of a trial of
+// built-in plugins only has no module part.
 std::string plugin_modules_text(
     const TrialSpec& trial,
     const std::map<std::pair<std::string, std::string>, std::string>& module_of) {

@@ -109,23 +109,11 @@ PluginChoice parse_reference(const Reporter& report, const toml::node& node) {
   }
 }
 
-// `track_length` is the domain's length (a final time in laps, for snapshot_laps).
-AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
-                               double track_length) {
-  AdaptiveSection section;
-  AdaptiveSettings& settings = section.settings;
-  const auto* table = optional_table(report, root, "adaptive");
-  if (!table)
-    report.fail({}, "adaptive",
-                "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
-  check_keys(report, *table, "adaptive.",
-             {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
-              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol", "reference", "path"});
-  settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
-
-  // path = { from = a, to = b }: a shuttle back and forth between a and b (a lap is one round
-  // trip); absent: laps around the track.
-  if (const auto* path = table->get("path")) {
+// path = { from = a, to = b }: a shuttle back and forth between a and b (a lap is one round
+// trip); absent: laps around the track.
+void read_path(const Reporter& report, const toml::table& table, double track_length,
+               AdaptiveSettings& settings) {
+  if (const auto* path = table.get("path")) {
     const auto* range = path->as_table();
     if (!range)
       report.fail(path->source(), "adaptive.path",
@@ -147,21 +135,16 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
     settings.shuttle_from = from;
     settings.shuttle_length = std::min(to, track_length) - from;
   }
+}
 
-  const std::vector<std::string> engines{"automatic", "lap_map", "time_stepping"};
-  const auto engine = get_string(report, *table, "engine", "adaptive.", std::string("automatic"));
-  if (const auto found = adaptive_engine_from_name(engine))
-    settings.engine = *found;
-  else
-    report.fail(table->get("engine")->source(), "adaptive.engine",
-                fmt::format("unknown engine \"{}\" {}", engine, with_suggestion(engine, engines)));
-  settings.lap_map_rtol =
-      get_number(report, *table, "lap_map_rtol", "adaptive.", settings.lap_map_rtol, 0);
-  settings.lap_map_atol =
-      get_number(report, *table, "lap_map_atol", "adaptive.", settings.lap_map_atol, 0);
-
-  // laps = 10 | "limit" | [10, 100, "limit"] (a list is an axis of the grid).
-  const auto* laps_node = table->get("laps");
+// laps = 10 | "limit" | [10, 100, "limit"] (a list is an axis of the grid): the lap counts with
+// where each is given, sorted; settings.laps (NaN for an axis, whose values go to
+// section.laps_values). Needs settings.engine.
+std::vector<std::pair<double, const toml::node*>> read_lap_counts(const Reporter& report,
+                                                                  const toml::table& table,
+                                                                  AdaptiveSection& section) {
+  AdaptiveSettings& settings = section.settings;
+  const auto* laps_node = table.get("laps");
   std::vector<std::pair<double, const toml::node*>> lap_counts;
   if (!laps_node) {
     lap_counts.emplace_back(settings.laps, nullptr);
@@ -180,7 +163,7 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   } else {
     lap_counts.emplace_back(parse_lap_count(report, *laps_node, false), laps_node);
   }
-  if (laps_node && table->contains("final_time")) {
+  if (laps_node && table.contains("final_time")) {
     const auto limit = std::find_if(lap_counts.begin(), lap_counts.end(),
                                     [](const auto& c) { return std::isinf(c.first); });
     if (limit != lap_counts.end())
@@ -188,8 +171,8 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
                   fmt::format("found \"limit\" together with final_time = {}: the periodic "
                               "limit has no final time; give laps = \"limit\" without "
                               "final_time, or a final time without laps",
-                              show(*table->get("final_time"))));
-    report.fail(table->source(), "adaptive", "give 'laps' or 'final_time', not both");
+                              show(*table.get("final_time"))));
+    report.fail(table.source(), "adaptive", "give 'laps' or 'final_time', not both");
   }
   for (const auto& [laps, node] : lap_counts) {
     if (std::isinf(laps) && settings.engine == AdaptiveEngine::time_stepping)
@@ -210,6 +193,79 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
   } else {
     settings.laps = lap_counts.front().first;
   }
+  return lap_counts;
+}
+
+// snapshot_laps: each within the longest finite run, the laps (the largest finite value of a
+// laps axis) or final_time. A "limit" trial records every snapshot lap; a shorter trial of a
+// laps axis the ones it reaches (trial_adaptive_settings).
+void read_snapshot_laps(const Reporter& report, const toml::table& table, double track_length,
+                        const std::vector<std::pair<double, const toml::node*>>& lap_counts,
+                        AdaptiveSettings& settings) {
+  std::optional<double> last_lap;
+  std::string last_lap_text;
+  if (settings.final_time > 0) {
+    last_lap = settings.final_time / settings.lap_time(track_length);
+    last_lap_text = fmt::format("final_time = {} s, {} laps", format_real(settings.final_time),
+                                format_real(*last_lap));
+  } else {
+    for (const auto& [laps, node] : lap_counts)
+      if (std::isfinite(laps)) {
+        last_lap = laps;
+        last_lap_text = fmt::format("laps = {}{}", laps_text(laps),
+                                    lap_counts.size() > 1 ? ", the largest finite lap count" : "");
+      }
+  }
+  if (const auto* laps = table.get("snapshot_laps")) {
+    const auto* array = laps->as_array();
+    if (!array)
+      report.fail(laps->source(), "adaptive.snapshot_laps",
+                  fmt::format("expected an array of lap numbers, found {}", describe(*laps)));
+    for (const auto& item : *array) {
+      const auto lap_number = real_of(item);
+      if (!lap_number || *lap_number < 0)
+        report.fail(item.source(), "adaptive.snapshot_laps",
+                    fmt::format("expected a lap number >= 0, found {}", show(item)));
+      const double lap = *lap_number;
+      if (last_lap && lap > *last_lap * (1 + 1e-12))
+        report.fail(item.source(), "adaptive.snapshot_laps",
+                    fmt::format("found {}, after the end of the run ({}); snapshot laps must be "
+                                "<= {}",
+                                show(item), last_lap_text, format_real(*last_lap)));
+      settings.snapshot_laps.push_back(lap);
+    }
+  }
+}
+
+// `track_length` is the domain's length (a final time in laps, for snapshot_laps).
+AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
+                               double track_length) {
+  AdaptiveSection section;
+  AdaptiveSettings& settings = section.settings;
+  const auto* table = optional_table(report, root, "adaptive");
+  if (!table)
+    report.fail({}, "adaptive",
+                "missing [adaptive] table (speed = ..., laps = ... or final_time = ...)");
+  check_keys(report, *table, "adaptive.",
+             {"speed", "laps", "final_time", "q", "road", "snapshot_laps", "snapshot_points",
+              "samples_per_lap", "engine", "lap_map_rtol", "lap_map_atol", "reference", "path"});
+  settings.speed = get_number(report, *table, "speed", "adaptive.", 1.0, 0);
+
+  read_path(report, *table, track_length, settings);
+
+  const std::vector<std::string> engines{"automatic", "lap_map", "time_stepping"};
+  const auto engine = get_string(report, *table, "engine", "adaptive.", std::string("automatic"));
+  if (const auto found = adaptive_engine_from_name(engine))
+    settings.engine = *found;
+  else
+    report.fail(table->get("engine")->source(), "adaptive.engine",
+                fmt::format("unknown engine \"{}\" {}", engine, with_suggestion(engine, engines)));
+  settings.lap_map_rtol =
+      get_number(report, *table, "lap_map_rtol", "adaptive.", settings.lap_map_rtol, 0);
+  settings.lap_map_atol =
+      get_number(report, *table, "lap_map_atol", "adaptive.", settings.lap_map_atol, 0);
+
+  const auto lap_counts = read_lap_counts(report, *table, section);
   // Absent: 0 (the laps decide); given: a time > 0 (final_time = 0 ran the default laps).
   settings.final_time = get_number(report, *table, "final_time", "adaptive.", 0, 0);
 
@@ -242,42 +298,7 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
                             road));
   settings.projected_road = road == "projection";
 
-  // A snapshot must be within the longest finite run: the laps (the largest finite value of a
-  // laps axis) or final_time. A "limit" trial records every snapshot lap; a shorter trial of a
-  // laps axis the ones it reaches (trial_adaptive_settings).
-  std::optional<double> last_lap;
-  std::string last_lap_text;
-  if (settings.final_time > 0) {
-    last_lap = settings.final_time / settings.lap_time(track_length);
-    last_lap_text = fmt::format("final_time = {} s, {} laps", format_real(settings.final_time),
-                                format_real(*last_lap));
-  } else {
-    for (const auto& [laps, node] : lap_counts)
-      if (std::isfinite(laps)) {
-        last_lap = laps;
-        last_lap_text = fmt::format("laps = {}{}", laps_text(laps),
-                                    lap_counts.size() > 1 ? ", the largest finite lap count" : "");
-      }
-  }
-  if (const auto* laps = table->get("snapshot_laps")) {
-    const auto* array = laps->as_array();
-    if (!array)
-      report.fail(laps->source(), "adaptive.snapshot_laps",
-                  fmt::format("expected an array of lap numbers, found {}", describe(*laps)));
-    for (const auto& item : *array) {
-      const auto lap_number = real_of(item);
-      if (!lap_number || *lap_number < 0)
-        report.fail(item.source(), "adaptive.snapshot_laps",
-                    fmt::format("expected a lap number >= 0, found {}", show(item)));
-      const double lap = *lap_number;
-      if (last_lap && lap > *last_lap * (1 + 1e-12))
-        report.fail(item.source(), "adaptive.snapshot_laps",
-                    fmt::format("found {}, after the end of the run ({}); snapshot laps must be "
-                                "<= {}",
-                                show(item), last_lap_text, format_real(*last_lap)));
-      settings.snapshot_laps.push_back(lap);
-    }
-  }
+  read_snapshot_laps(report, *table, track_length, lap_counts, settings);
   auto count = [&](std::string_view key, std::size_t fallback) {
     return static_cast<std::size_t>(
         get_whole_number(report, *table, key, "adaptive.", fallback, 1, 10000000));

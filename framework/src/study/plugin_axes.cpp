@@ -11,6 +11,7 @@
 
 #include "expectation_parser.hpp"
 #include "rkhs/core/data_root.hpp"
+#include "rkhs/plugin/plugin_loader.hpp"
 #include "study_file_parts.hpp"
 
 namespace rkhs::detail {
@@ -288,6 +289,30 @@ void check_instances(const Reporter& report, const toml::table& root, const Plug
                     section, fmt::format("{}: {}", choice.given_label(), e.what()));
       }
     });
+}
+
+// `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
+// before any plugin name in the file is looked up.
+void load_study_plugins(const Reporter& report, const toml::table& root) {
+  const auto* node = root.get("plugins");
+  if (!node) return;
+  const auto* array = node->as_array();
+  if (!array)
+    report.fail(node->source(), "plugins",
+                fmt::format("expected an array of plugin files, found {}", describe(*node)));
+  const auto directory = std::filesystem::path(report.source()).parent_path();
+  for (const auto& item : *array) {
+    if (!item.is_string())
+      report.fail(item.source(), "plugins",
+                  fmt::format("expected a plugin file name, found {}", describe(item)));
+    std::filesystem::path file(item.as_string()->get());
+    if (file.is_relative()) file = directory / file;
+    try {
+      load_plugin(file);
+    } catch (const PluginError& e) {
+      report.fail(item.source(), "plugins", e.what());
+    }
+  }
 }
 
 }  // namespace rkhs::detail

@@ -157,30 +157,6 @@ void check_grid_size(const Reporter& report, const toml::table& root,
                           cap, fmt::join(texts, " x ")));
 }
 
-// `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
-// before any plugin name in the file is looked up.
-void load_study_plugins(const Reporter& report, const toml::table& root) {
-  const auto* node = root.get("plugins");
-  if (!node) return;
-  const auto* array = node->as_array();
-  if (!array)
-    report.fail(node->source(), "plugins",
-                fmt::format("expected an array of plugin files, found {}", describe(*node)));
-  const auto directory = std::filesystem::path(report.source()).parent_path();
-  for (const auto& item : *array) {
-    if (!item.is_string())
-      report.fail(item.source(), "plugins",
-                  fmt::format("expected a plugin file name, found {}", describe(item)));
-    std::filesystem::path file(item.as_string()->get());
-    if (file.is_relative()) file = directory / file;
-    try {
-      load_plugin(file);
-    } catch (const PluginError& e) {
-      report.fail(item.source(), "plugins", e.what());
-    }
-  }
-}
-
 // Every extent of the domain (length, 2 pi radius, each of lengths) lies in
 // [Domain::min_extent, Domain::max_extent]; the reason, for messages.
 bool in_extent_range(double extent) {

@@ -118,6 +118,10 @@ std::vector<PluginChoice> expand_plugins(const Reporter& report, const PluginAxi
 void check_instances(const Reporter& report, const toml::table& root, const PluginAxis& axis,
                      const std::function<void(const PluginChoice&, const PluginEntry&)>& make);
 
+/// `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
+/// before any plugin name in the file is looked up.
+void load_study_plugins(const Reporter& report, const toml::table& root);
+
 /// The sections of a study file that a study kind owns, read by its descriptor
 /// (StudyKindDescriptor::file_sections).
 class StudyFileSections {

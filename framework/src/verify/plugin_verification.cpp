@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/centres.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/rates/rates.hpp"
 #include "rkhs/approx/target.hpp"
@@ -217,7 +218,7 @@ KernelVerification verify_kernel(std::string_view name) {
 PluginVerification verify_plugin(const std::filesystem::path& file) {
   PluginVerification out;
   out.plugin = load_plugin(file);
-  for (const auto& name : out.plugin.kernels) out.kernels.push_back(verify_kernel(name));
+  for (const auto& name : out.plugin.registered.at(std::string(kernel_kind_name))) out.kernels.push_back(verify_kernel(name));
   return out;
 }
 
@@ -231,11 +232,13 @@ std::string format_verification(const PluginVerification& v) {
     for (std::size_t i = 0; i < list.size(); ++i) s += (i ? ", " : "") + list[i];
     return s;
   };
-  if (!v.plugin.kernels.empty()) out += "  kernels: " + names(v.plugin.kernels) + "\n";
-  if (!v.plugin.centres.empty())
-    out += "  centre placements (no contract, not verified): " + names(v.plugin.centres) + "\n";
-  if (!v.plugin.targets.empty())
-    out += "  targets (no contract, not verified): " + names(v.plugin.targets) + "\n";
+  const auto& registered = v.plugin.registered;
+  if (const auto& kernels = registered.at(std::string(kernel_kind_name)); !kernels.empty())
+    out += "  kernels: " + names(kernels) + "\n";
+  if (const auto& centres = registered.at(std::string(centres_kind_name)); !centres.empty())
+    out += "  centre placements (no contract, not verified): " + names(centres) + "\n";
+  if (const auto& targets = registered.at(std::string(target_kind_name)); !targets.empty())
+    out += "  targets (no contract, not verified): " + names(targets) + "\n";
   std::size_t checks = 0, skipped = 0, failed = 0;
   auto count = [&](const ContractCheck& c) {
     ++checks;

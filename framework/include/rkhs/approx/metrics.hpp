@@ -134,11 +134,6 @@ constexpr bool table_in_enum_order() {
   return true;
 }
 
-template <class Metric>
-constexpr const MetricRow<Metric>& metric_row(Metric metric) {
-  return MetricTable<Metric>::rows[static_cast<std::size_t>(metric)];
-}
-
 /// The flag a value of `row` at or below its floor carries: the row's own flag when it is a
 /// floor flag of this metric ("<stem>_at_floor" with the metric's name starting with <stem>:
 /// power_function_at_floor for power_function_sup), else "<name>_at_floor" ("" for an exact

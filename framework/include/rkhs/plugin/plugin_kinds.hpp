@@ -8,8 +8,6 @@
 //                             layer), the words `rkhs-study list` accepts
 //   builtins                  the names every build of rkhs-study registers, sorted
 //   registry()                the kind's registry (the accessor declared in the kind's layer)
-//   loaded (optional)         the member of LoadedPlugin that lists what a module registered of
-//                             this kind (kept for the kinds that had one before the table)
 // and PluginKinds lists them, in the order of `rkhs-study list` and of registration_errors().
 //
 // Who iterates the table (for_each_plugin_kind): the registries' definitions (their kind names),
@@ -36,7 +34,6 @@
 #include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/kernel/kernel.hpp"
-#include "rkhs/plugin/plugin_loader.hpp"
 
 namespace rkhs {
 
@@ -46,7 +43,6 @@ struct KernelKind {
   static constexpr std::string_view singular = kernel_kind_name;
   static constexpr std::string_view plural = "kernels";
   static constexpr std::string_view builtins[] = {"bspline", "gaussian", "matern", "wendland"};
-  static constexpr auto loaded = &LoadedPlugin::kernels;
   static Registry& registry() { return kernel_registry(); }
 };
 
@@ -56,7 +52,6 @@ struct CentresKind {
   static constexpr std::string_view singular = centres_kind_name;
   static constexpr std::string_view plural = "centres";
   static constexpr std::string_view builtins[] = {"halton", "passes", "random", "uniform"};
-  static constexpr auto loaded = &LoadedPlugin::centres;
   static Registry& registry() { return centre_registry(); }
 };
 
@@ -67,7 +62,6 @@ struct TargetKind {
   static constexpr std::string_view plural = "targets";
   static constexpr std::string_view builtins[] = {"csv", "expression", "iso8608", "sine",
                                                   "surface_csv"};
-  static constexpr auto loaded = &LoadedPlugin::targets;
   static Registry& registry() { return target_registry(); }
 };
 
@@ -88,7 +82,6 @@ struct PlantKind {
   static constexpr std::string_view plural = "plants";
   static constexpr std::string_view builtins[] = {"duffing", "linear", "pendulum", "quarter_car",
                                                   "vehicle_surface"};
-  static constexpr auto loaded = &LoadedPlugin::plants;
   static Registry& registry() { return plant_registry(); }
 };
 
@@ -98,7 +91,6 @@ struct LawKind {
   static constexpr std::string_view singular = law_kind_name;
   static constexpr std::string_view plural = "laws";
   static constexpr std::string_view builtins[] = {"gradient", "rkhs", "rkhs_embedding"};
-  static constexpr auto loaded = &LoadedPlugin::laws;
   static Registry& registry() { return law_registry(); }
 };
 
@@ -109,7 +101,6 @@ struct IntegratorKind {
   static constexpr std::string_view plural = "integrators";
   static constexpr std::string_view builtins[] = {"dopri5", "radau5", "rk4", "rk_fehlberg78",
                                                   "rodas4", "rosenbrock4"};
-  static constexpr auto loaded = &LoadedPlugin::integrators;
   static Registry& registry() { return integrator_registry(); }
 };
 

@@ -60,9 +60,6 @@ struct LoadedPlugin {
   /// What it registered, sorted, per kind of plugin: keyed by the kind's singular name
   /// (plugin_kinds.hpp), every kind present.
   std::map<std::string, std::vector<std::string>, std::less<>> registered;
-  /// The same lists for the kinds that had a member before the table of kinds (each descriptor's
-  /// `loaded`).
-  std::vector<std::string> kernels, centres, targets, plants, laws, integrators;
 };
 
 /// Loads a plugin module (see the file comment). Throws PluginError.
