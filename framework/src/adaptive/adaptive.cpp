@@ -124,10 +124,7 @@ RoadTrial::RoadTrial(const AnyKernel& kernel_, const TargetFunction& target_,
                                     : LearningMap::scalar(coefficients, 1.0 / gamma));
   const Eigen::MatrixXd& A = plant.A();
   d = A.rows();
-  const Eigen::MatrixXd Q = parse_matrix(settings.q, d);
-  if (Q.rows() != d || Q.cols() != d)
-    throw std::invalid_argument(
-        fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
+  const Eigen::MatrixXd Q = settings.q.for_dimension(d);
   P = solve_lyapunov(A, Q).P;
 
   // The road that drives the plant: f itself, or its projection Pi_n f (then f lies in H_n).

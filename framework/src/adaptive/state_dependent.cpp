@@ -352,10 +352,7 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
   const Eigen::Index d = A.rows();
-  const Eigen::MatrixXd Q = parse_matrix(settings.q, d);
-  if (Q.rows() != d || Q.cols() != d)
-    throw std::invalid_argument(
-        fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
+  const Eigen::MatrixXd Q = settings.q.for_dimension(d);
   const Eigen::MatrixXd P = solve_lyapunov(A, Q).P;
   const PlantRoad road(kernel, target, centres, sections, alpha_star, settings.projected_road);
 
