@@ -51,6 +51,8 @@ void perturb(T& value) {
   } else if constexpr (is_optional<T>::value) {
     if (value) value.reset();
     else value.emplace();
+  } else if constexpr (std::is_same_v<T, WeightMatrix>) {
+    value = WeightMatrix::parse(value.text() == "identity" ? "diag(2, 3)" : "identity");
   } else {
     static_assert(std::is_same_v<T, PluginChoice>, "teach perturb() this field type");
     value.name += "x";

@@ -93,7 +93,7 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
   const Eigen::Index d = A.rows();
-  const Eigen::MatrixXd P = solve_lyapunov(A, parse_matrix(settings.q, d)).P;
+  const Eigen::MatrixXd P = solve_lyapunov(A, settings.q.for_dimension(d)).P;
   const std::function<double(double)> road = [&](double s) { return target(s); };
   const std::function<double(double)> road_slope = [&](double s) { return target.slope(s); };
 

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "rkhs/adaptive/plant.hpp"
+#include "rkhs/adaptive/weight_matrix.hpp"
 
 namespace rkhs {
 
@@ -72,6 +73,22 @@ Eigen::MatrixXd parse_matrix(std::string_view text, Eigen::Index size) {
       out(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = rows[r][c];
   }
   return out;
+}
+
+WeightMatrix WeightMatrix::parse(std::string_view text) {
+  WeightMatrix out;
+  out.text_ = std::string(text);
+  const auto body = trim(text);
+  if (body != "identity" && body != "I") out.given_ = parse_matrix(text);
+  return out;
+}
+
+Eigen::MatrixXd WeightMatrix::for_dimension(Eigen::Index d, std::string_view name) const {
+  if (given_.size() == 0) return Eigen::MatrixXd::Identity(d, d);
+  if (given_.rows() != d || given_.cols() != d)
+    throw std::invalid_argument(fmt::format("{} is {} x {}, this plant needs {} x {}", name,
+                                            given_.rows(), given_.cols(), d, d));
+  return given_;
 }
 
 }  // namespace rkhs

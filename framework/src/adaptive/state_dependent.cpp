@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "adaptive_metrics.hpp"
 #include "rkhs/adaptive/breakpoints.hpp"
 #include "rkhs/adaptive/excitation.hpp"
 #include "rkhs/adaptive/learning_map.hpp"
@@ -69,13 +70,11 @@ std::string state_dependent_settings_error(const AdaptiveSettings& settings, dou
   return {};
 }
 
-AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const TargetFunction& target,
-                                            std::span<const double> centres, const Plant& plant,
-                                            const LearningLaw& law, const Integrator& integrator,
-                                            const AdaptiveSettings& settings,
-                                            std::size_t evaluation_points,
-                                            const SolverOptions& solver_options,
-                                            const Integrator* reference) {
+namespace {
+
+// Throws std::invalid_argument for what a state-dependent trial cannot run (the header).
+void check_trial(const AnyKernel& kernel, const Plant& plant, const LearningLaw& law,
+                 const AdaptiveSettings& settings) {
   if (const auto error = state_dependent_settings_error(settings, plant.period()); !error.empty())
     throw std::invalid_argument(error);
   law.require_kernel(kernel);
@@ -83,8 +82,7 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
     throw std::invalid_argument(
         "a state-dependent plant learns in the span of the centres' sections (laws gradient and "
         "rkhs); feature coordinates are not supported for it");
-  const Domain& domain = kernel.domain();
-  const int p = domain.dimension;  // read-out coordinates
+  const int p = kernel.domain().dimension;  // read-out coordinates
   if (plant.readout().rows() != p)
     throw std::invalid_argument(
         fmt::format("the plant reads out {} coordinate{}; f on a domain of d = {} needs {}",
@@ -92,233 +90,204 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   if (p > 1 && !settings.snapshot_laps.empty())
     throw std::invalid_argument(
         "snapshots of the estimate (adaptive.snapshot_laps) are profiles along a domain of d = 1");
-  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
-  using M = AdaptiveMetric;
-  using Static = ApproximationMetric;
-  AdaptiveMeasurement out;
-  out.engine = "time_stepping";
-  auto& metrics = out.metrics;
-  double largest_state_pair = 0;  // max over the samples of |x| + |xhat| (the floors' scale)
+}
 
-  // The static part on Omega: H_n, Pi_n f, and the cross matrix on the evaluation grid.
-  const Eigen::MatrixXd gram = kernel.gram(centres);
-  check_cancelled();
-  const GramSolver solver(gram, solver_options);
-  check_cancelled();
-  Eigen::MatrixXd cross;
-  const auto approximation =
-      measure_approximation(kernel, target, centres, evaluation_points, gram, solver, &cross);
-  metrics[M::fill_distance] = approximation.metrics[Static::fill_distance];
-  metrics[M::separation_distance] = approximation.metrics[Static::separation_distance];
-  metrics[M::gram_condition_number] = approximation.metrics[Static::gram_condition_number];
-  metrics[M::power_function_sup] = approximation.metrics[Static::power_function_sup];
-  out.solve_method = approximation.solve_method;
-  for (const auto& flag : approximation.flags)
-    out.flags.push_back(
-        flag == "sup_error_at_floor" || flag == "l2_error_at_floor" ? "interpolant_" + flag : flag);
+// f itself, or Pi_n f (then f lies in H_n and alpha* is the answer): along one read-out
+// coordinate (road, road_slope) or at a point of R^p (point_road, point_road_gradient; the
+// gradient of f by central differences, that of Pi_n f from the sections' gradients). Built in
+// place (its functions refer to it).
+struct PlantRoad {
+  PlantRoad(const AnyKernel& kernel, const TargetFunction& target, std::span<const double> centres,
+            const PointSections& sections, const Eigen::VectorXd& alpha_star, bool projected);
+  PlantRoad(const PlantRoad&) = delete;
+  PlantRoad& operator=(const PlantRoad&) = delete;
 
-  Eigen::VectorXd at_centres(n);
-  target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
-  const Eigen::VectorXd alpha_star = solver.solve(at_centres);
-  const double gamma = law.gain();
-  const auto basis = p == 1 ? kernel.basis(centres) : nullptr;
-  const PointSections sections(kernel, centres);
-  const LearningMap learning_map = law.uses_gram_inverse()
-                                       ? LearningMap::gram_inverse(solver, gamma)
-                                       : LearningMap::scalar(n, 1.0 / gamma);
-  const Eigen::MatrixXd& A = plant.A();
-  const Eigen::VectorXd& B = plant.B();
-  const Eigen::Index d = A.rows();
-  const Eigen::MatrixXd Q = parse_matrix(settings.q, d);
-  if (Q.rows() != d || Q.cols() != d)
-    throw std::invalid_argument(
-        fmt::format("Q is {} x {}, the plant needs {} x {}", Q.rows(), Q.cols(), d, d));
-  const Eigen::MatrixXd P = solve_lyapunov(A, Q).P;
+  /// f at a read-out point (p values).
+  double at(const double* y) const { return p == 1 ? road(y[0]) : point_road(y); }
 
-  // f itself, or Pi_n f (then f lies in H_n and alpha* is the answer): along one read-out
-  // coordinate (road, road_slope) or at a point of R^p (point_road, point_road_gradient; the
-  // gradient of f by central differences, that of Pi_n f from the sections' gradients).
-  const auto road_basis = p == 1 ? kernel.basis(centres) : nullptr;
-  std::vector<double> road_phi(static_cast<std::size_t>(n) * static_cast<std::size_t>(p));
-  const std::function<double(double)> road =
-      settings.projected_road ? std::function<double(double)>([&](double y) {
-        road_basis->evaluate(y, road_phi.data());
-        return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
-      })
-                              : std::function<double(double)>([&](double y) { return target(y); });
-  const std::function<double(double)> road_slope =
-      settings.projected_road
-          ? std::function<double(double)>([&](double y) {
-              road_basis->evaluate_derivative(y, road_phi.data());
-              return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
-            })
-          : std::function<double(double)>([&](double y) { return target.slope(y); });
-  const std::function<double(const double*)> point_road =
-      settings.projected_road ? std::function<double(const double*)>([&](const double* y) {
-        sections.evaluate(y, road_phi.data());
-        return Eigen::Map<const Eigen::VectorXd>(road_phi.data(), n).dot(alpha_star);
-      })
-                              : std::function<double(const double*)>([&](const double* y) {
-                                  double value = 0;
-                                  target.evaluate(std::span<const double>(y, std::size_t(p)),
-                                                  std::span<double>(&value, 1));
-                                  return value;
-                                });
-  const std::function<void(const double*, double*)> point_road_gradient =
-      settings.projected_road
-          ? std::function<void(const double*, double*)>([&](const double* y, double* g) {
-              sections.gradient(y, road_phi.data());
-              const Eigen::Map<const Eigen::MatrixXd> slopes(road_phi.data(), n, p);
-              Eigen::Map<Eigen::VectorXd>(g, p).noalias() = slopes.transpose() * alpha_star;
-            })
-          : std::function<void(const double*, double*)>([&](const double* y, double* g) {
-              // Central differences with step 1e-6 of each axis' extent; one-sided within that
-              // step of a box's faces (the target need not exist beyond them).
-              double point[Domain::max_dimension] = {0, 0, 0};
-              std::copy(y, y + p, point);
-              for (int a = 0; a < p; ++a) {
-                const double extent = domain.extent(a), step = 1e-6 * extent;
-                const double up = domain.periodic || y[a] + step <= extent ? step : 0.0;
-                const double down = domain.periodic || y[a] - step >= 0.0 ? step : 0.0;
-                point[a] = y[a] + up;
-                const double high = point_road(point);
-                point[a] = y[a] - down;
-                const double low = point_road(point);
-                point[a] = y[a];
-                g[a] = (high - low) / (up + down);
-              }
-            });
+  const Domain& domain;
+  const int p;
+  const Eigen::Index n;
+  std::unique_ptr<KernelBasis> basis;
+  std::vector<double> phi;
+  std::function<double(double)> road, road_slope;
+  std::function<double(const double*)> point_road;
+  std::function<void(const double*, double*)> point_road_gradient;
+};
 
-  std::unique_ptr<AdaptiveSystem> made;
-  if (p == 1) {
-    made = std::make_unique<AdaptiveSystem>(A, B, P, *basis, learning_map, road, road_slope, domain,
-                                            1.0, learning_signal_for(kernel));
-    made->set_state_readout(plant);
-  } else {
-    made = std::make_unique<AdaptiveSystem>(A, B, P, sections, learning_map, plant, point_road,
-                                            point_road_gradient, domain);
+PlantRoad::PlantRoad(const AnyKernel& kernel, const TargetFunction& target,
+                     std::span<const double> centres, const PointSections& sections,
+                     const Eigen::VectorXd& alpha_star, bool projected)
+    : domain(kernel.domain()),
+      p(domain.dimension),
+      n(static_cast<Eigen::Index>(domain.point_count(centres))),
+      basis(p == 1 ? kernel.basis(centres) : nullptr),
+      phi(static_cast<std::size_t>(n) * static_cast<std::size_t>(p)) {
+  if (projected) {
+    road = [this, &alpha_star](double y) {
+      basis->evaluate(y, phi.data());
+      return Eigen::Map<const Eigen::VectorXd>(phi.data(), n).dot(alpha_star);
+    };
+    road_slope = [this, &alpha_star](double y) {
+      basis->evaluate_derivative(y, phi.data());
+      return Eigen::Map<const Eigen::VectorXd>(phi.data(), n).dot(alpha_star);
+    };
+    point_road = [this, &alpha_star, &sections](const double* y) {
+      sections.evaluate(y, phi.data());
+      return Eigen::Map<const Eigen::VectorXd>(phi.data(), n).dot(alpha_star);
+    };
+    point_road_gradient = [this, &alpha_star, &sections](const double* y, double* g) {
+      sections.gradient(y, phi.data());
+      const Eigen::Map<const Eigen::MatrixXd> slopes(phi.data(), n, p);
+      Eigen::Map<Eigen::VectorXd>(g, p).noalias() = slopes.transpose() * alpha_star;
+    };
+    return;
   }
-  AdaptiveSystem& system = *made;
-  const Eigen::Index m = system.dimension();
-
-  // One lap = one forcing period. The breakpoints of a track whose lap takes that long (speed
-  // L / period) are the samples and snapshots; no kink restarts (phi(y(t)) has its kinks where
-  // the trajectory crosses a knot, not at times known in advance).
-  const double final_time =
-      settings.final_time > 0 ? settings.final_time : settings.laps * plant.period();
-  const double lap_time = plant.period() > 0 ? plant.period() : final_time;
-  AdaptiveSettings timing = settings;
-  timing.speed = domain.length / lap_time;
-  timing.final_time = final_time;
-  const auto points = adaptive_breakpoints(timing, domain, 0.0, final_time, {}, false);
-  std::vector<double> times(points.size());
-  std::transform(points.begin(), points.end(), times.begin(),
-                 [](const auto& breakpoint) { return breakpoint.t; });
-
-  Eigen::VectorXd z0 = Eigen::VectorXd::Zero(m);
-  if (const Eigen::VectorXd& x0 = plant.initial_state(); x0.size() > 0) {
-    if (x0.size() != d)
-      throw std::invalid_argument(
-          fmt::format("the plant's initial state has {} values, expected {}", x0.size(), d));
-    z0.head(d) = x0;
-    z0.segment(d, d) = x0;
-  }
-
-  // Observation: samples of |x - xhat| and V, snapshots, and over the second half of the run the
-  // visited range of y and the excitation E.
-  const auto grid = domain.uniform_points(evaluation_points);
-  const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
-  const Eigen::MatrixXd snapshot_cross =
-      settings.snapshot_laps.empty() ? Eigen::MatrixXd() : kernel.cross(snapshot_grid, centres);
-  // phi and f at a read-out point (p values).
-  auto evaluate_phi = [&](const double* y, double* out_phi) {
-    if (p == 1)
-      basis->evaluate(y[0], out_phi);
-    else
-      sections.evaluate(y, out_phi);
+  road = [&target](double y) { return target(y); };
+  road_slope = [&target](double y) { return target.slope(y); };
+  point_road = [this, &target](const double* y) {
+    double value = 0;
+    target.evaluate(std::span<const double>(y, std::size_t(p)), std::span<double>(&value, 1));
+    return value;
   };
-  auto road_at = [&](const double* y) { return p == 1 ? road(y[0]) : point_road(y); };
-  const bool gram_inverse = law.uses_gram_inverse();
-  out.snapshots.resize(settings.snapshot_laps.size());
-  for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
-    out.snapshots[i].lap = settings.snapshot_laps[i];
+  point_road_gradient = [this](const double* y, double* g) {
+    // Central differences with step 1e-6 of each axis' extent; one-sided within that step of a
+    // box's faces (the target need not exist beyond them).
+    double point[Domain::max_dimension] = {0, 0, 0};
+    std::copy(y, y + p, point);
+    for (int a = 0; a < p; ++a) {
+      const double extent = domain.extent(a), step = 1e-6 * extent;
+      const double up = domain.periodic || y[a] + step <= extent ? step : 0.0;
+      const double down = domain.periodic || y[a] - step >= 0.0 ? step : 0.0;
+      point[a] = y[a] + up;
+      const double high = point_road(point);
+      point[a] = y[a] - down;
+      const double low = point_road(point);
+      point[a] = y[a];
+      g[a] = (high - low) / (up + down);
+    }
+  };
+}
+
+// What the integration observes: samples of |x - xhat| and V, snapshots, and over the second
+// half of the run the visited range of y and the excitation E.
+struct TrajectoryObserver {
+  const AdaptiveSystem& system;
+  const Domain& domain;
+  const std::vector<Breakpoint>& points;
+  double final_time;
+  Eigen::Index d, n;
+  const Eigen::VectorXd& alpha_star;
+  const Eigen::MatrixXd& P;
+  double gamma;
+  const Eigen::MatrixXd* gram;  ///< W = G of V (rkhs law), or null (W = I)
+  const std::function<void(const double*, double*)>& evaluate_phi;  ///< phi at a read-out
+  const PlantRoad& road;
+  const Eigen::MatrixXd& snapshot_cross;
+  AdaptiveMeasurement& out;
+
+  double largest_state_pair = 0;  ///< max over the samples of |x| + |xhat| (the floors' scale)
   Eigen::MatrixXd excitation = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd phi(n), excitation_load = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd phi = Eigen::VectorXd(n), excitation_load = Eigen::VectorXd::Zero(n);
   std::size_t excitation_samples = 0;
   // The visited set: [min y, max y] in d = 1; in d > 1 the neighbourhood of the polyline through
   // the sampled read-outs (visited_points, p values each).
   double visited_low = std::numeric_limits<double>::infinity(), visited_high = -visited_low;
-  std::vector<double> visited_points;
+  std::vector<double> visited_points = {};
   bool left_domain = false;
-  auto observe = [&](std::size_t k, const double* z) {
-    check_cancelled();
-    const Breakpoint& point = points[k];
-    double y[Domain::max_dimension] = {0, 0, 0};
-    system.readout_point(z, y);
-    // Beyond the interval or box by more than 1e-6 of its extent: a read-out that runs along
-    // a face (a path on the box's edge) stays within its integration error of it.
-    for (int a = 0; a < p; ++a) {
-      const double slack = 1e-6 * domain.extent(a);
-      if (!domain.periodic && (y[a] < -slack || y[a] > domain.extent(a) + slack))
-        left_domain = true;
+
+  void observe(std::size_t k, const double* z);
+  /// E and its load r = mean f(y) phi(y) as means over the samples, after the integration.
+  void finish();
+};
+
+void TrajectoryObserver::observe(std::size_t k, const double* z) {
+  check_cancelled();
+  const int p = domain.dimension;
+  const Breakpoint& point = points[k];
+  double y[Domain::max_dimension] = {0, 0, 0};
+  system.readout_point(z, y);
+  // Beyond the interval or box by more than 1e-6 of its extent: a read-out that runs along
+  // a face (a path on the box's edge) stays within its integration error of it.
+  for (int a = 0; a < p; ++a) {
+    const double slack = 1e-6 * domain.extent(a);
+    if (!domain.periodic && (y[a] < -slack || y[a] > domain.extent(a) + slack)) left_domain = true;
+  }
+  if (point.roles & sample_role) {
+    out.samples.push_back(
+        adaptive_sample(point.t, z, d, alpha_star, P, gamma, gram, largest_state_pair));
+    if (point.t >= 0.5 * final_time) {
+      evaluate_phi(y, phi.data());
+      excitation.selfadjointView<Eigen::Lower>().rankUpdate(phi);
+      excitation_load += road.at(y) * phi;
+      ++excitation_samples;
+      visited_low = std::min(visited_low, y[0]);
+      visited_high = std::max(visited_high, y[0]);
+      visited_points.insert(visited_points.end(), y, y + p);
     }
-    if (point.roles & sample_role) {
-      const Eigen::Map<const Eigen::VectorXd> x(z, d), xhat(z + d, d), alpha(z + 2 * d, n);
-      const Eigen::VectorXd e = x - xhat;
-      const Eigen::VectorXd gap = alpha_star - alpha;
-      const double weighted = gram_inverse ? gap.dot(gram * gap) : gap.squaredNorm();
-      out.samples.push_back({point.t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted});
-      largest_state_pair = std::max(largest_state_pair, x.norm() + xhat.norm());
-      if (point.t >= 0.5 * final_time) {
-        evaluate_phi(y, phi.data());
-        excitation.selfadjointView<Eigen::Lower>().rankUpdate(phi);
-        excitation_load += road_at(y) * phi;
-        ++excitation_samples;
-        visited_low = std::min(visited_low, y[0]);
-        visited_high = std::max(visited_high, y[0]);
-        visited_points.insert(visited_points.end(), y, y + p);
-      }
-    }
-    if (point.roles & snapshot_role) {
-      const Eigen::VectorXd estimate =
-          snapshot_cross * Eigen::Map<const Eigen::VectorXd>(z + 2 * d, n);
-      out.snapshots[point.snapshot_index].estimate.assign(estimate.data(),
-                                                          estimate.data() + estimate.size());
-    }
-  };
-  Eigen::VectorXd z = z0;
-  const IntegrationStats stats = integrator.integrate(system, z, times, observe);
+  }
+  if (point.roles & snapshot_role) {
+    const Eigen::VectorXd estimate =
+        snapshot_cross * Eigen::Map<const Eigen::VectorXd>(z + 2 * d, n);
+    out.snapshots[point.snapshot_index].estimate.assign(estimate.data(),
+                                                        estimate.data() + estimate.size());
+  }
+}
+
+void TrajectoryObserver::finish() {
   excitation = excitation.selfadjointView<Eigen::Lower>();
   if (excitation_samples > 0) {
     excitation /= static_cast<double>(excitation_samples);
     excitation_load /= static_cast<double>(excitation_samples);
   }
   if (left_domain) out.flags.push_back("readout_left_domain");
+}
 
-  if (p == 1) {
-    out.road.resize(snapshot_grid.size());
-    for (std::size_t k = 0; k < snapshot_grid.size(); ++k) out.road[k] = road(snapshot_grid[k]);
-  }
-  const std::size_t grid_count = domain.point_count(grid);
-  Eigen::VectorXd f(static_cast<Eigen::Index>(grid_count));
-  for (std::size_t k = 0; k < grid_count; ++k)
-    f(static_cast<Eigen::Index>(k)) = road_at(grid.data() + k * static_cast<std::size_t>(p));
-  const Eigen::VectorXd alpha = z.tail(n);
-  const Eigen::VectorXd estimate = cross * alpha, projection = cross * alpha_star;
-  auto l2 = [&](const Eigen::VectorXd& v) {
-    return domain.l2_norm(std::span<const double>(v.data(), static_cast<std::size_t>(v.size())));
-  };
-  const Eigen::VectorXd interpolant_residual = f - projection, residual = f - estimate;
-  metrics[M::interpolant_l2_error] = l2(interpolant_residual);
-  metrics[M::interpolant_sup_error] = interpolant_residual.cwiseAbs().maxCoeff();
-  metrics[M::l2_error] = l2(residual);
-  metrics[M::sup_error] = residual.cwiseAbs().maxCoeff();
-  metrics[M::gap_to_projection] = l2(estimate - projection);
+// P_L2 f along the trajectory: the g in H_n of least H-norm that minimises the time average
+// of (f - g)^2(y(t)) over the second half, E a = r with r = mean f(y) phi(y) (the minimum
+// G-norm solution through G = L L^T: a = L^-T (L^-1 E L^-T)^+ L^-1 r). The pseudo-inverse
+// drops the eigenvalues of L^-1 E L^-T within its round-off, eps max(n, cond(G)) times the
+// largest (`condition`: cond(G)): directions the trajectory excites less than that are not
+// determined by it (in d > 1 a curve grazes many supports, and keeping them made P_L2 f off the
+// curve noise). Its coefficients.
+Eigen::VectorXd trajectory_l2_projection(const Eigen::MatrixXd& gram,
+                                         const Eigen::MatrixXd& excitation,
+                                         const Eigen::VectorXd& excitation_load, double condition) {
+  const Eigen::Index n = gram.rows();
+  Eigen::LLT<Eigen::MatrixXd> cholesky(gram);
+  if (cholesky.info() != Eigen::Success)
+    return excitation.completeOrthogonalDecomposition().solve(excitation_load);
+  const auto L = cholesky.matrixL();
+  Eigen::MatrixXd reduced = L.solve(excitation);
+  reduced = L.solve(reduced.transpose()).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(reduced);
+  const Eigen::VectorXd& values = eigen.eigenvalues();
+  const double cutoff =
+      std::numeric_limits<double>::epsilon() *
+      std::max(static_cast<double>(n), std::isfinite(condition) ? condition : 0.0) *
+      std::max(values.cwiseAbs().maxCoeff(), 1e-300);
+  Eigen::VectorXd w = eigen.eigenvectors().transpose() * L.solve(excitation_load);
+  for (Eigen::Index i = 0; i < n; ++i) w(i) = values(i) > cutoff ? w(i) / values(i) : 0.0;
+  return L.transpose().solve(eigen.eigenvectors() * w);
+}
+
+// path_l2_error and off_path_l2_error: the error `residual` (on `grid`) on and off the visited
+// set, and visited_rms_error: f - fhat(T) at the sampled read-outs of the second half.
+void set_visited_errors(const TrajectoryObserver& seen, const std::vector<double>& grid,
+                        const Eigen::VectorXd& residual, const Eigen::VectorXd& alpha,
+                        AdaptiveMeasurement& out) {
+  using M = AdaptiveMetric;
+  const Domain& domain = seen.domain;
+  const int p = domain.dimension;
+  auto& metrics = out.metrics;
   if (p > 1) {  // On and off the visited set: the grid points within the centres' fill distance
                 // of the polyline through the sampled read-outs, with the L2 norm's weights
                 // (the two parts add up to l2_error^2).
+    const auto l2 = [&](const Eigen::VectorXd& v) {
+      return domain.l2_norm(std::span<const double>(v.data(), static_cast<std::size_t>(v.size())));
+    };
     const double reach = metrics[M::fill_distance];
-    const auto on_path = visited_neighbourhood(domain, visited_points, grid, reach);
+    const auto on_path = visited_neighbourhood(domain, seen.visited_points, grid, reach);
     Eigen::VectorXd on = residual, off = residual;
     for (Eigen::Index k = 0; k < residual.size(); ++k)
       (on_path[static_cast<std::size_t>(k)] ? off : on)(k) = 0;
@@ -335,95 +304,156 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
                                 ? domain.length / static_cast<double>(count)
                                 : (k == 0 || k + 1 == count ? 0.5 : 1.0) * domain.length /
                                       static_cast<double>(count - 1);
-      (grid[k] >= visited_low && grid[k] <= visited_high ? on : off) += weight * r * r;
+      (grid[k] >= seen.visited_low && grid[k] <= seen.visited_high ? on : off) += weight * r * r;
     }
     metrics[M::path_l2_error] = std::sqrt(on);
     metrics[M::off_path_l2_error] = std::sqrt(off);
   }
-  {  // f - fhat(T) where the trajectory went: at the sampled read-outs of the second half.
-    const std::size_t visited = visited_points.size() / static_cast<std::size_t>(p);
-    double sum = 0;
-    for (std::size_t k = 0; k < visited; ++k) {
-      const double* y = visited_points.data() + k * static_cast<std::size_t>(p);
-      evaluate_phi(y, phi.data());
-      const double r = road_at(y) - phi.dot(alpha);
-      sum += r * r;
-    }
-    metrics[M::visited_rms_error] =
-        visited > 0 ? std::sqrt(sum / static_cast<double>(visited)) : std::nan("");
+  const std::size_t visited = seen.visited_points.size() / static_cast<std::size_t>(p);
+  Eigen::VectorXd phi(seen.n);
+  double sum = 0;
+  for (std::size_t k = 0; k < visited; ++k) {
+    const double* y = seen.visited_points.data() + k * static_cast<std::size_t>(p);
+    seen.evaluate_phi(y, phi.data());
+    const double r = seen.road.at(y) - phi.dot(alpha);
+    sum += r * r;
   }
-  metrics[M::final_state_error] = (z.head(d) - z.segment(d, d)).norm();
-  double max_state_error = 0, max_increase = 0;
-  for (std::size_t k = 0; k < out.samples.size(); ++k) {
-    max_state_error = std::max(max_state_error, out.samples[k].state_error);
-    if (k > 0)
-      max_increase = std::max(max_increase, out.samples[k].lyapunov - out.samples[k - 1].lyapunov);
+  metrics[M::visited_rms_error] =
+      visited > 0 ? std::sqrt(sum / static_cast<double>(visited)) : std::nan("");
+}
+
+}  // namespace
+
+AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const TargetFunction& target,
+                                            std::span<const double> centres, const Plant& plant,
+                                            const LearningLaw& law, const Integrator& integrator,
+                                            const AdaptiveSettings& settings,
+                                            std::size_t evaluation_points,
+                                            const SolverOptions& solver_options,
+                                            const Integrator* reference) {
+  check_trial(kernel, plant, law, settings);
+  const Domain& domain = kernel.domain();
+  const int p = domain.dimension;  // read-out coordinates
+  using M = AdaptiveMetric;
+  AdaptiveMeasurement out;
+  out.engine = "time_stepping";
+
+  // The static part on Omega: H_n, Pi_n f, and the cross matrix on the evaluation grid.
+  const StaticPart fixed(kernel, target, centres, evaluation_points, solver_options);
+  fixed.record(out);
+  const Eigen::Index n = fixed.n;
+  const Eigen::VectorXd& alpha_star = fixed.alpha_star;
+  const double gamma = law.gain();
+  const auto basis = p == 1 ? kernel.basis(centres) : nullptr;
+  const PointSections sections(kernel, centres);
+  const LearningMap learning_map = law.uses_gram_inverse()
+                                       ? LearningMap::gram_inverse(fixed.solver, gamma)
+                                       : LearningMap::scalar(n, 1.0 / gamma);
+  const Eigen::MatrixXd& A = plant.A();
+  const Eigen::VectorXd& B = plant.B();
+  const Eigen::Index d = A.rows();
+  const Eigen::MatrixXd Q = settings.q.for_dimension(d);
+  const Eigen::MatrixXd P = solve_lyapunov(A, Q).P;
+  const PlantRoad road(kernel, target, centres, sections, alpha_star, settings.projected_road);
+
+  std::unique_ptr<AdaptiveSystem> made;
+  if (p == 1) {
+    made =
+        std::make_unique<AdaptiveSystem>(A, B, P, *basis, learning_map, road.road, road.road_slope,
+                                         domain, 1.0, learning_signal_for(kernel));
+    made->set_state_readout(plant);
+  } else {
+    made = std::make_unique<AdaptiveSystem>(A, B, P, sections, learning_map, plant, road.point_road,
+                                            road.point_road_gradient, domain);
   }
-  metrics[M::max_state_error] = max_state_error;
-  if (settings.projected_road) {
-    const double v0 = out.samples.front().lyapunov;
-    metrics[M::coefficient_error] =
-        (alpha - alpha_star).norm() / std::max(alpha_star.norm(), 1e-300);
-    metrics[M::lyapunov_max_increase] = v0 > 0 ? max_increase / v0 : max_increase;
-    metrics[M::lyapunov_ratio] = v0 > 0 ? out.samples.back().lyapunov / v0 : std::nan("");
+  AdaptiveSystem& system = *made;
+
+  // One lap = one forcing period. The breakpoints of a track whose lap takes that long (speed
+  // L / period) are the samples and snapshots; no kink restarts (phi(y(t)) has its kinks where
+  // the trajectory crosses a knot, not at times known in advance).
+  const double final_time =
+      settings.final_time > 0 ? settings.final_time : settings.laps * plant.period();
+  const double lap_time = plant.period() > 0 ? plant.period() : final_time;
+  AdaptiveSettings timing = settings;
+  timing.speed = domain.length / lap_time;
+  timing.final_time = final_time;
+  const auto points = adaptive_breakpoints(timing, domain, 0.0, final_time, {}, false);
+  std::vector<double> times(points.size());
+  std::transform(points.begin(), points.end(), times.begin(),
+                 [](const auto& breakpoint) { return breakpoint.t; });
+
+  Eigen::VectorXd z0 = Eigen::VectorXd::Zero(system.dimension());
+  if (const Eigen::VectorXd& x0 = plant.initial_state(); x0.size() > 0) {
+    if (x0.size() != d)
+      throw std::invalid_argument(
+          fmt::format("the plant's initial state has {} values, expected {}", x0.size(), d));
+    z0.head(d) = x0;
+    z0.segment(d, d) = x0;
   }
-  {  // P_L2 f along the trajectory: the g in H_n of least H-norm that minimises the time average
-     // of (f - g)^2(y(t)) over the second half, E a = r with r = mean f(y) phi(y) (the minimum
-     // G-norm solution through G = L L^T: a = L^-T (L^-1 E L^-T)^+ L^-1 r). The pseudo-inverse
-     // drops the eigenvalues of L^-1 E L^-T within its round-off, eps max(n, cond(G)) times the
-     // largest: directions the trajectory excites less than that are not determined by it (in
-     // d > 1 a curve grazes many supports, and keeping them made P_L2 f off the curve noise).
-    Eigen::LLT<Eigen::MatrixXd> cholesky(gram);
-    Eigen::VectorXd coefficients;
-    if (cholesky.info() == Eigen::Success) {
-      const auto L = cholesky.matrixL();
-      Eigen::MatrixXd reduced = L.solve(excitation);
-      reduced = L.solve(reduced.transpose()).transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(reduced);
-      const Eigen::VectorXd& values = eigen.eigenvalues();
-      const double condition = metrics[M::gram_condition_number];
-      const double cutoff =
-          std::numeric_limits<double>::epsilon() *
-          std::max(static_cast<double>(n), std::isfinite(condition) ? condition : 0.0) *
-          std::max(values.cwiseAbs().maxCoeff(), 1e-300);
-      Eigen::VectorXd w = eigen.eigenvectors().transpose() * L.solve(excitation_load);
-      for (Eigen::Index i = 0; i < n; ++i) w(i) = values(i) > cutoff ? w(i) / values(i) : 0.0;
-      coefficients = L.transpose().solve(eigen.eigenvectors() * w);
-    } else {
-      coefficients = excitation.completeOrthogonalDecomposition().solve(excitation_load);
-    }
-    const Eigen::VectorXd l2_projection = cross * coefficients;
-    const Eigen::VectorXd l2_projection_residual = f - l2_projection;
-    metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
-    metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
-    metrics[M::gap_to_l2_projection] = l2(estimate - l2_projection);
-    set_static_floors(approximation, solver.spectrum(), n, l2(l2_projection),
-                      l2_projection.cwiseAbs().maxCoeff(), out);
+
+  const auto grid = domain.uniform_points(evaluation_points);
+  const auto snapshot_grid = domain.uniform_points(settings.snapshot_points);
+  const Eigen::MatrixXd snapshot_cross =
+      settings.snapshot_laps.empty() ? Eigen::MatrixXd() : kernel.cross(snapshot_grid, centres);
+  const std::function<void(const double*, double*)> evaluate_phi = [&](const double* y,
+                                                                       double* phi) {
+    if (p == 1)
+      basis->evaluate(y[0], phi);
+    else
+      sections.evaluate(y, phi);
+  };
+  out.snapshots.resize(settings.snapshot_laps.size());
+  for (std::size_t i = 0; i < settings.snapshot_laps.size(); ++i)
+    out.snapshots[i].lap = settings.snapshot_laps[i];
+  TrajectoryObserver seen{system,
+                          domain,
+                          points,
+                          final_time,
+                          d,
+                          n,
+                          alpha_star,
+                          P,
+                          gamma,
+                          law.uses_gram_inverse() ? &fixed.gram : nullptr,
+                          evaluate_phi,
+                          road,
+                          snapshot_cross,
+                          out};
+  Eigen::VectorXd z = z0;
+  const IntegrationStats stats = integrator.integrate(
+      system, z, times, [&](std::size_t k, const double* state) { seen.observe(k, state); });
+  seen.finish();
+
+  if (p == 1) {
+    out.road.resize(snapshot_grid.size());
+    for (std::size_t k = 0; k < snapshot_grid.size(); ++k)
+      out.road[k] = road.road(snapshot_grid[k]);
   }
-  {  // Persistence of excitation along the trajectory.
-    const auto level = excitation_level(excitation, gram, solver.spectrum());
-    const double unexcited =
-        solver.spectrum().singular ? std::nan("") : static_cast<double>(level.unexcited);
-    metrics[M::pe_level] = level.value;
-    out.floors[M::pe_level] = level.error_bound;
-    metrics[M::unexcited_dimension] = unexcited;
-    if (unexcited > 0) {
-      metrics[M::pe_level] = 0.0;
-      out.flags.push_back("not_persistently_excited");
-    } else if (!level.resolved && !solver.spectrum().singular) {
-      out.flags.push_back("pe_level_unresolved");
-    }
-  }
-  set_integration_floors(settings, AdaptiveEngine::time_stepping, domain, estimate, alpha,
-                         alpha_star, largest_state_pair, d,
-                         cross.size() ? cross.cwiseAbs().rowwise().sum().maxCoeff() : 0.0,
-                         std::numeric_limits<double>::quiet_NaN(), out);
+  const std::size_t grid_count = domain.point_count(grid);
+  Eigen::VectorXd f(static_cast<Eigen::Index>(grid_count));
+  for (std::size_t k = 0; k < grid_count; ++k)
+    f(static_cast<Eigen::Index>(k)) = road.at(grid.data() + k * static_cast<std::size_t>(p));
+  const Eigen::VectorXd alpha = z.tail(n);
+  const Eigen::VectorXd estimate = fixed.cross * alpha, projection = fixed.cross * alpha_star;
+  const Eigen::VectorXd l2_projection =
+      fixed.cross * trajectory_l2_projection(fixed.gram, seen.excitation, seen.excitation_load,
+                                             out.metrics[M::gram_condition_number]);
+  // Persistence of excitation along the trajectory.
+  const GramSpectrum& spectrum = fixed.solver.spectrum();
+  const auto level = excitation_level(seen.excitation, fixed.gram, spectrum);
+  const Eigen::VectorXd residual = set_shared_metrics(
+      {domain, fixed, f, estimate, projection, l2_projection, z, d, alpha, alpha_star,
+       settings.projected_road, level,
+       spectrum.singular ? std::nan("") : static_cast<double>(level.unexcited), !spectrum.singular},
+      out);
+  set_visited_errors(seen, grid, residual, alpha, out);
+  set_integration_floors(
+      settings, AdaptiveEngine::time_stepping, domain, estimate, alpha, alpha_star,
+      seen.largest_state_pair, d,
+      fixed.cross.size() ? fixed.cross.cwiseAbs().rowwise().sum().maxCoeff() : 0.0,
+      std::numeric_limits<double>::quiet_NaN(), out);
   out.floors[M::visited_rms_error] = out.floors[M::sup_error];
-  metrics[M::steps] = static_cast<double>(stats.steps);
-  metrics[M::rejected_steps] = static_cast<double>(stats.rejected_steps);
-  metrics[M::segments] = static_cast<double>(stats.segments);
-  metrics[M::rhs_evaluations] = static_cast<double>(system.rhs_evaluations());
-  metrics[M::jacobian_evaluations] = static_cast<double>(system.jacobian_evaluations());
+  set_cost_metrics(stats, system.rhs_evaluations(), system.jacobian_evaluations(), out);
   if (reference) {
     const auto started = std::chrono::steady_clock::now();
     Eigen::VectorXd z_ref = z0;
@@ -431,9 +461,8 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
                          [](std::size_t, const double*) { check_cancelled(); });
     out.reference_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const Eigen::VectorXd estimate_ref = cross * z_ref.tail(n);
-    metrics[M::integration_error] =
-        l2(estimate - estimate_ref) / std::max(l2(estimate_ref), 1e-300);
+    out.metrics[M::integration_error] =
+        integration_error(domain, estimate, fixed.cross * z_ref.tail(n));
   }
   return out;
 }

@@ -43,6 +43,8 @@ bool write_value(const T& value, std::string& out) {
   } else if constexpr (std::is_integral_v<T>) {
     out += std::to_string(value);
     return true;
+  } else if constexpr (std::is_same_v<T, WeightMatrix>) {
+    return write_value(value.text(), out);  // as written, as when q was a string
   } else if constexpr (std::is_same_v<T, AdaptiveEngine>) {
     out += adaptive_engine_name(value);
     return true;

@@ -284,9 +284,9 @@ AdaptiveSection parse_adaptive(const Reporter& report, const toml::table& root,
                     "cannot reach the periodic limit; give a number of laps or remove reference");
   }
 
-  settings.q = get_string(report, *table, "q", "adaptive.", std::string("identity"));
   try {
-    parse_matrix(settings.q, 1);
+    settings.q = WeightMatrix::parse(
+        get_string(report, *table, "q", "adaptive.", std::string("identity")));
   } catch (const std::exception& e) {
     report.fail(table->get("q")->source(), "adaptive.q", e.what());
   }
@@ -373,10 +373,7 @@ class AdaptiveFileSections final : public StudyFileSections {
     check_instances(report, root, plant_axis, [&](const PluginChoice& c, const PluginEntry&) {
       const auto plant = plant_registry().find(c.name)->factory(c.parameters);
       const auto d = plant->A().rows();
-      const auto Q = parse_matrix(study.adaptive.q, d);
-      if (Q.rows() != d || Q.cols() != d)
-        throw std::invalid_argument(fmt::format("adaptive.q is {} x {}, this plant needs {} x {}",
-                                                Q.rows(), Q.cols(), d, d));
+      const auto Q = study.adaptive.q.for_dimension(d, "adaptive.q");
       solve_lyapunov(plant->A(), Q);
       const int dimension = study.domain.dimension;
       if (!plant->state_dependent() && dimension > 1)

@@ -16,6 +16,7 @@
 #include "rkhs/adaptive/coupled_structure.hpp"
 #include "rkhs/adaptive/learning_map.hpp"
 #include "rkhs/adaptive/metrics.hpp"
+#include "rkhs/adaptive/weight_matrix.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/kernel/point_sections.hpp"
@@ -283,7 +284,7 @@ struct AdaptiveSettings {
   /// steady state (lap map only).
   double laps = 10;
   double final_time = 0;              ///< s
-  std::string q = "identity";         ///< Q of the Lyapunov equation (parse_matrix syntax)
+  WeightMatrix q;                     ///< Q of the Lyapunov equation
   bool projected_road = false;        ///< drive the plant with Pi_n f (in H_n) instead of f
   std::vector<double> snapshot_laps;  ///< laps at which fhat is recorded (estimates.csv)
   std::size_t snapshot_points = 256;  ///< points of the snapshot grid

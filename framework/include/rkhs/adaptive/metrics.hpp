@@ -63,7 +63,7 @@ template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
   using F = FloorRule;
-  static constexpr std::array<MetricRow<M>, 46> rows{{
+  static constexpr auto rows = std::to_array<MetricRow<M>>({
       { {"fill_distance", "fill distance h", F::exact, "m", "h = sup_x min_i |x - c_i|", false, ""}, M::fill_distance},
       { {"separation_distance", "separation distance q", F::exact, "m",
        "q = min_{i != j} |c_i - c_j| / 2; NaN for a single centre", true, ""}, M::separation_distance},
@@ -197,7 +197,7 @@ struct MetricTable<AdaptiveMetric> {
        "state-dependent plants: the root mean square of f - fhat(T) at the read-outs sampled over "
        "the second half of the run, where the trajectory went (what it can teach); NaN otherwise",
        true, ""}, M::visited_rms_error},
-  }};
+  });
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());
 

@@ -244,7 +244,7 @@ template <>
 struct MetricTable<ApproximationMetric> {
   using M = ApproximationMetric;
   using F = FloorRule;
-  static constexpr std::array<MetricRow<M>, 13> rows{{
+  static constexpr auto rows = std::to_array<MetricRow<M>>({
       { {"fill_distance", "fill distance h", F::exact, "m", "h = sup_x min_i |x - c_i|", false, "", true,
        work_fill}, M::fill_distance},
       { {"separation_distance", "separation distance q", F::exact, "m",
@@ -284,7 +284,7 @@ struct MetricTable<ApproximationMetric> {
       { {"projection_operator_norm", "norm of Π on H", F::round_off, "1",
        "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
        work_operator_norm}, M::projection_operator_norm},
-  }};
+  });
 };
 static_assert(table_in_enum_order<ApproximationMetric>());
 
