@@ -2,8 +2,8 @@
 #   - rkhs/version.hpp, generated from the project version (plugins record what they were built
 #     against);
 #   - rkhs_study::plugin, the framework for plugin modules, and rkhs_study_add_plugin();
-#   - `cmake --install` puts headers, librkhs_study.so, the rkhs-study command and the CMake
-#     package rkhs_study (rkhs_studyConfig.cmake) under the prefix.
+#   - `cmake --install` puts the public headers, librkhs_study.so, the rkhs-study command and the
+#     CMake package rkhs_study (rkhs_studyConfig.cmake) under the prefix.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -38,8 +38,10 @@ install(TARGETS rkhs_study rkhs_study_plugin rkhs-study
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/framework/include/ ${PROJECT_SOURCE_DIR}/plugins/include/
-                  ${RKHS_GENERATED_INCLUDE_DIR}/
+# The public headers only: framework/include/ (the plugin API, the study and result types, and
+# what they include) and the generated rkhs/version.hpp. framework/internal/, plugins/internal/ and
+# framework/mpi/internal/ are not installed (plugins.install_and_build_example checks the list).
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/framework/include/ ${RKHS_GENERATED_INCLUDE_DIR}/
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
         FILES_MATCHING PATTERN "*.hpp")
 

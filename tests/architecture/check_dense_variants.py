@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The dense kernels' variants share no code (framework/include/rkhs/approx/dense_kernels.hpp).
+"""The dense kernels' variants share no code (framework/internal/rkhs/approx/dense_kernels.hpp).
 
 Each object file given is one variant, compiled for its own instruction set with Eigen's
 namespace renamed to rkhs_eigen_<variant>. A weak or unique symbol (an inline function or

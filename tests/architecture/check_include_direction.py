@@ -1,11 +1,17 @@
 #!/usr/bin/env python3
 """Dependencies point down: no file of a lower layer includes a header of a higher one.
 
-The layers, bottom to top, are the folders of framework/include/rkhs/ and framework/src/, then
-the MPI runner (framework/mpi/) and the command (framework/cli/). The built-in plugins
-(plugins/) sit beside the framework: they may include the layers a plugin module may use (up
-to plugin/) and each other's headers (rkhs/integrators/, rkhs/kernels/, rkhs/plants/, rkhs/targets/), and no framework layer
-includes them. docs/architecture.md draws the same picture.
+The layers, bottom to top, are the folders of framework/include/rkhs/, framework/internal/rkhs/
+and framework/src/, then the MPI runner (framework/mpi/) and the command (framework/cli/). The
+built-in plugins (plugins/) sit beside the framework: they may include the layers a plugin module
+may use (up to plugin/) and each other's headers (plugins/internal/rkhs/integrators/, kernels/,
+plants/, targets/), and no framework layer includes them. docs/architecture.md draws the same
+picture.
+
+A layer's headers sit under one of two roots, included the same way (rkhs/<layer>/x.hpp): the
+public ones under framework/include/rkhs/ (installed: the plugin API, the study and result types)
+and the internal ones under framework/internal/rkhs/ (not installed). A public header includes
+public headers only, or the installed package would not compile.
 
 Every `#include "rkhs/<folder>/..."` (or `<rkhs/<folder>/...>`) of every C++ file below
 framework/ and plugins/ (.hpp, .cpp, .h, .ipp, .inl, .tpp, .cc, .cxx, .hh) is checked; a file of
@@ -14,7 +20,9 @@ layer L may include layer M only when M is L or below it. Also fails, each with 
     every layer folder, a header at the root of rkhs/ included;
   - an include of `rkhs/<file>` with no layer folder;
   - any other quoted include that climbs (`..`) or does not resolve, from the including file's
-    folder or its layer's root, to a file of the same layer: a private header stays in its layer.
+    folder or its layer's root, to a file of the same layer: a private header stays in its layer;
+  - a public header (framework/include/rkhs/) that includes a header that is not public: an
+    internal one, a built-in plugin's, or none at all.
 
 The library's layers are also framework/CMakeLists.txt's RKHS_LAYERS (one object library each,
 linked against the layers below only: the layer check); --cmake-layers "core;kernel;..." checks
@@ -39,6 +47,8 @@ LOCAL_INCLUDE = re.compile(r'^\s*#\s*include\s+"((?!rkhs/)[^"]+)"', re.M)
 # Generated into the build tree's rkhs/ (cmake/version.hpp.in): the project's version, below every
 # layer, the one header at the root of rkhs/.
 GENERATED_ROOT_HEADERS = {"version.hpp"}
+# The two roots of the framework's headers: public (installed) and internal (this build only).
+PUBLIC_AND_INTERNAL = (("framework", "include"), ("framework", "internal"))
 SUFFIXES = (".hpp", ".cpp", ".h", ".ipp", ".inl", ".tpp", ".cc", ".cxx", ".hh")
 
 
@@ -47,13 +57,13 @@ def layer_of(path, source):
     rel = path.relative_to(source).parts
     if rel[0] == "plugins":
         return ("plugins", None)
-    if rel[:4] == ("framework", "mpi", "include", "rkhs"):
+    if rel[:4] == ("framework", "mpi", "internal", "rkhs"):
         return ("framework", rel[4]) if len(rel) >= 6 else None
     if rel[:2] == ("framework", "mpi"):
         return ("framework", "mpi")
     if rel[:2] == ("framework", "cli"):
         return ("framework", "cli")
-    if rel[:3] == ("framework", "include", "rkhs") and len(rel) >= 5:
+    if rel[:2] in PUBLIC_AND_INTERNAL and rel[2] == "rkhs" and len(rel) >= 5:
         return ("framework", rel[3])
     if rel[:2] == ("framework", "src") and len(rel) >= 4:
         return ("framework", rel[2])
@@ -69,7 +79,13 @@ def layer_roots(path, source, placed):
     if layer in ("mpi", "cli"):
         return [path.parent, source / "framework" / layer, source / "framework" / layer / "src"]
     return [path.parent, source / "framework" / "src" / layer,
-            source / "framework" / "include" / "rkhs" / layer]
+            source / "framework" / "include" / "rkhs" / layer,
+            source / "framework" / "internal" / "rkhs" / layer]
+
+
+def is_public(path, source):
+    """Whether a file is a public (installed) header: below framework/include/rkhs/."""
+    return path.relative_to(source).parts[:3] == ("framework", "include", "rkhs")
 
 
 def violations(source):
@@ -83,7 +99,8 @@ def violations(source):
         rel = path.relative_to(source)
         if placed is None:
             found.append(f"{rel}: outside every layer folder (framework/include/rkhs/<layer>/, "
-                         "framework/src/<layer>/, framework/mpi/, framework/cli/, plugins/; "
+                         "framework/internal/rkhs/<layer>/, framework/src/<layer>/, "
+                         "framework/mpi/, framework/cli/, plugins/; "
                          "a header at the root of rkhs/ belongs under rkhs/<layer>/)")
             continue
         kind, layer = placed
@@ -101,6 +118,11 @@ def violations(source):
                              f"folder (rkhs/<layer>/...)")
                 continue
             where = f"{rel}:{line}: includes rkhs/{target}/"
+            public = source / "framework" / "include" / "rkhs" / target / match.group(2)
+            if is_public(path, source) and not public.is_file():
+                found.append(f"{rel}:{line}: a public header includes rkhs/{target}/"
+                             f"{match.group(2)}, which is not a public header (not below "
+                             f"framework/include/rkhs/): the installed package would not compile")
             if target in PLUGIN_HEADER_FOLDERS:
                 if kind != "plugins":
                     found.append(f"{where}: a framework layer ({layer}) includes a built-in plugin")
@@ -130,6 +152,9 @@ def violations(source):
             elif layer_of(resolved[0], source) != placed:
                 found.append(f"{where}: resolves to {resolved[0].relative_to(source)}, in another "
                              f"layer than {rel}")
+            elif is_public(path, source) and not is_public(resolved[0], source):
+                found.append(f"{where}: a public header includes "
+                             f"{resolved[0].relative_to(source)}, which is not a public header")
     return found
 
 
@@ -149,6 +174,8 @@ def self_test():
                 assert part in message, (message, part)
 
     accepted = {"framework/include/rkhs/core/a.hpp": "",
+                "framework/internal/rkhs/core/i.hpp": '#include "rkhs/core/a.hpp"\n',
+                "framework/include/rkhs/run/p.hpp": '#include "rkhs/core/a.hpp"\n',
                 "framework/src/report/b.cpp": '#include "rkhs/core/a.hpp"\n#include "c.hpp"\n',
                 "framework/src/report/c.hpp": "#include <rkhs/core/a.hpp>\n",
                 "framework/cli/commands/x.cpp": '#include "commands/y.hpp"\n',
@@ -162,7 +189,7 @@ def self_test():
     check({**accepted, "plugins/kernels/k.cpp": '#include "rkhs/run/run.hpp"\n'},
           ["a built-in plugin may use only"])
     # A header at the root of rkhs/ (in the MPI runner's tree) and its include.
-    check({**accepted, "framework/mpi/include/rkhs/d.hpp": "",
+    check({**accepted, "framework/mpi/internal/rkhs/d.hpp": "",
            "framework/mpi/src/m.cpp": '#include "rkhs/d.hpp"\n'},
           ["outside every layer folder", "a header at the root of rkhs/"])
     # A relative include into another layer's sources, and one that resolves elsewhere.
@@ -170,9 +197,26 @@ def self_test():
           ["climbs out of its folder"])
     check({**accepted, "framework/src/core/w.cpp": '#include "c.hpp"\n'},
           ["not a file of its own layer"])
+    # A public header that includes an internal header (of its own layer or a lower one, quoted,
+    # in angle brackets or relative to its folder), a built-in plugin's, or nothing; an internal
+    # header may include either.
+    check({**accepted, "framework/include/rkhs/core/b.hpp": '#include "rkhs/core/i.hpp"\n'},
+          ["a public header includes rkhs/core/i.hpp, which is not a public header"])
+    check({**accepted, "framework/include/rkhs/run/q.hpp": "#include <rkhs/core/i.hpp>\n"},
+          ["a public header includes rkhs/core/i.hpp"])
+    check({**accepted, "framework/internal/rkhs/core/j.hpp": "",
+           "framework/include/rkhs/core/b.hpp": '#include "j.hpp"\n'},
+          ["which is not a public header"])
+    check({**accepted, "framework/include/rkhs/run/q.hpp": '#include "rkhs/kernels/g.hpp"\n'},
+          ["not a public header", "a framework layer (run) includes a built-in plugin"])
+    check({**accepted, "framework/include/rkhs/run/q.hpp": '#include "rkhs/core/none.hpp"\n'},
+          ["not a public header"])
+    check({**accepted, "framework/internal/rkhs/run/r.hpp": '#include "rkhs/core/i.hpp"\n'
+                                                            '#include "rkhs/run/p.hpp"\n'}, [])
     # Files of other suffixes are checked as well.
     for suffix in (".ipp", ".h"):
-        check({**accepted, f"framework/include/rkhs/core/t{suffix}": '#include "rkhs/cli/z.hpp"\n'},
+        upward = '#include "rkhs/cli/z.hpp"\n'
+        check({**accepted, f"framework/internal/rkhs/core/t{suffix}": upward},
               ["layer core includes the higher layer cli"])
 
 

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The installed package, as a plugin author uses it (the steps of docs/writing-a-kernel.md): install
-# this build into a temporary prefix, build examples/kernel-plugin out of tree against it
+# this build into a temporary prefix, check that its include/rkhs/ holds exactly the public headers
+# (framework/include/rkhs/ and the generated version.hpp; nothing of an internal/ folder) and that
+# each of them includes only installed headers, build examples/kernel-plugin out of tree against it
 # (find_package(rkhs_study)), list its kernel, run `verify-plugin` on the result, and run the
 # example's study with the plugin loaded through `plugins = [...]`, `--plugin` and
 # RKHS_STUDY_PLUGIN_PATH. With tests/docs/check_tutorial_snippets.py (every code block of the
@@ -10,6 +12,9 @@
 # built by another compiler family or version, plugin/build_configuration.hpp). Then the same
 # plugin is built once more with -mavx where the build is for generic x86-64 and the processor has
 # AVX: the installed rkhs-study refuses it, naming both configurations.
+#
+# An embedding program (tests/plugin/embedding/) is built out of tree against the package too, with
+# one source that includes every installed header, and runs a small study.
 #
 # Last, the console excerpts of docs/writing-a-kernel.md are compared with what this package prints
 # for the plugin (tests/docs/check_console_excerpts.py), also after the page's "Try lying" edit.
@@ -33,9 +38,30 @@ step "cmake --install into $prefix"
 "$cmake" --install "$build" --prefix "$prefix" > "$work/install.log"
 rkhs=$prefix/bin/rkhs-study
 [[ -x $rkhs ]] || fail "no $rkhs"
-for header in rkhs/plugin/module.hpp rkhs/kernel/kernel_algorithms.hpp rkhs/version.hpp rkhs/kernels/gaussian.hpp; do
+for header in rkhs/plugin/module.hpp rkhs/kernel/kernel_algorithms.hpp rkhs/version.hpp \
+              rkhs/study/study.hpp rkhs/run/run.hpp; do
   [[ -f $prefix/include/$header ]] || fail "header $header not installed"
 done
+
+step "include/rkhs/ holds exactly the public headers, and they include only installed headers"
+# The public headers: every file of framework/include/rkhs/, and version.hpp (generated).
+{ (cd "$source/framework/include" && find rkhs -type f); echo rkhs/version.hpp; } | LC_ALL=C sort > "$work/public.txt"
+(cd "$prefix/include" && find rkhs -type f) | LC_ALL=C sort > "$work/installed.txt"
+[[ $(wc -l < "$work/public.txt") -gt 10 ]] || fail "no public headers found below $source/framework/include"
+if ! diff -u --label "public headers (framework/include/rkhs/)" --label "installed ($prefix/include/rkhs/)" \
+     "$work/public.txt" "$work/installed.txt" > "$work/headers.diff"; then
+  cat "$work/headers.diff"
+  fail "the installed headers are not the public ones (an internal header installed, or a public one missing)"
+fi
+missing=0
+while read -r header; do
+  while read -r included; do
+    [[ -f $prefix/include/$included ]] && continue
+    echo "$header includes $included, which is not installed (an internal header?)"
+    missing=1
+  done < <(sed -n 's|^[[:space:]]*#[[:space:]]*include[[:space:]]*[<"]\(rkhs/[^">]*\)[">].*|\1|p' "$prefix/include/$header")
+done < "$work/installed.txt"
+[[ $missing == 0 ]] || fail "an installed header includes a header that is not installed"
 config=$(find "$prefix" -name rkhs_studyConfig.cmake)
 [[ -n $config ]] || fail "rkhs_studyConfig.cmake not installed"
 # The installed command uses the installed library (its RUNPATH), not the build tree's.
@@ -54,6 +80,18 @@ command -v ninja > /dev/null && generator=(-G Ninja)
 "$cmake" --build "$work/kernel-plugin/build" -j 2 > "$work/build.log" || { cat "$work/build.log"; fail "build"; }
 plugin=$work/kernel-plugin/build/inverse_multiquadric.so
 [[ -f $plugin ]] || fail "no $plugin"
+
+step "build and run an embedding program out of tree, with every installed header compiled"
+cp -r "$source/tests/plugin/embedding" "$work/embedding"
+rm -rf "$work/embedding/build"
+sed 's|^\(.*\)$|#include "\1"|' "$work/installed.txt" > "$work/embedding/all_public_headers.cpp"
+"$cmake" -S "$work/embedding" -B "$work/embedding/build" "${generator[@]}" \
+  -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" "${compiler[@]}" > "$work/configure-embedding.log" \
+  || { cat "$work/configure-embedding.log"; fail "configure the embedding program"; }
+"$cmake" --build "$work/embedding/build" -j 2 > "$work/build-embedding.log" \
+  || { cat "$work/build-embedding.log"; fail "build the embedding program and every installed header"; }
+"$work/embedding/build/embed_study" | tee "$work/embedding.txt"
+grep -q "^embedded study: 2 trials ok$" "$work/embedding.txt" || fail "the embedding program's study did not run"
 
 step "list kernel --plugin"
 "$rkhs" list kernel --plugin "$plugin" > "$work/list.txt"
@@ -117,4 +155,4 @@ if [[ $page_build == "$this_build" ]]; then
 else
   echo "(skipped: this build prints '${this_build# *}', the page shows '${page_build# *}')"
 fi
-echo "installed package, out-of-tree plugin, verify-plugin, study and tutorial console: ok"
+echo "installed package (public headers only), out-of-tree plugin and embedding program, verify-plugin, study and tutorial console: ok"

@@ -19,7 +19,7 @@ in R^d", docs/study-files.md):
         included); n must be m^d;
     evaluation points: p = round(M^(1/d)) per axis, s = j L_a / (p - 1), M = evaluation_points;
         L2 weights: the trapezoid rule per axis, tensor product.
-Kernel: rkhs-study's matern is scikit-learn's Matern (plugins/include/rkhs/kernels/matern.hpp):
+Kernel: rkhs-study's matern is scikit-learn's Matern (plugins/internal/rkhs/kernels/matern.hpp):
     nu = 2.5: (1 + a + a^2/3) exp(-a), a = sqrt(5) |x - y| / length_scale; unit amplitude.
 Target `expression`: the muparser expression f of x1..xd, L1..Ld, pi, evaluated here with NumPy
 (`^` -> `**`; the functions of muparser that NumPy has under the same name).
