@@ -83,7 +83,8 @@ TEST_CASE("integration_error: zero for the reference's settings, smaller for tig
   CHECK(loose > 1e-6);
   CHECK(tight < loose / 100);
   CHECK(tight > 0);
-  for (std::size_t i = 0; i < 3; ++i) CHECK(with.results[i].engine == "time_stepping");
+  for (std::size_t i = 0; i < 3; ++i)
+    CHECK(with.results[i].engine == AdaptiveEngine::time_stepping);
 
   // Without a reference: NaN, and the same cost metrics: the reference run is not counted.
   const auto without = test::run_study_text(learning);

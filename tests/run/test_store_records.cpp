@@ -174,3 +174,18 @@ TEST_CASE("a damaged database file is an error naming the store, not 'not stored
   CHECK_THROWS_WITH(store.size(), Catch::StartsWith(file.string() + ": result store: "));
   CHECK_THROWS_WITH(store.lookup("hash7"), Catch::StartsWith(file.string() + ": result store: "));
 }
+
+TEST_CASE("a stored trial's engine is written by name and read back as the engine", "[store]") {
+  TrialResult result;
+  result.ok = true;
+  result.engine = AdaptiveEngine::lap_map;
+  const auto text = serialize_result(result);
+  CHECK(text.find("engine lap_map\n") != std::string::npos);
+  CHECK(deserialize_result(text).engine == AdaptiveEngine::lap_map);
+  result.engine.reset();  // an approximation trial has none, and its record says nothing
+  CHECK(serialize_result(result).find("engine") == std::string::npos);
+  CHECK_FALSE(deserialize_result(serialize_result(result)).engine.has_value());
+  std::string unknown = text;
+  unknown.replace(unknown.find("lap_map"), 7, "warp");
+  CHECK_THROWS_WITH(deserialize_result(unknown), Catch::Contains("unknown engine 'warp'"));
+}

@@ -166,8 +166,9 @@ std::string export_csv(const std::vector<ResultStore::Entry>& entries) {
     std::vector<std::string> fields{entry.hash, entry.study, entry.key, entry.stored,
                                     check_text(entry)};
     if (const auto& r = entry.check.result) {
-      fields.insert(fields.end(), {r->ok ? "ok" : "failed", r->reason, r->solve_method, r->engine,
-                                   flags_text(*r), csv_number(r->seconds), r->data_provenance});
+      fields.insert(fields.end(), {r->ok ? "ok" : "failed", r->reason, r->solve_method,
+                                   std::string(engine_text(*r)), flags_text(*r),
+                                   csv_number(r->seconds), r->data_provenance});
       for (const auto& metric : metrics) {
         const auto& names = entry.check.metric_names;
         const auto at = std::find(names.begin(), names.end(), metric);
@@ -224,7 +225,7 @@ std::string export_json(const std::vector<ResultStore::Entry>& entries) {
           "\"seconds\": {}, \"data\": {}, \"metrics\": {{{}}}, \"samples\": [{}], \"road\": {}, "
           "\"snapshots\": [{}], \"work\": {}",
           json_string(r->ok ? "ok" : "failed"), json_string(r->reason),
-          json_string(r->solve_method), json_string(r->engine), json_string(flags_text(*r)),
+          json_string(r->solve_method), json_string(engine_text(*r)), json_string(flags_text(*r)),
           json_number(r->seconds), json_string(r->data_provenance), fmt::join(metrics, ", "),
           fmt::join(samples, ", "), json_reals(r->road), fmt::join(snapshots, ", "),
           work_json(r->work));

@@ -157,7 +157,8 @@ RoadTrial::RoadTrial(const AnyKernel& kernel_, const TargetFunction& target_,
   m = system->dimension();
   lap_time = settings.lap_time(domain.length);
   engine = adaptive_engine_for(settings, m);
-  out.engine = engine == AdaptiveEngine::lap_map ? "lap_map" : "time_stepping";
+  out.engine =
+      engine == AdaptiveEngine::lap_map ? AdaptiveEngine::lap_map : AdaptiveEngine::time_stepping;
   if (reference && engine != AdaptiveEngine::time_stepping)
     throw std::invalid_argument(
         "a reference integration needs time stepping (engine = \"time_stepping\")");

@@ -126,4 +126,23 @@ AdaptiveEngine adaptive_engine_for(const AdaptiveSettings& settings, Eigen::Inde
              : AdaptiveEngine::time_stepping;
 }
 
+std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept {
+  switch (engine) {
+    case AdaptiveEngine::lap_map:
+      return "lap_map";
+    case AdaptiveEngine::time_stepping:
+      return "time_stepping";
+    case AdaptiveEngine::automatic:
+      return "automatic";
+  }
+  return "unknown";
+}
+
+std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept {
+  for (const auto engine :
+       {AdaptiveEngine::automatic, AdaptiveEngine::lap_map, AdaptiveEngine::time_stepping})
+    if (adaptive_engine_name(engine) == name) return engine;
+  return std::nullopt;
+}
+
 }  // namespace rkhs

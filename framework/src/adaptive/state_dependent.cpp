@@ -336,7 +336,7 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   const int p = domain.dimension;  // read-out coordinates
   using M = AdaptiveMetric;
   AdaptiveMeasurement out;
-  out.engine = "time_stepping";
+  out.engine = AdaptiveEngine::time_stepping;
 
   // The static part on Omega: H_n, Pi_n f, and the cross matrix on the evaluation grid.
   const StaticPart fixed(kernel, target, centres, evaluation_points, solver_options);

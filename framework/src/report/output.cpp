@@ -186,7 +186,7 @@ std::vector<std::string> reported_flags(const StudyDefinition& study,
 // The value of a trials.csv column a study kind declares (StudyKindOutputs::trial_columns).
 std::string kind_column_value(std::string_view column, const TrialResult& result) {
   static const std::map<std::string_view, std::string (*)(const TrialResult&)> columns{
-      {"engine", [](const TrialResult& r) { return r.engine; }},
+      {"engine", [](const TrialResult& r) { return std::string(engine_text(r)); }},
   };
   const auto it = columns.find(column);
   if (it == columns.end())
@@ -513,14 +513,16 @@ std::string summary_json(const RunRecord& run) {
     out += fmt::format(
         "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
         "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
-        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}, \"floors\": {{{}}}, \"work\": {}, "
+        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}, \"floors\": {{{}}}, \"work\": "
+        "{}, "
         "\"work_missing\": {}}}{}\n",
         trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
         json_plugin(trial.centres), trial.n,
         result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
         json_string(result.ok ? "ok" : "failed"), json_string(result.reason),
         json_string(result.solve_method), fmt::join(flags, ", "),
-        result.engine.empty() ? std::string() : " \"engine\": " + json_string(result.engine) + ",",
+        !result.engine ? std::string()
+                       : " \"engine\": " + json_string(adaptive_engine_name(*result.engine)) + ",",
         json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
         fmt::join(floors, ", "), trial_work_json(study, result), missing_work_json(result),
         trial.index + 1 < run.trials.size() ? "," : "");

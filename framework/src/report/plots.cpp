@@ -679,18 +679,24 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
     const bool in_n =
         series.analysis.reported == RateModel::exponential || run.study.abscissa == Abscissa::n;
     curve.x = in_n ? series.n : series.abscissa;
-    // The theory slope (power-law theories from the kernel's metadata) on the same axis.
-    try {
+    // The theory slope (power-law theories from the kernel's metadata) on the same axis, for a
+    // metric whose catalogue row has a theory law.
+    const auto* row = run.study.kind_descriptor().find_metric(metric);
+    if (row && row->theory != TheoryLaw::none) {
       const auto& trial = run.trials[series.trials.front()];
-      const auto theory = theory_rate(
-          metric, kernel_properties(trial.kernel.name, trial.kernel.parameters, run.study.domain));
-      if (theory && theory->model == RateModel::power_law &&
-          in_n == (run.study.abscissa == Abscissa::n))
-        curve.theory_slope = run.study.abscissa == Abscissa::n
-                                 ? -theory->h_exponent / theory->dimension
-                                 : theory->h_exponent;
-    } catch (const std::exception&) {
-      // A kernel that cannot be rebuilt here (e.g. from an unloaded plugin): no theory line.
+      try {
+        const auto theory = theory_rate(
+            *row, kernel_properties(trial.kernel.name, trial.kernel.parameters, run.study.domain));
+        if (theory && theory->model == RateModel::power_law &&
+            in_n == (run.study.abscissa == Abscissa::n))
+          curve.theory_slope = run.study.abscissa == Abscissa::n
+                                   ? -theory->h_exponent / theory->dimension
+                                   : theory->h_exponent;
+      } catch (const std::exception& e) {
+        // A kernel that cannot be rebuilt here (e.g. from a plugin not loaded): said, not drawn.
+        plan.notes.push_back(fmt::format("convergence_{}: no theory line for kernel {}: {}", metric,
+                                         trial.kernel.label(), e.what()));
+      }
     }
     curves.push_back(std::move(curve));
   }

@@ -351,7 +351,12 @@ std::pair<TrialSpec, TrialResult> read_trial(const Reader& reader, const Json& t
   result.ok = status == "ok";
   result.reason = reader.text(entry, path, "reason");
   result.solve_method = reader.text(entry, path, "solve");
-  result.engine = reader.optional_text(entry, path, "engine");
+  if (const auto engine = reader.optional_text(entry, path, "engine"); !engine.empty()) {
+    result.engine = adaptive_engine_from_name(engine);
+    if (!result.engine)
+      reader.fail(Reader::join(path, "engine"),
+                  fmt::format("\"{}\"; lap_map or time_stepping", engine));
+  }
   result.seconds = reader.number(entry, path, "seconds");
   const auto& flags = reader.array(entry, path, "flags");
   for (std::size_t k = 0; k < flags.size(); ++k)

@@ -74,7 +74,7 @@ double measure_adaptive_trial(const TrialInputs& in, TrialResult& result) {
   result.metrics = std::move(measured.metrics).values();
   result.floors = std::move(measured.floors).values();
   result.solve_method = std::move(measured.solve_method);
-  result.engine = std::move(measured.engine);
+  result.engine = measured.engine;
   result.flags = std::move(measured.flags);
   result.samples = std::move(measured.samples);
   result.road = std::move(measured.road);

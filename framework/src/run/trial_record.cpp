@@ -143,7 +143,7 @@ std::string serialize_result(const TrialResult& r) {
   out += fmt::format("ok {}\n", r.ok ? 1 : 0);
   out += "reason " + escape(r.reason) + "\n";
   out += "solve " + escape(r.solve_method) + "\n";
-  if (!r.engine.empty()) out += "engine " + escape(r.engine) + "\n";
+  if (r.engine) out += "engine " + escape(std::string(adaptive_engine_name(*r.engine))) + "\n";
   std::string flags;
   for (std::size_t i = 0; i < r.flags.size(); ++i) flags += (i ? ";" : "") + r.flags[i];
   out += "flags " + escape(flags) + "\n";
@@ -180,9 +180,11 @@ TrialResult deserialize_result(std::string_view text) {
       r.reason = unescape(value);
     else if (field == "solve")
       r.solve_method = unescape(value);
-    else if (field == "engine")
-      r.engine = unescape(value);
-    else if (field == "flags") {
+    else if (field == "engine") {
+      r.engine = adaptive_engine_from_name(unescape(value));
+      if (!r.engine)
+        throw std::invalid_argument("unknown engine '" + value + "' in a stored trial");
+    } else if (field == "flags") {
       // Names separated by ';'; an empty name ("a;;b", a trailing ';') is no flag.
       const auto flags = unescape(value);
       std::size_t start = 0;

@@ -32,22 +32,6 @@ std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept {
   return std::nullopt;
 }
 
-std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept {
-  switch (engine) {
-    case AdaptiveEngine::lap_map: return "lap_map";
-    case AdaptiveEngine::time_stepping: return "time_stepping";
-    case AdaptiveEngine::automatic: return "automatic";
-  }
-  return "unknown";
-}
-
-std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept {
-  for (const auto engine :
-       {AdaptiveEngine::automatic, AdaptiveEngine::lap_map, AdaptiveEngine::time_stepping})
-    if (adaptive_engine_name(engine) == name) return engine;
-  return std::nullopt;
-}
-
 const std::vector<std::string>& metric_names(StudyKind kind) {
   return describe(kind).metric_names();
 }

@@ -5,9 +5,10 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <limits>
 #include <functional>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -17,11 +18,11 @@
 #include "rkhs/adaptive/learning_map.hpp"
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/adaptive/weight_matrix.hpp"
+#include "rkhs/approx/target.hpp"
 #include "rkhs/core/domain.hpp"
+#include "rkhs/core/registry.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/kernel/point_sections.hpp"
-#include "rkhs/core/registry.hpp"
-#include "rkhs/approx/target.hpp"
 
 namespace rkhs {
 
@@ -277,6 +278,13 @@ bool register_integrator() noexcept {
 ///   automatic: the lap map where it applies, time stepping otherwise.
 enum class AdaptiveEngine { automatic, lap_map, time_stepping };
 
+/// "automatic", "lap_map", "time_stepping": the names of [adaptive] engine, of trials.csv's
+/// engine column and of the result store's records.
+std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept;
+
+/// The engine `name` stands for; std::nullopt for an unknown name.
+std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept;
+
 /// Study-wide settings of adaptive trials ([adaptive] in a study file).
 struct AdaptiveSettings {
   double speed = 1.0;                 ///< v, m/s
@@ -349,7 +357,7 @@ struct AdaptiveMeasurement {
   /// The floor of each metric (MetricRow::floor; NaN: exact, or not estimated by this trial).
   MetricValues<AdaptiveMetric> floors;
   std::string solve_method;
-  std::string engine;  ///< "time_stepping" or "lap_map" (AdaptiveEngine)
+  AdaptiveEngine engine = AdaptiveEngine::time_stepping;  ///< the one the trial ran with
   std::vector<std::string> flags;
   std::vector<TimeSample> samples;
   std::vector<double> road;  ///< f on the snapshot grid

@@ -31,7 +31,9 @@ struct TrialResult {
   /// a result stored before floors were recorded.
   std::vector<double> floors;
   std::string solve_method;       ///< how the Gram matrix was solved
-  std::string engine;             ///< adaptive trials: "time_stepping" or "lap_map"
+  /// Adaptive trials: the engine it ran with (lap_map or time_stepping), written by name
+  /// (adaptive_engine_name); std::nullopt for approximation trials.
+  std::optional<AdaptiveEngine> engine;
   std::vector<std::string> flags; ///< numerically doubtful values (gram_singular, ..._at_floor)
   double seconds = 0;             ///< wall time (not part of the deterministic results),
                                   ///< without the reference integration of integration_error
@@ -47,6 +49,12 @@ struct TrialResult {
   std::vector<double> road;         ///< f on the snapshot grid
   std::vector<Snapshot> snapshots;  ///< fhat on the snapshot grid at the chosen laps
 };
+
+/// The name of the engine `result` ran with (adaptive_engine_name), "" for a trial without
+/// one: how trials.csv, summary.json and the store's exports write it.
+inline std::string_view engine_text(const TrialResult& result) noexcept {
+  return result.engine ? adaptive_engine_name(*result.engine) : std::string_view();
+}
 
 struct RunOptions {
   int threads = 0;  ///< worker threads; 0: all hardware threads

@@ -79,13 +79,6 @@ std::string_view study_kind_name(StudyKind kind) noexcept;
 /// The kind `name` stands for; std::nullopt for an unknown name.
 std::optional<StudyKind> study_kind_from_name(std::string_view name) noexcept;
 
-/// "automatic", "lap_map", "time_stepping": the names of [adaptive] engine (and of the trial
-/// identity's text).
-std::string_view adaptive_engine_name(AdaptiveEngine engine) noexcept;
-
-/// The engine `name` stands for; std::nullopt for an unknown name.
-std::optional<AdaptiveEngine> adaptive_engine_from_name(std::string_view name) noexcept;
-
 /// [plot]: how the convergence plots look (docs/study-files.md). Only the figures change: no
 /// number, no trial key, no table. Every field has a default that reads well.
 struct PlotStyle {
