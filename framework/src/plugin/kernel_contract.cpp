@@ -156,19 +156,26 @@ void check_metadata(const AnyKernel& kernel, Checks& checks) {
              metadata_problems.empty() ? "consistent" : fmt::format("{}", fmt::join(metadata_problems, "; ")));
 }
 
+// A kernel on flat point sets: point(set, p) is point p of `set` (the domain's dimension
+// coordinates each), k(x, y) the kernel at two such points.
+struct FlatPoints {
+  const AnyKernel& kernel;
+  std::size_t dimension = static_cast<std::size_t>(kernel.domain().dimension);
+  std::span<const double> point(const std::vector<double>& set, std::size_t p) const {
+    return std::span<const double>(set).subspan(p * dimension, dimension);
+  }
+  double k(std::span<const double> x, std::span<const double> y) const {
+    return kernel.evaluate_point(x, y);
+  }
+};
+
 // Symmetry, periodicity, compact support, stationarity on pairs of `points` (scale: max k).
 void check_pairs(const AnyKernel& kernel, const std::vector<double>& points, double scale,
                  Checks& checks) {
   const Domain& domain = kernel.domain();
   const std::size_t point_count = domain.point_count(points);
   const auto d_points = static_cast<std::size_t>(domain.dimension);
-  // Point p of a flat set, and k of two such points.
-  auto at = [d_points](const std::vector<double>& set, std::size_t p) {
-    return std::span<const double>(set).subspan(p * d_points, d_points);
-  };
-  auto k = [&](std::span<const double> x, std::span<const double> y) {
-    return kernel.evaluate_point(x, y);
-  };
+  const FlatPoints flat{kernel};
   const auto props = kernel.properties();
 
   // Symmetry, periodicity, compact support, stationarity on pairs of scattered points. In
@@ -176,11 +183,11 @@ void check_pairs(const AnyKernel& kernel, const std::vector<double>& points, dou
   double asymmetry = 0, aperiodicity = 0, outside_support = 0, nonstationarity = 0;
   std::vector<double> moved_x(d_points), moved_y(d_points);
   for (std::size_t i = 0; i < point_count; ++i) {
-    const auto x = at(points, i);
+    const auto x = flat.point(points, i);
     for (std::size_t j = 0; j < point_count; ++j) {
-      const auto y = at(points, j);
-      const double kxy = k(x, y);
-      asymmetry = std::max(asymmetry, std::abs(kxy - k(y, x)));
+      const auto y = flat.point(points, j);
+      const double kxy = flat.k(x, y);
+      asymmetry = std::max(asymmetry, std::abs(kxy - flat.k(y, x)));
       if (domain.periodic) {
         for (std::size_t a = 0; a < d_points; ++a) {
           const double period = domain.extent(static_cast<int>(a));
@@ -188,8 +195,8 @@ void check_pairs(const AnyKernel& kernel, const std::vector<double>& points, dou
           std::copy(y.begin(), y.end(), moved_y.begin());
           moved_x[a] += period;
           moved_y[a] -= 2 * period;
-          aperiodicity = std::max(aperiodicity, std::abs(k(moved_x, y) - kxy));
-          aperiodicity = std::max(aperiodicity, std::abs(k(x, moved_y) - kxy));
+          aperiodicity = std::max(aperiodicity, std::abs(flat.k(moved_x, y) - kxy));
+          aperiodicity = std::max(aperiodicity, std::abs(flat.k(x, moved_y) - kxy));
         }
       }
       if (props.support_radius > 0 &&
@@ -205,7 +212,7 @@ void check_pairs(const AnyKernel& kernel, const std::vector<double>& points, dou
                    moved_y[a] <= domain.extent(static_cast<int>(a));
         }
         if (domain.periodic || inside)
-          nonstationarity = std::max(nonstationarity, std::abs(k(moved_x, moved_y) - kxy));
+          nonstationarity = std::max(nonstationarity, std::abs(flat.k(moved_x, moved_y) - kxy));
       }
     }
   }
@@ -265,14 +272,7 @@ bool check_matrices(const AnyKernel& kernel, const std::vector<double>& points, 
                     Checks& checks) {
   const Domain& domain = kernel.domain();
   const std::size_t point_count = domain.point_count(points);
-  const auto d_points = static_cast<std::size_t>(domain.dimension);
-  // Point p of a flat set, and k of two such points.
-  auto at = [d_points](const std::vector<double>& set, std::size_t p) {
-    return std::span<const double>(set).subspan(p * d_points, d_points);
-  };
-  auto k = [&](std::span<const double> x, std::span<const double> y) {
-    return kernel.evaluate_point(x, y);
-  };
+  const FlatPoints flat{kernel};
 
   // Gram matrix: symmetric positive semidefinite, diagonal = diagonal(), entries = evaluate().
   const auto centres = scattered_points(domain, 40, 0.77);
@@ -312,8 +312,9 @@ bool check_matrices(const AnyKernel& kernel, const std::vector<double>& points, 
   for (Eigen::Index m = 0; m < cross.rows(); ++m)
     for (Eigen::Index i = 0; i < cross.cols(); ++i)
       cross_error = std::max(
-          cross_error, std::abs(cross(m, i) - k(at(points, static_cast<std::size_t>(m)),
-                                                at(centres, static_cast<std::size_t>(i)))));
+          cross_error,
+          std::abs(cross(m, i) - flat.k(flat.point(points, static_cast<std::size_t>(m)),
+                                        flat.point(centres, static_cast<std::size_t>(i)))));
   checks.at_most("cross matrix", "max |K_mi - k(s_m, c_i)| / max k", cross_error / scale, 1e-14);
   return true;
 }
