@@ -521,8 +521,7 @@ std::string summary_json(const RunRecord& run) {
         result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
         json_string(result.ok ? "ok" : "failed"), json_string(result.reason),
         json_string(result.solve_method), fmt::join(flags, ", "),
-        !result.engine ? std::string()
-                       : " \"engine\": " + json_string(adaptive_engine_name(*result.engine)) + ",",
+        !result.engine ? std::string() : " \"engine\": " + json_string(engine_text(result)) + ",",
         json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
         fmt::join(floors, ", "), trial_work_json(study, result), missing_work_json(result),
         trial.index + 1 < run.trials.size() ? "," : "");
