@@ -30,6 +30,70 @@ Eigen::MatrixXd feature_values(const KernelBasis& features, std::span<const doub
   return out;
 }
 
+// R = L^T W, with G_B = L L^T: row i holds the weights of the i-th function of an orthonormal
+// basis of H_j = range(Pi_j) over the projection's samples (dim x |S|).
+Eigen::MatrixXd orthonormal_basis_weights(const AnyKernel& kernel, const ProjectionOperator& op) {
+  const Eigen::MatrixXd basis_gram = projection_basis_gram(kernel, op);
+  const Eigen::LLT<Eigen::MatrixXd> cholesky(basis_gram);
+  const double largest = basis_gram.diagonal().cwiseAbs().maxCoeff();
+  if (cholesky.info() != Eigen::Success ||
+      cholesky.matrixL().toDenseMatrix().diagonal().minCoeff() <= 1e-7 * std::sqrt(largest))
+    throw std::invalid_argument(
+        "the projection's basis is linearly dependent in H (its Gram matrix G_B is singular to "
+        "working precision): no coordinates for H_j");
+  const Eigen::MatrixXd L = cholesky.matrixL();
+  return L.transpose() * op.weights();
+}
+
+// The difference fhat - Pi_j^* fhat_j as coefficients c = U beta - V a over functions whose
+// H-Gram matrix is `metric` and whose values on the grid are the rows of `on_grid`:
+//   exact features: the features themselves, U = I, V = Phi_S^T R^T, metric I (both in the
+//     range of the features);
+//   a reference resolution H_N: the sections at C and at S, U = [L^-T; 0], V = [0; R^T],
+//     metric the Gram matrix of C and S together.
+struct GapCoordinates {
+  const ReferenceResolvedKernel* resolved = nullptr;  ///< the reference resolution, if any
+  Eigen::MatrixXd U, V, metric, on_grid;
+
+  // c for the infinite estimator's coefficients beta and the finite one's a.
+  void gap(const Eigen::Ref<const Eigen::VectorXd>& beta,
+           const Eigen::Ref<const Eigen::VectorXd>& a, Eigen::VectorXd& c) const {
+    if (resolved)
+      c.noalias() = U * beta;
+    else
+      c = beta;
+    c.noalias() -= V * a;
+  }
+  // ||c||_H.
+  double norm_H(const Eigen::VectorXd& c) const {
+    return resolved ? std::sqrt(std::max(0.0, c.dot(metric * c))) : c.norm();
+  }
+};
+
+GapCoordinates gap_coordinates(const AnyKernel& kernel, const KernelBasis& features,
+                               const ProjectionOperator& op, const Eigen::MatrixXd& R,
+                               const std::vector<double>& grid) {
+  GapCoordinates out;
+  const auto F = static_cast<Eigen::Index>(features.size());
+  out.resolved = dynamic_cast<const ReferenceResolvedKernel*>(&kernel);
+  if (const auto* resolved = out.resolved) {
+    std::vector<double> points = resolved->centres();
+    const auto N = static_cast<Eigen::Index>(points.size());
+    points.insert(points.end(), op.samples().begin(), op.samples().end());
+    const auto all = static_cast<Eigen::Index>(points.size());
+    out.U = Eigen::MatrixXd::Zero(all, F);
+    out.U.topRows(N) = resolved->inverse_factor().transpose();
+    out.V = Eigen::MatrixXd::Zero(all, R.rows());
+    out.V.bottomRows(all - N) = R.transpose();
+    out.metric = resolved->kernel().gram(points);
+    out.on_grid = resolved->kernel().cross(grid, points);
+  } else {
+    out.V = feature_values(features, op.samples()).transpose() * R.transpose();  // F x dim
+    out.on_grid = feature_values(features, grid);                                // M x F
+  }
+  return out;
+}
+
 }  // namespace
 
 EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction& target,
@@ -49,46 +113,16 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
   const double gamma = law.gain();
   EstimateGaps out;
 
-  // The orthonormal basis of H_j: G_B = L L^T, R = L^T W.
-  const Eigen::MatrixXd basis_gram = projection_basis_gram(kernel, op);
-  const Eigen::LLT<Eigen::MatrixXd> cholesky(basis_gram);
-  const double largest = basis_gram.diagonal().cwiseAbs().maxCoeff();
-  if (cholesky.info() != Eigen::Success ||
-      cholesky.matrixL().toDenseMatrix().diagonal().minCoeff() <= 1e-7 * std::sqrt(largest))
-    throw std::invalid_argument(
-        "the projection's basis is linearly dependent in H (its Gram matrix G_B is singular to "
-        "working precision): no coordinates for H_j");
-  const Eigen::MatrixXd L = cholesky.matrixL();
-  const Eigen::MatrixXd R = L.transpose() * op.weights();  // dim x |S|
+  const Eigen::MatrixXd R = orthonormal_basis_weights(kernel, op);  // dim x |S|
   const auto dimension = R.rows();
   out.dimension = static_cast<std::size_t>(dimension);
 
   const auto features = kernel.feature_basis();
   const auto F = static_cast<Eigen::Index>(features->size());
   const auto grid = domain.uniform_points(evaluation_points);
-  // The difference fhat - Pi_j^* fhat_j as coefficients c = U beta - V a over functions whose
-  // H-Gram matrix is `metric` and whose values on the grid are the rows of `on_grid`:
-  //   exact features: the features themselves, U = I, V = Phi_S^T R^T, metric I (both in the
-  //     range of the features);
-  //   a reference resolution H_N: the sections at C and at S, U = [L^-T; 0], V = [0; R^T],
-  //     metric the Gram matrix of C and S together.
-  const auto* resolved = dynamic_cast<const ReferenceResolvedKernel*>(&kernel);
-  Eigen::MatrixXd U, V, metric, on_grid;
-  if (resolved) {
-    std::vector<double> points = resolved->centres();
-    const auto N = static_cast<Eigen::Index>(points.size());
-    points.insert(points.end(), op.samples().begin(), op.samples().end());
-    const auto all = static_cast<Eigen::Index>(points.size());
-    U = Eigen::MatrixXd::Zero(all, F);
-    U.topRows(N) = resolved->inverse_factor().transpose();
-    V = Eigen::MatrixXd::Zero(all, dimension);
-    V.bottomRows(all - N) = R.transpose();
-    metric = resolved->kernel().gram(points);
-    on_grid = resolved->kernel().cross(grid, points);
-  } else {
-    V = feature_values(*features, op.samples()).transpose() * R.transpose();  // F x dim
-    on_grid = feature_values(*features, grid);                                // M x F
-  }
+  const GapCoordinates coordinates = gap_coordinates(kernel, *features, op, R, grid);
+  const Eigen::MatrixXd& V = coordinates.V;
+  const Eigen::MatrixXd& on_grid = coordinates.on_grid;
 
   const Eigen::MatrixXd& A = plant.A();
   const Eigen::VectorXd& B = plant.B();
@@ -138,13 +172,9 @@ EstimateGaps measure_estimate_gaps(const AnyKernel& kernel, const TargetFunction
     const Eigen::Map<const Eigen::VectorXd> x_j(state, d), xhat_j(state + d, d),
         a(state + 2 * d, dimension);
     const auto reference = infinite_states.col(static_cast<Eigen::Index>(k));
-    if (resolved)
-      gap.noalias() = U * reference.tail(F);
-    else
-      gap = reference.tail(F);
-    gap.noalias() -= V * a;
+    coordinates.gap(reference.tail(F), a, gap);
     gap_on_grid.noalias() = on_grid * gap;
-    const double gap_H = resolved ? std::sqrt(std::max(0.0, gap.dot(metric * gap))) : gap.norm();
+    const double gap_H = coordinates.norm_H(gap);
     out.estimate_gap_H = std::max(out.estimate_gap_H, gap_H);
     out.estimate_gap_C = std::max(out.estimate_gap_C, gap_on_grid.cwiseAbs().maxCoeff());
     out.state_gap = std::max(out.state_gap, (reference.segment(d, d) - xhat_j).norm());

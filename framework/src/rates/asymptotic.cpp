@@ -314,115 +314,129 @@ std::optional<ConstantSeries> detect_constant(std::span<const double> y,
   return constant;
 }
 
-SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
-                              std::span<const double> y, const std::vector<bool>& usable,
-                              double confidence, const FitWindow& set_window,
-                              std::span<const double> floors, double constant_within) {
-  if (x.size() != y.size() || n.size() != y.size() || usable.size() != y.size())
-    throw std::invalid_argument("analyse_series: x, n, y and usable differ in size");
-  if (!(confidence > 0.0 && confidence < 1.0))
-    throw std::invalid_argument("analyse_series: confidence must lie in (0, 1)");
+namespace {
 
-  // The same points for both models, so that their fits can be compared.
-  std::vector<std::size_t> positions;
-  for (std::size_t i = 0; i < y.size(); ++i)
-    if (usable[i] && std::isfinite(y[i]) && y[i] > 0.0 && std::isfinite(x[i]) && x[i] > 0.0 &&
-        std::isfinite(n[i]))
-      positions.push_back(i);
-  if (!set_window.empty()) {
-    std::erase_if(positions, [&](std::size_t i) {
-      return (set_window.n_from && n[i] < *set_window.n_from) ||
-             (set_window.n_to && n[i] > *set_window.n_to) ||
-             (set_window.h_from && x[i] < *set_window.h_from) ||
-             (set_window.h_to && x[i] > *set_window.h_to);
-    });
-    if (set_window.last && positions.size() > *set_window.last)
-      positions.erase(positions.begin(),
-                      positions.end() - static_cast<std::ptrdiff_t>(*set_window.last));
+// Whether a point with this n and abscissa x lies inside the window the study set.
+bool inside(const FitWindow& window, double n, double x) {
+  return (!window.n_from || n >= *window.n_from) && (!window.n_to || n <= *window.n_to) &&
+         (!window.h_from || x >= *window.h_from) && (!window.h_to || x <= *window.h_to);
+}
+
+// Keeps the last `window.last` of `points` when the window asks for them.
+void keep_last(const FitWindow& window, std::vector<std::size_t>& points) {
+  if (window.last && points.size() > *window.last)
+    points.erase(points.begin(), points.end() - static_cast<std::ptrdiff_t>(*window.last));
+}
+
+// A series' points both models are fitted on, and their coordinates: the same points for both,
+// so that their fits can be compared.
+struct FittedPoints {
+  std::span<const double> x, n, y, floors;
+  std::vector<std::size_t> positions;         ///< usable, positive, inside the set window
+  std::vector<double> log_x, log_y, plain_n;  ///< at `positions`
+
+  double floor_at(std::size_t p) const {
+    return p < floors.size() && floors[p] > 0.0 ? floors[p] : 0.0;
   }
-  std::vector<double> labels, log_x, log_y, plain_n;
-  for (auto i : positions) {
-    labels.push_back(n[i]);
-    log_x.push_back(std::log(x[i]));
-    log_y.push_back(std::log(y[i]));
-    plain_n.push_back(n[i]);
-  }
-
-  SeriesAnalysis out;
-  out.evidence = not_a_number;
-  out.set_window = set_window.text();
-  auto analyse_model = [&](RateModel model, ModelAnalysis& result) {
-    result.model = model;
-    const std::span<const double> u = model == RateModel::power_law ? log_x : plain_n;
-    AsymptoticWindow window;
-    if (set_window.empty()) {
-      window = detect_asymptotic_window(u, log_y, labels);
-    } else {
-      for (std::size_t k = 0; k < positions.size(); ++k) window.points.push_back(k);
-      window.bulk_rate = window.noise = not_a_number;
-    }
-    auto to_positions = [&](std::vector<std::size_t>& indices) {
-      for (auto& k : indices) k = positions[k];
-    };
-    std::vector<double> fit_x, fit_y, fit_u, fit_floor_values;
-    for (auto k : window.points) {
-      fit_x.push_back(model == RateModel::power_law ? x[positions[k]] : n[positions[k]]);
-      fit_y.push_back(y[positions[k]]);
-      fit_u.push_back(u[k]);
-      fit_floor_values.push_back(positions[k] < floors.size() ? floors[positions[k]] : 0.0);
-    }
-    to_positions(window.points);
-    to_positions(window.head);
-    to_positions(window.floor);
-    result.window = std::move(window);
-    result.fit = model == RateModel::power_law ? fit_power_law(fit_x, fit_y, confidence)
-                                               : fit_exponential(fit_x, fit_y, confidence);
-    if (result.fit) {
-      result.floors = fit_floors(*result.fit, fit_u, fit_y, fit_floor_values);
-      for (auto& k : result.fit->used) k = result.window.points[k];
-    }
-    result.pairwise = model == RateModel::power_law ? pairwise_rates(x, y)
-                                                    : pairwise_exponential_rates(n, y);
-  };
-  analyse_model(RateModel::power_law, out.power_law);
-  analyse_model(RateModel::exponential, out.exponential);
-
-  // ΔAIC of `model` over the other on `model`'s own window (indices into `positions`).
-  auto own_window_advantage = [&](const ModelAnalysis& analysis) -> double {
+  // `analysis`'s window as indices into `positions`.
+  std::vector<std::size_t> window_of(const ModelAnalysis& analysis) const {
     std::vector<std::size_t> window;
     for (auto p : analysis.window.points)
       window.push_back(static_cast<std::size_t>(
           std::lower_bound(positions.begin(), positions.end(), p) - positions.begin()));
-    if (window.size() < minimum_window) return not_a_number;
-    const double m = static_cast<double>(window.size());
-    const double floor = m * 1e-20;  // exact series: a finite ratio instead of 0 / 0
-    const double power = std::max(line_sse(log_x, log_y, window), floor);
-    const double exponential = std::max(line_sse(plain_n, log_y, window), floor);
-    const double ratio = analysis.model == RateModel::power_law ? exponential / power
-                                                                : power / exponential;
-    return m * std::log(ratio);
-  };
-  // The floor of that ΔAIC: both models' ln SSE on the window, moved by the values' floors.
-  auto own_window_advantage_floor = [&](const ModelAnalysis& analysis) -> double {
-    std::vector<std::size_t> window;
-    double norm_squared = 0.0;
-    for (auto p : analysis.window.points) {
-      window.push_back(static_cast<std::size_t>(
-          std::lower_bound(positions.begin(), positions.end(), p) - positions.begin()));
-      const double floor = p < floors.size() && floors[p] > 0.0 ? floors[p] : 0.0;
-      norm_squared += (floor / y[p]) * (floor / y[p]);
-    }
-    if (window.size() < minimum_window || norm_squared == 0.0) return 0.0;
-    const double norm = std::sqrt(norm_squared);
-    return static_cast<double>(window.size()) *
-           (log_sse_floor(line_sse(log_x, log_y, window), norm) +
-            log_sse_floor(line_sse(plain_n, log_y, window), norm));
-  };
-  const double power_advantage = out.power_law.advantage = own_window_advantage(out.power_law);
+    return window;
+  }
+};
+
+FittedPoints fitted_points(std::span<const double> x, std::span<const double> n,
+                           std::span<const double> y, const std::vector<bool>& usable,
+                           const FitWindow& set_window, std::span<const double> floors) {
+  FittedPoints points{x, n, y, floors, {}, {}, {}, {}};
+  for (std::size_t i = 0; i < y.size(); ++i)
+    if (usable[i] && std::isfinite(y[i]) && y[i] > 0.0 && std::isfinite(x[i]) && x[i] > 0.0 &&
+        std::isfinite(n[i]) && (set_window.empty() || inside(set_window, n[i], x[i])))
+      points.positions.push_back(i);
+  keep_last(set_window, points.positions);
+  for (auto i : points.positions) {
+    points.log_x.push_back(std::log(x[i]));
+    points.log_y.push_back(std::log(y[i]));
+    points.plain_n.push_back(n[i]);
+  }
+  return points;
+}
+
+// One model's window (automatic unless the study set one), fit, floors and pairwise rates.
+ModelAnalysis analyse_model(RateModel model, const FittedPoints& points,
+                            const FitWindow& set_window, double confidence) {
+  ModelAnalysis result;
+  result.model = model;
+  const auto& positions = points.positions;
+  const std::span<const double> u = model == RateModel::power_law ? points.log_x : points.plain_n;
+  AsymptoticWindow window;
+  if (set_window.empty()) {
+    window = detect_asymptotic_window(u, points.log_y, points.plain_n);
+  } else {
+    for (std::size_t k = 0; k < positions.size(); ++k) window.points.push_back(k);
+    window.bulk_rate = window.noise = not_a_number;
+  }
+  std::vector<double> fit_x, fit_y, fit_u, fit_floor_values;
+  for (auto k : window.points) {
+    const std::size_t p = positions[k];
+    fit_x.push_back(model == RateModel::power_law ? points.x[p] : points.n[p]);
+    fit_y.push_back(points.y[p]);
+    fit_u.push_back(u[k]);
+    fit_floor_values.push_back(p < points.floors.size() ? points.floors[p] : 0.0);
+  }
+  for (auto* indices : {&window.points, &window.head, &window.floor})
+    for (auto& k : *indices) k = positions[k];
+  result.window = std::move(window);
+  result.fit = model == RateModel::power_law ? fit_power_law(fit_x, fit_y, confidence)
+                                             : fit_exponential(fit_x, fit_y, confidence);
+  if (result.fit) {
+    result.floors = fit_floors(*result.fit, fit_u, fit_y, fit_floor_values);
+    for (auto& k : result.fit->used) k = result.window.points[k];
+  }
+  result.pairwise = model == RateModel::power_law ? pairwise_rates(points.x, points.y)
+                                                  : pairwise_exponential_rates(points.n, points.y);
+  return result;
+}
+
+// ΔAIC of `analysis`'s model over the other on its own window.
+double own_window_advantage(const FittedPoints& points, const ModelAnalysis& analysis) {
+  const auto window = points.window_of(analysis);
+  if (window.size() < minimum_window) return not_a_number;
+  const double m = static_cast<double>(window.size());
+  const double floor = m * 1e-20;  // exact series: a finite ratio instead of 0 / 0
+  const double power = std::max(line_sse(points.log_x, points.log_y, window), floor);
+  const double exponential = std::max(line_sse(points.plain_n, points.log_y, window), floor);
+  const double ratio =
+      analysis.model == RateModel::power_law ? exponential / power : power / exponential;
+  return m * std::log(ratio);
+}
+
+// The floor of that ΔAIC: both models' ln SSE on the window, moved by the values' floors.
+double own_window_advantage_floor(const FittedPoints& points, const ModelAnalysis& analysis) {
+  const auto window = points.window_of(analysis);
+  double norm_squared = 0.0;
+  for (auto p : analysis.window.points) {
+    const double floor = points.floor_at(p);
+    norm_squared += (floor / points.y[p]) * (floor / points.y[p]);
+  }
+  if (window.size() < minimum_window || norm_squared == 0.0) return 0.0;
+  const double norm = std::sqrt(norm_squared);
+  return static_cast<double>(window.size()) *
+         (log_sse_floor(line_sse(points.log_x, points.log_y, window), norm) +
+          log_sse_floor(line_sse(points.plain_n, points.log_y, window), norm));
+}
+
+// Which model describes the series, with what evidence, and the sentence saying so.
+void compare_models(const FittedPoints& points, SeriesAnalysis& out) {
+  const double power_advantage = out.power_law.advantage =
+      own_window_advantage(points, out.power_law);
   const double exponential_advantage = out.exponential.advantage =
-      own_window_advantage(out.exponential);
-  out.power_law.advantage_floor = own_window_advantage_floor(out.power_law);
-  out.exponential.advantage_floor = own_window_advantage_floor(out.exponential);
+      own_window_advantage(points, out.exponential);
+  out.power_law.advantage_floor = own_window_advantage_floor(points, out.power_law);
+  out.exponential.advantage_floor = own_window_advantage_floor(points, out.exponential);
   const double power_per_point = power_advantage / static_cast<double>(out.power_law.window.points.size());
   const double exponential_per_point =
       exponential_advantage / static_cast<double>(out.exponential.window.points.size());
@@ -449,92 +463,122 @@ SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double>
             ? ", not decisive (ΔAIC within its floor of 2: the values' floors decide it)"
         : out.evidence_points < 4 ? ", not decisive (a decision needs 4 points)"
                                   : "";
-    out.note = fmt::format("{} preferred (ΔAIC = {} over the {} on n = {}){}",
-                           model_name(*out.preferred), evidence_text(out.evidence, out.evidence_floor),
-                           model_name(other), label_range(n, window),
-                           out.decisive() ? "" : why_not);
+    out.note =
+        fmt::format("{} preferred (ΔAIC = {} over the {} on n = {}){}", model_name(*out.preferred),
+                    evidence_text(out.evidence, out.evidence_floor), model_name(other),
+                    label_range(points.n, window), out.decisive() ? "" : why_not);
   } else if (std::isnan(power_advantage) || std::isnan(exponential_advantage)) {
     out.note = "models not compared (fewer than 3 points in a window)";
   } else {
     out.note = "neither model fits better on its own window";
   }
+}
 
-  // A bend: the window with its head, else the window alone (a head that is not part of the
-  // bend, e.g. a first point before the kernel's support covers the centres).
-  if (set_window.empty() && positions.size() >= 2) {
-    const bool upward = x[positions.back()] > x[positions.front()];
-    auto try_bend = [&](const std::vector<std::size_t>& candidate) {
-      if (candidate.size() < 6) return false;
-      std::vector<double> cx, cy;
-      for (auto p : candidate) {
-        cx.push_back(x[p]);
-        cy.push_back(y[p]);
-      }
-      if (!bends_monotonically(pairwise_rates(cx, cy))) return false;
-      auto fit = fit_power_law_corrected(cx, cy, upward, confidence);
-      if (!fit) return false;
-      // Its floors: refits with the values moved within them (both sign patterns).
-      std::vector<double> relative;
-      for (auto p : candidate)
-        relative.push_back(p < floors.size() && floors[p] > 0.0 ? floors[p] / y[p] : 0.0);
-      if (std::any_of(relative.begin(), relative.end(), [](double d) { return d > 0.0; })) {
-        double mean_u = 0.0;
-        for (double v : cx) mean_u += std::log(v) / static_cast<double>(cx.size());
-        for (const double sign : {1.0, -1.0}) {
-          std::vector<double> moved(cy);
-          for (std::size_t k = 0; k < moved.size(); ++k)
-            moved[k] *= 1.0 + sign * (std::log(cx[k]) >= mean_u ? 1.0 : -1.0) * relative[k];
-          const auto refit = fit_power_law_corrected(cx, moved, upward, confidence);
-          if (!refit) {
-            out.corrected_floors = {std::numeric_limits<double>::infinity(),
-                                    std::numeric_limits<double>::infinity(),
-                                    std::numeric_limits<double>::infinity()};
-            break;
-          }
-          auto& f = out.corrected_floors;
-          for (double change : {refit->fit.rate - fit->fit.rate,
-                                refit->fit.std_error - fit->fit.std_error,
-                                refit->fit.ci_low - fit->fit.ci_low,
-                                refit->fit.ci_high - fit->fit.ci_high})
-            if (std::isfinite(change)) f.rate = std::max(f.rate, std::abs(change));
-          f.r_squared = std::max(f.r_squared, std::abs(refit->fit.r_squared - fit->fit.r_squared));
-          f.log_sse = std::max(f.log_sse, std::abs(refit->advantage - fit->advantage));
-        }
-      }
-      for (auto& k : fit->fit.used) k = candidate[k];
-      out.corrected = std::move(fit);
-      out.corrected_points = candidate;
-      return true;
-    };
-    const auto& window = out.power_law.window;
-    std::vector<std::size_t> with_head = window.head;
-    with_head.insert(with_head.end(), window.points.begin(), window.points.end());
-    if (!try_bend(with_head) && !window.head.empty()) try_bend(window.points);
+// The power law with a pre-asymptotic term on `candidate` (positions), with its floors, when
+// the pairwise rates there bend monotonically; false when they do not or the fit fails.
+bool try_bend(const FittedPoints& points, const std::vector<std::size_t>& candidate, bool upward,
+              double confidence, SeriesAnalysis& out) {
+  if (candidate.size() < 6) return false;
+  std::vector<double> cx, cy;
+  for (auto p : candidate) {
+    cx.push_back(points.x[p]);
+    cy.push_back(points.y[p]);
   }
+  if (!bends_monotonically(pairwise_rates(cx, cy))) return false;
+  auto fit = fit_power_law_corrected(cx, cy, upward, confidence);
+  if (!fit) return false;
+  // Its floors: refits with the values moved within them (both sign patterns).
+  std::vector<double> relative;
+  for (auto p : candidate) relative.push_back(points.floor_at(p) / points.y[p]);
+  if (std::any_of(relative.begin(), relative.end(), [](double d) { return d > 0.0; })) {
+    double mean_u = 0.0;
+    for (double v : cx) mean_u += std::log(v) / static_cast<double>(cx.size());
+    for (const double sign : {1.0, -1.0}) {
+      std::vector<double> moved(cy);
+      for (std::size_t k = 0; k < moved.size(); ++k)
+        moved[k] *= 1.0 + sign * (std::log(cx[k]) >= mean_u ? 1.0 : -1.0) * relative[k];
+      const auto refit = fit_power_law_corrected(cx, moved, upward, confidence);
+      if (!refit) {
+        out.corrected_floors = {std::numeric_limits<double>::infinity(),
+                                std::numeric_limits<double>::infinity(),
+                                std::numeric_limits<double>::infinity()};
+        break;
+      }
+      auto& f = out.corrected_floors;
+      for (double change :
+           {refit->fit.rate - fit->fit.rate, refit->fit.std_error - fit->fit.std_error,
+            refit->fit.ci_low - fit->fit.ci_low, refit->fit.ci_high - fit->fit.ci_high})
+        if (std::isfinite(change)) f.rate = std::max(f.rate, std::abs(change));
+      f.r_squared = std::max(f.r_squared, std::abs(refit->fit.r_squared - fit->fit.r_squared));
+      f.log_sse = std::max(f.log_sse, std::abs(refit->advantage - fit->advantage));
+    }
+  }
+  for (auto& k : fit->fit.used) k = candidate[k];
+  out.corrected = std::move(fit);
+  out.corrected_points = candidate;
+  return true;
+}
 
-  // A constant: every usable finite value (of the set window), any sign; else the power law's
-  // automatic window without its head.
+// A constant: every usable finite value (of the set window), any sign; else the power law's
+// automatic window without the shortest part of its pre-asymptotic head that leaves a constant
+// (the head bounds what may be left out: a slow decay is not cut to its last points).
+std::optional<ConstantSeries> find_constant(std::span<const double> x, std::span<const double> n,
+                                            std::span<const double> y,
+                                            const std::vector<bool>& usable,
+                                            const FitWindow& set_window,
+                                            std::span<const double> floors, double constant_within,
+                                            const AsymptoticWindow& power_law_window) {
   std::vector<std::size_t> levels;
   for (std::size_t i = 0; i < y.size(); ++i)
     if (usable[i] && std::isfinite(y[i]) && std::isfinite(n[i]) &&
-        (set_window.empty() || ((!set_window.n_from || n[i] >= *set_window.n_from) &&
-                                (!set_window.n_to || n[i] <= *set_window.n_to) &&
-                                (!set_window.h_from || x[i] >= *set_window.h_from) &&
-                                (!set_window.h_to || x[i] <= *set_window.h_to))))
+        (set_window.empty() || inside(set_window, n[i], x[i])))
       levels.push_back(i);
-  if (set_window.last && levels.size() > *set_window.last)
-    levels.erase(levels.begin(), levels.end() - static_cast<std::ptrdiff_t>(*set_window.last));
-  out.constant = detect_constant(y, floors, levels, constant_within);
-  // Else without the shortest part of the power law's pre-asymptotic head that leaves a
-  // constant (the head bounds what may be left out: a slow decay is not cut to its last points).
-  const auto& head = out.power_law.window.head;
-  for (std::size_t cut = 1; !out.constant && set_window.empty() && cut <= head.size(); ++cut) {
+  keep_last(set_window, levels);
+  auto constant = detect_constant(y, floors, levels, constant_within);
+  const auto& head = power_law_window.head;
+  for (std::size_t cut = 1; !constant && set_window.empty() && cut <= head.size(); ++cut) {
     std::vector<std::size_t> rest(head.begin() + static_cast<std::ptrdiff_t>(cut), head.end());
-    rest.insert(rest.end(), out.power_law.window.points.begin(), out.power_law.window.points.end());
-    out.constant = detect_constant(y, floors, rest, constant_within);
-    if (out.constant)
-      out.constant->head.assign(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(cut));
+    rest.insert(rest.end(), power_law_window.points.begin(), power_law_window.points.end());
+    constant = detect_constant(y, floors, rest, constant_within);
+    if (constant)
+      constant->head.assign(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(cut));
   }
+  return constant;
+}
+
+}  // namespace
+
+SeriesAnalysis analyse_series(std::span<const double> x, std::span<const double> n,
+                              std::span<const double> y, const std::vector<bool>& usable,
+                              double confidence, const FitWindow& set_window,
+                              std::span<const double> floors, double constant_within) {
+  if (x.size() != y.size() || n.size() != y.size() || usable.size() != y.size())
+    throw std::invalid_argument("analyse_series: x, n, y and usable differ in size");
+  if (!(confidence > 0.0 && confidence < 1.0))
+    throw std::invalid_argument("analyse_series: confidence must lie in (0, 1)");
+
+  const FittedPoints points = fitted_points(x, n, y, usable, set_window, floors);
+  SeriesAnalysis out;
+  out.evidence = not_a_number;
+  out.set_window = set_window.text();
+  out.power_law = analyse_model(RateModel::power_law, points, set_window, confidence);
+  out.exponential = analyse_model(RateModel::exponential, points, set_window, confidence);
+  compare_models(points, out);
+
+  // A bend: the window with its head, else the window alone (a head that is not part of the
+  // bend, e.g. a first point before the kernel's support covers the centres).
+  const auto& positions = points.positions;
+  if (set_window.empty() && positions.size() >= 2) {
+    const bool upward = x[positions.back()] > x[positions.front()];
+    const auto& window = out.power_law.window;
+    std::vector<std::size_t> with_head = window.head;
+    with_head.insert(with_head.end(), window.points.begin(), window.points.end());
+    if (!try_bend(points, with_head, upward, confidence, out) && !window.head.empty())
+      try_bend(points, window.points, upward, confidence, out);
+  }
+
+  out.constant =
+      find_constant(x, n, y, usable, set_window, floors, constant_within, out.power_law.window);
   return out;
 }
 

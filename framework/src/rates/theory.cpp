@@ -22,14 +22,17 @@ const std::vector<std::string>& theory_metrics() {
   return names;
 }
 
+std::string no_theory_law(std::string_view metric) {
+  return fmt::format("no theory rate for metric '{}' (theory covers {})", metric,
+                     fmt::join(theory_metrics(), ", "));
+}
+
 std::optional<TheoryRate> theory_rate(std::string_view metric, const KernelProperties& properties,
                                       std::string* why) {
   for (const auto& row : MetricTable<ApproximationMetric>::rows)
     if (row.name == metric && row.theory != TheoryLaw::none)
       return theory_rate(row, properties, why);
-  if (why)
-    *why = fmt::format("no theory rate for metric '{}' (theory covers {})", metric,
-                       fmt::join(theory_metrics(), ", "));
+  if (why) *why = no_theory_law(metric);
   return std::nullopt;
 }
 
@@ -42,9 +45,7 @@ std::optional<TheoryRate> theory_rate(const MetricInfo& row, const KernelPropert
     if (why) *why = std::move(reason);
     return std::nullopt;
   };
-  if (law == TheoryLaw::none)
-    return none(fmt::format("no theory rate for metric '{}' (theory covers {})", metric,
-                            fmt::join(theory_metrics(), ", ")));
+  if (law == TheoryLaw::none) return none(no_theory_law(metric));
   TheoryRate theory;
   theory.dimension = dimension;
   if (properties.analytic) {

@@ -16,12 +16,17 @@
 #include <limits>
 #include <map>
 
+#include "output_fields.hpp"
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/core/build_info.hpp"
 #include "rkhs/core/printable.hpp"
 
 namespace rkhs {
+
+using report_detail::abscissa_name;
+using report_detail::model_id;
+using report_detail::reported_flags;
 
 namespace {
 
@@ -33,76 +38,6 @@ std::string csv_row(const std::vector<std::string>& fields) {
   }
   out += '\n';
   return out;
-}
-
-std::string abscissa_name(const StudyDefinition& study) {
-  return study.abscissa == Abscissa::n ? "n" : "h";
-}
-
-std::string model_id(RateModel model) {
-  return model == RateModel::power_law ? "power_law" : "exponential";
-}
-
-std::string json_value(const ParameterValue& value) {
-  if (std::holds_alternative<std::string>(value)) return json_string(std::get<std::string>(value));
-  if (std::holds_alternative<bool>(value)) return std::get<bool>(value) ? "true" : "false";
-  return format_value(value);
-}
-
-std::string json_parameters(const ParameterSet& parameters) {
-  std::vector<std::string> items;
-  for (const auto& [name, value] : parameters.values())
-    items.push_back(fmt::format("{}: {}", json_string(name), json_value(value)));
-  return fmt::format("{{{}}}", fmt::join(items, ", "));
-}
-
-std::string json_plugin(const PluginChoice& choice) {
-  return fmt::format("{{\"name\": {}, \"parameters\": {}}}", json_string(choice.name),
-                     json_parameters(choice.parameters));
-}
-
-std::string group_label(const TrialSpec& trial) {
-  return trial.group_key;
-}
-
-// "expectations": the verdicts of RunRecord::verdicts, one object per test case.
-std::string expectations_json(const RunRecord& run) {
-  auto counts = count_verdicts(*run.verdicts);
-  counts.deselected = run.deselected;
-  std::string out = fmt::format(
-      "  \"expectations\": {{\n    \"counts\": {{\"passed\": {}, \"failed\": {}, "
-      "\"inconclusive\": {}, \"xfailed\": {}, \"xpassed\": {}, \"deselected\": {}}},\n"
-      "    \"outcomes\": [\n",
-      counts.passed, counts.failed, counts.inconclusive, counts.xfailed, counts.xpassed,
-      counts.deselected);
-  const auto optional_text = [](const std::string& text) {
-    return text.empty() ? std::string("null") : json_string(text);
-  };
-  const auto n_or_null = [](std::size_t n) { return n ? std::to_string(n) : std::string("null"); };
-  for (std::size_t k = 0; k < run.verdicts->size(); ++k) {
-    const auto& o = (*run.verdicts)[k];
-    const auto& e = *o.expectation;
-    std::string verdict(verdict_name(o.verdict));
-    for (auto& c : verdict) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    out += fmt::format(
-        "      {{\"name\": {}, \"expectation_name\": {}, \"metric\": {}, \"kind\": {}, "
-        "\"location\": {}, \"group\": {}, \"group_label\": {}, \"verdict\": {}, "
-        "\"outcome\": {}, \"xfail\": {}, \"rate\": {}, \"ci_low\": {}, \"ci_high\": {}, "
-        "\"accepted_low\": {}, \"accepted_high\": {}, \"effectivity_min\": {}, "
-        "\"effectivity_max\": {}, \"window\": {{\"from\": {}, \"to\": {}, \"points\": {}}}, "
-        "\"expected\": {}, \"found\": {}, \"reason\": {}, \"advice\": {}, \"seconds\": {}}}{}\n",
-        json_string(o.name), optional_text(e.name), json_string(e.metric),
-        json_string(expectation_kind_name(e.kind)), json_string(e.location), json_string(o.group),
-        json_string(o.group_label), json_string(verdict),
-        json_string(case_outcome_id(case_outcome(o))), optional_text(e.xfail), json_number(o.rate),
-        json_number(o.ci_low), json_number(o.ci_high), json_number(o.accepted_low),
-        json_number(o.accepted_high), json_number(o.effectivity_min),
-        json_number(o.effectivity_max), n_or_null(o.window_from), n_or_null(o.window_to),
-        o.window_points, json_string(o.expected), json_string(o.found), json_string(o.reason),
-        o.advice.empty() ? std::string("null") : json_string(o.advice),
-        json_number(std::round(o.seconds * 1e4) / 1e4), k + 1 < run.verdicts->size() ? "," : "");
-  }
-  return out + "    ]\n  }\n";
 }
 
 }  // namespace
@@ -161,27 +96,6 @@ std::string csv_field(const std::string& raw) {
 std::string csv_number(double value) {
   return std::isnan(value) ? "" : format_real(value);
 }
-
-namespace {
-
-// The flags of `result` that concern what the study reports: every flag but the floor flag
-// "<metric>_at_floor" of a metric the study does not report (a trial flags every metric it
-// computes; rows' own flags, such as power_function_at_floor, are always written).
-std::vector<std::string> reported_flags(const StudyDefinition& study,
-                                        const std::vector<std::string>& flags) {
-  std::vector<std::string> out;
-  for (const auto& flag : flags) {
-    bool unreported = false;
-    for (const auto& row : study.kind_descriptor().metrics())
-      if (flag == floor_flag(row) && flag != row.flag &&
-          std::find(study.metrics.begin(), study.metrics.end(), row.name) == study.metrics.end())
-        unreported = true;
-    if (!unreported) out.push_back(flag);
-  }
-  return out;
-}
-
-}  // namespace
 
 // The value of a trials.csv column a study kind declares (StudyKindOutputs::trial_columns).
 std::string kind_column_value(std::string_view column, const TrialResult& result) {
@@ -369,221 +283,6 @@ std::string rates_csv(const RunRecord& run) {
     }
   }
   return out;
-}
-
-namespace {
-
-// Per trial: the work counters as a JSON object, or null. `source` says whether they were
-// counted in this run or when the stored record was written (the same code: a trial's hash
-// includes the code version, docs/results.md).
-std::string trial_work_json(const StudyDefinition& study, const TrialResult& result) {
-  if (!result.work) return "null";
-  const auto& w = *result.work;
-  const auto tracked = [&](std::uint64_t value) {
-    return w.allocations_tracked ? std::to_string(value) : std::string("null");
-  };
-  std::string out = fmt::format(
-      "{{\"source\": {}, \"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
-      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
-      "\"peak_bytes\": {}",
-      json_string(result.reused ? "store" : "run"), w.kernel_evaluations,
-      w.kernel_derivative_evaluations, w.factorisations, tracked(w.allocations),
-      tracked(w.allocated_bytes), tracked(w.peak_bytes));
-  // The counts of work the kind's metrics hold already (an adaptive trial's steps): reported
-  // with the work counters, not counted twice.
-  for (const auto metric : study.kind_descriptor().outputs().work_metrics)
-    out += fmt::format(", {}: {}", json_string(metric),
-                       json_number(result.metrics[study.metric_index(metric)]));
-  return out + "}";
-}
-
-// Why a trial has no work counters (null when it has them).
-std::string missing_work_json(const TrialResult& result) {
-  if (result.work) return "null";
-  return json_string(result.reused
-                         ? "reused from the result store: its record holds no work counters "
-                           "(stored by an older rkhs-study); run with --fresh to count them"
-                         : "not counted");
-}
-
-// The study's work: sums of every counter over the trials that have counters, the largest
-// peak_bytes, and how many trials have none.
-std::string study_work_json(const StudyDefinition& study, const std::vector<TrialResult>& results) {
-  WorkCounts total;
-  total.allocations_tracked = true;
-  std::size_t counted = 0, from_store = 0;
-  const auto& work_metrics = study.kind_descriptor().outputs().work_metrics;
-  std::vector<double> sums(work_metrics.size(), 0.0);
-  for (const auto& r : results) {
-    if (!r.work) continue;
-    ++counted;
-    from_store += r.reused ? 1 : 0;
-    total.kernel_evaluations += r.work->kernel_evaluations;
-    total.kernel_derivative_evaluations += r.work->kernel_derivative_evaluations;
-    total.factorisations += r.work->factorisations;
-    total.allocations_tracked = total.allocations_tracked && r.work->allocations_tracked;
-    total.allocations += r.work->allocations;
-    total.allocated_bytes += r.work->allocated_bytes;
-    total.peak_bytes = std::max(total.peak_bytes, r.work->peak_bytes);
-    for (std::size_t i = 0; i < work_metrics.size(); ++i) {
-      const double value = r.metrics[study.metric_index(work_metrics[i])];
-      sums[i] += std::isfinite(value) ? value : 0;
-    }
-  }
-  total.allocations_tracked = total.allocations_tracked && counted > 0;
-  const auto tracked = [&](std::uint64_t value) {
-    return total.allocations_tracked ? std::to_string(value) : std::string("null");
-  };
-  std::string out = fmt::format(
-      "{{\"trials_counted\": {}, \"trials_from_store\": {}, \"trials_without_counters\": {}, "
-      "\"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
-      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
-      "\"peak_bytes\": {}",
-      counted, from_store, results.size() - counted, total.kernel_evaluations,
-      total.kernel_derivative_evaluations, total.factorisations, tracked(total.allocations),
-      tracked(total.allocated_bytes), tracked(total.peak_bytes));
-  for (std::size_t i = 0; i < work_metrics.size(); ++i)
-    out += fmt::format(", {}: {}", json_string(work_metrics[i]), json_number(sums[i]));
-  return out + "}";
-}
-
-}  // namespace
-
-std::string summary_json(const RunRecord& run) {
-  const auto& study = run.study;
-  const auto& build = build_info();
-  std::string out = "{\n";
-  out +=
-      fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
-                  json_string(study.name), json_string(study.description),
-                  json_string(study.source), json_string(study_kind_name(study.kind)));
-  // A distributed run names its ranks: host, threads and trials run on each.
-  std::string mpi;
-  if (!run.ranks.empty()) {
-    std::vector<std::string> ranks;
-    for (const auto& r : run.ranks)
-      ranks.push_back(fmt::format("{{\"host\": {}, \"threads\": {}, \"trials\": {}{}}}",
-                                  json_string(r.host), r.threads, r.trials,
-                                  r.lost ? ", \"lost\": true" : ""));
-    mpi = fmt::format(", \"mpi_ranks\": [{}]", fmt::join(ranks, ", "));
-  }
-  out += fmt::format(
-      "  \"provenance\": {{\"version\": {}, \"git_commit\": {}, \"compiler\": {}, "
-      "\"build_type\": {}, \"threads\": {}, \"started\": {}, \"wall_seconds\": {}{}}},\n",
-      json_string(build.version), json_string(build.git_commit), json_string(build.compiler),
-      json_string(build.build_type), run.threads, json_string(run.started),
-      json_number(std::round(run.wall_seconds * 1000) / 1000), mpi);
-  if (study.domain.dimension == 1) {
-    out += fmt::format("  \"domain\": {{\"length\": {}, \"periodic\": {}}},\n",
-                       json_number(study.domain.length), study.domain.periodic ? "true" : "false");
-  } else {
-    std::vector<std::string> lengths;
-    for (int a = 0; a < study.domain.dimension; ++a)
-      lengths.push_back(json_number(study.domain.extent(a)));
-    out += fmt::format(
-        "  \"domain\": {{\"dimension\": {}, \"lengths\": [{}], \"periodic\": {}}},\n",
-        study.domain.dimension, fmt::join(lengths, ", "), study.domain.periodic ? "true" : "false");
-  }
-  std::vector<std::string> n_values;
-  for (auto n : study.n_values) n_values.push_back(std::to_string(n));
-  out += fmt::format("  \"n\": [{}],\n  \"evaluation_points\": {},\n  \"abscissa\": {},\n",
-                     fmt::join(n_values, ", "), study.evaluation_points,
-                     json_string(abscissa_name(study)));
-  std::size_t failed = 0;
-  for (const auto& r : run.results) failed += r.ok ? 0 : 1;
-  out += fmt::format("  \"counts\": {{\"trials\": {}, \"ok\": {}, \"failed\": {}}},\n",
-                     run.trials.size(), run.trials.size() - failed, failed);
-  out += fmt::format("  \"tier\": {},\n", run.tier.empty() ? "null" : json_string(run.tier));
-  out += fmt::format("  \"work\": {},\n", study_work_json(study, run.results));
-
-  out += "  \"trials\": [\n";
-  for (const auto& trial : run.trials) {
-    const auto& result = run.results[trial.index];
-    std::vector<std::string> metrics, flags, floors;
-    for (const auto& metric : study.metrics) {
-      const auto position = study.metric_index(metric);
-      metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[position]));
-      if (metric_floor_rule(study.kind, metric) != FloorRule::exact)
-        floors.push_back(json_string(metric) + ": " +
-                         json_number(position < result.floors.size()
-                                         ? result.floors[position]
-                                         : std::numeric_limits<double>::quiet_NaN()));
-    }
-    for (const auto& flag : reported_flags(study, result.flags)) flags.push_back(json_string(flag));
-    out += fmt::format(
-        "    {{\"index\": {}, \"key\": {}, \"kernel\": {}, \"target\": {}, \"centres\": {}, "
-        "\"n\": {}, \"data\": {}, \"status\": {}, \"reason\": {}, \"solve\": {}, "
-        "\"flags\": [{}],{} \"seconds\": {}, \"metrics\": {{{}}}, \"floors\": {{{}}}, \"work\": "
-        "{}, "
-        "\"work_missing\": {}}}{}\n",
-        trial.index, json_string(trial.key), json_plugin(trial.kernel), json_plugin(trial.target),
-        json_plugin(trial.centres), trial.n,
-        result.data_provenance.empty() ? std::string("null") : json_string(result.data_provenance),
-        json_string(result.ok ? "ok" : "failed"), json_string(result.reason),
-        json_string(result.solve_method), fmt::join(flags, ", "),
-        !result.engine ? std::string() : " \"engine\": " + json_string(engine_text(result)) + ",",
-        json_number(std::round(result.seconds * 1e4) / 1e4), fmt::join(metrics, ", "),
-        fmt::join(floors, ", "), trial_work_json(study, result), missing_work_json(result),
-        trial.index + 1 < run.trials.size() ? "," : "");
-  }
-  out += "  ],\n  \"rates\": [\n";
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (std::size_t s = 0; s < run.rates.size(); ++s) {
-    const auto& series = run.rates[s];
-    const auto n_list = [&](const std::vector<std::size_t>& positions) {
-      std::vector<std::string> items;
-      for (auto k : positions) items.push_back(std::to_string(run.trials[series.trials[k]].n));
-      return fmt::format("[{}]", fmt::join(items, ", "));
-    };
-    // A model's fit on its window: the fields common to the reported and the alternative fit.
-    const auto model_fields = [&](const ModelAnalysis& analysis) {
-      const auto& fit = analysis.fit;
-      return fmt::format(
-          "\"model\": {}, \"rate\": {}, \"std_error\": {}, \"ci_low\": {}, \"ci_high\": {}, "
-          "\"r_squared\": {}, \"points\": {}, \"window\": {}, \"head\": {}, \"floor\": {}, "
-          "\"delta_aic\": {}, \"rate_floor\": {}, \"r_squared_floor\": {}, "
-          "\"delta_aic_floor\": {}",
-          json_string(model_id(analysis.model)), json_number(fit ? fit->rate : nan),
-          json_number(fit ? fit->std_error : nan), json_number(fit ? fit->ci_low : nan),
-          json_number(fit ? fit->ci_high : nan), json_number(fit ? fit->r_squared : nan),
-          fit ? fit->points : 0, n_list(analysis.window.points), n_list(analysis.window.head),
-          n_list(analysis.window.floor), json_number(analysis.advantage),
-          json_number(fit ? analysis.floors.rate : nan),
-          json_number(fit ? analysis.floors.r_squared : nan),
-          json_number(analysis.advantage_floor));
-    };
-    const auto reported = series.analysis.reported;
-    const auto& alternative = series.analysis.analysis(
-        reported == RateModel::power_law ? RateModel::exponential : RateModel::power_law);
-    std::vector<std::size_t> flagged;
-    for (std::size_t k = 0; k < series.flagged.size(); ++k)
-      if (series.flagged[k]) flagged.push_back(k);
-    std::vector<std::string> pairwise;
-    for (double r : series.pairwise) pairwise.push_back(json_number(r));
-    const auto& constant = series.analysis.constant;
-    const auto constant_json =
-        constant ? fmt::format(
-                       "{{\"value\": {}, \"band\": {}, \"floor\": {}, "
-                       "\"within_floors\": {}, \"within\": {}, \"window\": {}, "
-                       "\"head\": {}, \"text\": {}}}",
-                       json_number(constant->value), json_number(constant->band),
-                       json_number(constant->floor), constant->within_floors ? "true" : "false",
-                       json_number(constant->within), n_list(constant->points),
-                       n_list(constant->head), json_string(constant->text(series.n)))
-                 : std::string("null");
-    out += fmt::format(
-        "    {{\"group\": {}, \"metric\": {}, \"constant\": {}, {}, \"preferred\": {}, "
-        "\"decisive\": {}, \"model_note\": {}, \"flagged\": {}, \"pairwise\": [{}], "
-        "\"note\": {}, \"alternative\": {{{}}}}}{}\n",
-        json_string(group_label(run.trials[series.trials.front()])), json_string(series.metric),
-        constant_json, model_fields(series.analysis.reported_analysis()),
-        series.analysis.preferred ? json_string(model_id(*series.analysis.preferred)) : "null",
-        series.analysis.decisive() ? "true" : "false", json_string(series.analysis.note),
-        n_list(flagged), fmt::join(pairwise, ", "), json_string(series.note),
-        model_fields(alternative), s + 1 < run.rates.size() ? "," : "");
-  }
-  out += run.verdicts ? "  ],\n" + expectations_json(run) : "  ]\n";
-  return out + "}\n";
 }
 
 std::string estimates_csv(const RunRecord& run) {

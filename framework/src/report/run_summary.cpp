@@ -489,6 +489,7 @@ MetricSeries read_series(const Reader& reader, const Json& rates, std::size_t s,
         fmt::format("constant {}: not a rate", series.analysis.constant->text(series.n));
   }
   if (!series.fit && !series.constant()) series.no_fit_reason = no_fit_reason(series);
+  series.theory = series_theory(study, folder.trials[series.trials.front()].kernel, series.metric);
   return series;
 }
 

@@ -11,6 +11,7 @@
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/metrics.hpp"
+#include "rkhs/kernel/kernel.hpp"
 
 namespace rkhs {
 
@@ -27,6 +28,25 @@ std::vector<std::string> excluding_flags_of(const MetricInfo* row) {
 }
 
 }  // namespace
+
+SeriesTheory series_theory(const StudyDefinition& study, const PluginChoice& kernel,
+                           std::string_view metric) {
+  SeriesTheory out;
+  const auto* row = study.kind_descriptor().find_metric(metric);
+  if (!row || row->theory == TheoryLaw::none) {
+    out.why_none = no_theory_law(metric);
+    return out;
+  }
+  try {
+    out.rate = theory_rate(*row, kernel_properties(kernel.name, kernel.parameters, study.domain),
+                           &out.why_none);
+  } catch (const std::exception& e) {
+    out.kernel_unavailable = true;
+    out.why_none = e.what();
+  }
+  if (out.rate) out.why_none.clear();
+  return out;
+}
 
 std::string_view excluding_flag(StudyKind kind, std::string_view metric) {
   const auto* row = describe(kind).find_metric(metric);
@@ -126,6 +146,7 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
       series.group = g;
       series.trials = indices;
       series.constant_within = study.constant_within;
+      series.theory = series_theory(study, trials[indices.front()].kernel, metric);
       for (std::size_t k = 0; k < indices.size(); ++k) {
         const auto& result = results[indices[k]];
         const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)

@@ -12,7 +12,6 @@
 
 #include "judgement.hpp"
 #include "rkhs/rates/asymptotic.hpp"
-#include "rkhs/kernel/kernel.hpp"
 #include "rkhs/study/trial_grid.hpp"
 #include "rkhs/rates/theory.hpp"
 #include "rkhs/verify/expectation_cases.hpp"
@@ -226,14 +225,11 @@ class Verifier {
   }
 
   void judge_theory(const Expectation& e, const MetricSeries& series, ExpectationOutcome& o) const {
-    const auto& trial = trials_[series.trials.front()];
-    std::string why;
-    const auto theory = theory_rate(
-        e.metric, kernel_properties(trial.kernel.name, trial.kernel.parameters, study_.domain), &why);
+    const auto& theory = series.theory.rate;
     if (!theory) {  // the parser rejects this; a study built in code may still ask for it
       o.verdict = Verdict::inconclusive;
       o.expected = "theory";
-      o.reason = why;
+      o.reason = series.theory.why_none;
       return;
     }
     if (theory->model == RateModel::exponential) {

@@ -67,6 +67,10 @@ std::optional<TheoryRate> theory_rate(const MetricInfo& metric, const KernelProp
 /// table order.
 const std::vector<std::string>& theory_metrics();
 
+/// Why `metric` has no theory rate when its row has no TheoryLaw: "no theory rate for metric
+/// 'm' (theory covers ...)".
+std::string no_theory_law(std::string_view metric);
+
 /// The interval accepted for the fitted power-law slope against the study's abscissa, for an
 /// algebraic theory: the slope is h_exponent against ln h, -h_exponent / d against ln n
 /// (quasi-uniform centres). Sharp: slope +- tolerance; otherwise one-sided (at least as fast

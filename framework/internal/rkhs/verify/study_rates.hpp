@@ -13,10 +13,26 @@
 
 #include "rkhs/rates/asymptotic.hpp"
 #include "rkhs/rates/rates.hpp"
+#include "rkhs/rates/theory.hpp"
 #include "rkhs/run/run.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
+
+/// What theory says about a series' metric for its group's kernel (rkhs/rates/theory.hpp),
+/// worked out once when the series is formed and read by the plots and the theory expectations.
+struct SeriesTheory {
+  std::optional<TheoryRate> rate;  ///< empty when theory predicts nothing
+  std::string why_none;            ///< why `rate` is empty ("" when it is not)
+  /// The kernel could not be rebuilt from its name and parameters (a plugin not loaded when a
+  /// results folder is read back): why_none holds the error.
+  bool kernel_unavailable = false;
+};
+
+/// The theory for `metric` of `study` and `kernel`: only a metric whose catalogue row has a
+/// theory law asks the kernel's properties (rkhs/kernel/kernel.hpp, kernel_properties).
+SeriesTheory series_theory(const StudyDefinition& study, const PluginChoice& kernel,
+                           std::string_view metric);
 
 struct MetricSeries {
   std::string metric;
@@ -40,6 +56,7 @@ struct MetricSeries {
   std::string no_fit_reason;            ///< why there is no fit ("" when there is one)
   /// The relative band of a constant series (StudyDefinition::constant_within).
   double constant_within = default_constant_within;
+  SeriesTheory theory;  ///< for the group's kernel (series_theory)
 
   /// The series does not vary with n: reported as analysis.constant, not as a rate.
   bool constant() const { return analysis.constant.has_value(); }
