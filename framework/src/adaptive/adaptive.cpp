@@ -304,7 +304,8 @@ Eigen::VectorXd RoadTrial::measure_against_limit(const Eigen::VectorXd& f,
   }
   const Eigen::VectorXd projection = fixed.cross * fixed.alpha_star;
   return set_shared_metrics(
-      {domain, fixed, f, estimate, projection, l2_projection, z, d, alpha, coefficients_star,
+      {domain, fixed, f, estimate, projection, l2_projection, limit.solved_spectrum,
+       static_cast<Eigen::Index>(limit.coefficients.size()), z, d, alpha, coefficients_star,
        settings.projected_road, excitation, unexcited, in_features || !spectrum.singular},
       out);
 }

@@ -104,8 +104,9 @@ Eigen::VectorXd set_shared_metrics(const FinalState& state, AdaptiveMeasurement&
   metrics[M::l2_projection_l2_error] = l2(l2_projection_residual);
   metrics[M::l2_projection_sup_error] = l2_projection_residual.cwiseAbs().maxCoeff();
   metrics[M::gap_to_l2_projection] = l2(estimate - state.l2_projection);
-  set_static_floors(state.fixed.approximation, state.fixed.solver.spectrum(), state.fixed.n,
-                    l2(state.l2_projection), state.l2_projection.cwiseAbs().maxCoeff(), out);
+  set_static_floors(state.fixed.approximation, state.l2_projection_spectrum,
+                    state.l2_projection_size, l2(state.l2_projection),
+                    state.l2_projection.cwiseAbs().maxCoeff(), out);
   // Persistence of excitation (rkhs/adaptive/excitation.hpp).
   metrics[M::pe_level] = state.excitation.value;
   out.floors[M::pe_level] = state.excitation.error_bound;

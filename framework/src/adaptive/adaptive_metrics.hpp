@@ -51,6 +51,10 @@ struct FinalState {
   const Eigen::VectorXd& estimate;           ///< fhat(T)
   const Eigen::VectorXd& projection;         ///< Pi_n f
   const Eigen::VectorXd& l2_projection;      ///< P_L2 f, the averaged limit of the law
+  /// The eigenvalues the solve for P_L2 f's coefficients divided by, and the matrix's size:
+  /// its floors are solve_round_off of them (rkhs/approx/approximation.hpp).
+  const GramSpectrum& l2_projection_spectrum;
+  Eigen::Index l2_projection_size;
   const Eigen::VectorXd& z;                  ///< the state (x, xhat, c) at T
   Eigen::Index d;                            ///< the plant's dimension
   const Eigen::VectorXd& coefficients;       ///< c(T) = z.tail(...)

@@ -57,6 +57,16 @@ GaussLegendreRule gauss_legendre(std::size_t q) {
 
 namespace {
 
+// The spectrum a pseudo-inverse solve divides by: from its smallest kept eigenvalue to the
+// largest.
+GramSpectrum kept_spectrum(double lambda_max, double smallest_kept) {
+  GramSpectrum out;
+  out.lambda_min = smallest_kept;
+  out.lambda_max = lambda_max;
+  out.condition_number = lambda_max / smallest_kept;
+  return out;
+}
+
 // Mbar, bbar and mean(f^2) under one composite rule.
 struct Moments {
   Eigen::MatrixXd gram;
@@ -288,6 +298,9 @@ AveragedLimit averaged_limit(const AnyKernel& kernel, std::span<const double> ce
   out.coefficients = gram_solver.solve(current.load);
   out.solve_method = gram_solver.method();
   out.spectrum = gram_solver.spectrum();
+  out.solved_spectrum = out.spectrum;
+  if (const auto* kept = gram_solver.kept_values(); kept && kept->size() > 0)
+    out.solved_spectrum = kept_spectrum(out.spectrum.lambda_max, kept->minCoeff());
   record_moments(std::move(moments), out);
   return out;
 }
@@ -332,6 +345,7 @@ AveragedLimit averaged_limit_in_features(const AnyKernel& kernel,
   out.spectrum.singular = rank < count;
   out.spectrum.condition_number = out.spectrum.singular ? std::numeric_limits<double>::infinity()
                                                         : values(count - 1) / values(0);
+  out.solved_spectrum = rank > 0 ? kept_spectrum(values(count - 1), values(first)) : out.spectrum;
   out.averaged_gram_eigenvalues = values;
   record_moments(std::move(moments), out);
   return out;

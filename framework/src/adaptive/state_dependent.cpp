@@ -442,8 +442,8 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   const GramSpectrum& spectrum = fixed.solver.spectrum();
   const auto level = excitation_level(seen.excitation, fixed.gram, spectrum);
   const Eigen::VectorXd residual = set_shared_metrics(
-      {domain, fixed, f, estimate, projection, l2_projection, z, d, alpha, alpha_star,
-       settings.projected_road, level,
+      {domain, fixed, f, estimate, projection, l2_projection, spectrum, fixed.n, z, d, alpha,
+       alpha_star, settings.projected_road, level,
        spectrum.singular ? std::nan("") : static_cast<double>(level.unexcited), !spectrum.singular},
       out);
   set_visited_errors(seen, grid, residual, alpha, out);

@@ -60,6 +60,21 @@ Judgement judge_interval(const RateFit* fit, const RateInterval& accepted) {
   return {Verdict::inconclusive, fmt::format("the {} CI straddles {}", level, num(edge))};
 }
 
+// A constant whose values agree within their floors: its band is round-off, which the verdicts
+// do not print (it differs from one processor to another); they print the floors instead.
+bool floor_bound(const ConstantSeries& constant) {
+  return constant.within_floors && constant.floor > 0.0 && constant.value != 0.0;
+}
+
+// `value` to the digits `floor` leaves it ("1.0000000000" for 1 +- 2e-11).
+std::string digits_of(double value, double floor) {
+  const int digits =
+      std::clamp(static_cast<int>(std::ceil(std::log10(std::fabs(value) / floor))), 1, 17);
+  auto out = fmt::format("{:#.{}g}", value, digits);
+  if (!out.empty() && out.back() == '.') out.pop_back();
+  return out;
+}
+
 // The rates a constant series allows under `model`: every line within its band over its points,
 // slopes up to w = 2 band / |value| per span of ln x (power law) or of n (exponential).
 // +inf for a constant of value 0 with a band, or a span of 0.
@@ -69,7 +84,10 @@ double constant_rate_width(const MetricSeries& series, RateModel model) {
   const double span = model == RateModel::power_law
                           ? std::fabs(std::log(series.abscissa[last] / series.abscissa[first]))
                           : std::fabs(series.n[last] - series.n[first]);
-  const double relative = constant.relative_band();
+  // Within the values' floors the band is round-off: the floors bound what the values allow.
+  const double relative = floor_bound(constant)
+                              ? std::max(constant.band, constant.floor) / std::fabs(constant.value)
+                              : constant.relative_band();
   if (relative == 0.0) return 0.0;
   return span > 0.0 && std::isfinite(relative) ? 2.0 * relative / span
                                                : std::numeric_limits<double>::infinity();
@@ -80,7 +98,10 @@ double constant_rate_width(const MetricSeries& series, RateModel model) {
 Judgement judge_constant_rate(const MetricSeries& series, RateModel model,
                               const RateInterval& accepted) {
   const double w = constant_rate_width(series, model);
-  const auto allowed = fmt::format("the rates its band allows, [{}, {}],", num(0.0 - w), num(w));
+  const auto allowed =
+      floor_bound(*series.analysis.constant)
+          ? fmt::format("the rates its floors allow, [{:.2g}, {:.2g}],", -w, w)
+          : fmt::format("the rates its band allows, [{}, {}],", num(0.0 - w), num(w));
   if (-w >= accepted.low && w <= accepted.high)
     return {Verdict::pass,
             "the series is constant: " + allowed + " lie within the accepted interval"};
@@ -114,7 +135,16 @@ Judgement judge_model(const SeriesAnalysis& analysis, RateModel required) {
 std::string describe_fit(const MetricSeries& series, const ModelAnalysis& analysis) {
   const auto& fit = analysis.fit;
   std::string out;
-  if (series.constant()) {
+  if (series.constant() && floor_bound(*series.analysis.constant)) {
+    const auto& constant = *series.analysis.constant;
+    const double w = constant_rate_width(series, analysis.model);
+    out = fmt::format(
+        "constant {} within the values' floors (± {:.2g}) on n = {} ({} of {} points; the rates "
+        "its floors allow: [{:.2g}, {:.2g}]{})",
+        digits_of(constant.value, constant.floor), constant.floor,
+        label_range(series.n, constant.points), constant.points.size(), series.trials.size(), -w, w,
+        analysis.model == RateModel::exponential ? " per unit n" : "");
+  } else if (series.constant()) {
     const double w = constant_rate_width(series, analysis.model);
     out = fmt::format("constant {} ({} of {} points; the rates its band allows: [{}, {}]{})",
                       series.analysis.constant->text(series.n),

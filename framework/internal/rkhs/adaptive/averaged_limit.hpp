@@ -85,6 +85,10 @@ struct AveragedLimit {
   Eigen::VectorXd averaged_load;     ///< bbar = (1/L) int phi f
   std::string solve_method;          ///< GramSolver::method() for Mbar ("cholesky", ...)
   GramSpectrum spectrum;             ///< of Mbar: condition number, singular to working precision
+  /// The eigenvalues the solve for `coefficients` divides by: Mbar's, or those a pseudo-inverse
+  /// keeps (lambda_min its smallest kept one). The coefficients' round-off is
+  /// solve_round_off(solved_spectrum, Mbar's size) (rkhs/approx/approximation.hpp).
+  GramSpectrum solved_spectrum;
   std::size_t quadrature_nodes = 0;  ///< nodes of the accepted rule
   std::size_t panels = 0;            ///< panels of the accepted rule
   std::size_t refinements = 0;       ///< panel doublings from the initial rule to the accepted one
