@@ -69,7 +69,7 @@ final_time = 2.0
   REQUIRE(out.trials.size() == 5);
   // Reference: the 7(8) pair at tight tolerance.
   for (std::size_t i = 1; i < out.trials.size(); ++i) {
-    INFO(out.trials[i].integrator.name);
+    INFO(out.trials[i].adaptive_axes().integrator.name);
     CHECK(relative(out.metric(i, "final_state_error"), out.metric(0, "final_state_error")) < 1e-5);
     CHECK(relative(out.metric(i, "l2_error"), out.metric(0, "l2_error")) < 1e-7);
     CHECK(relative(out.metric(i, "max_state_error"), out.metric(0, "max_state_error")) < 1e-5);
@@ -121,14 +121,14 @@ final_time = 20.0
 )");
   CHECK(std::abs(learning.metric(0, "l2_error") - 7.0898) > 0.1);  // fhat moved (||f|| = 7.09)
   for (std::size_t i = 1; i < learning.trials.size(); ++i) {
-    INFO(learning.trials[i].integrator.name);
+    INFO(learning.trials[i].adaptive_axes().integrator.name);
     CHECK(relative(learning.metric(i, "l2_error"), learning.metric(0, "l2_error")) < 1e-6);
     // x - xhat is a small difference of states of order 1: compare it absolutely, at a level
     // set by the tolerances (rtol 1e-9 on states of order 1, accumulated over the run).
     CHECK(std::abs(learning.metric(i, "final_state_error") -
                    learning.metric(0, "final_state_error")) < 1e-7);
-    UNSCOPED_INFO(learning.trials[i].integrator.name << " "
-                                                     << learning.metric(i, "final_state_error"));
+    UNSCOPED_INFO(learning.trials[i].adaptive_axes().integrator.name
+                  << " " << learning.metric(i, "final_state_error"));
   }
   CHECK(learning.metric(0, "final_state_error") > 1e-5);
 }

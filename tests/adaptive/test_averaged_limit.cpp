@@ -323,7 +323,7 @@ laps = 20
   const auto out = test::run_study_text(study, "averaged.toml");
   REQUIRE(out.trials.size() == 2);
   for (std::size_t i = 0; i < 2; ++i) {
-    INFO(out.trials[i].law.name);
+    INFO(out.trials[i].adaptive_axes().law.name);
     const double projection_error = out.metric(i, "l2_projection_l2_error");
     CHECK(projection_error > 0.1);  // n = 8 Gaussians resolve the sine only roughly
     // The best approximation in L2 is no worse than the interpolant, nor than fhat(T).
@@ -336,7 +336,7 @@ laps = 20
   const auto projected =
       test::run_study_text(study + "road = \"projection\"\n", "averaged_projection.toml");
   for (std::size_t i = 0; i < 2; ++i) {
-    INFO(projected.trials[i].law.name);
+    INFO(projected.trials[i].adaptive_axes().law.name);
     CHECK(projected.metric(i, "l2_projection_l2_error") < 1e-10);
     CHECK(projected.metric(i, "l2_projection_sup_error") < 1e-10);
   }

@@ -75,7 +75,8 @@ TEST_CASE("integration_error: zero for the reference's settings, smaller for tig
   const auto with = test::run_study_text(
       learning + "reference = { integrator = \"radau5\", rtol = 1e-11, atol = 1e-12 }\n");
   REQUIRE(with.trials.size() == 3);
-  CHECK(with.study.reference.label() == with.trials[0].integrator.label());
+  CHECK(with.study.adaptive_axes().reference.label() ==
+        with.trials[0].adaptive_axes().integrator.label());
   // The trial with the reference's own integrator and tolerances computes the same solution.
   CHECK(with.metric(0, "integration_error") < 1e-13);
   const double loose = with.metric(1, "integration_error");
@@ -111,9 +112,9 @@ TEST_CASE("a reference forces time stepping where automatic would take the lap m
   CHECK(trial_adaptive_settings(referenced, referenced.trials()[1]).engine ==
         AdaptiveEngine::time_stepping);
   // Left-out tolerances are the reference's defaults, other parameters the integrator's.
-  CHECK(referenced.reference.parameters.real("rtol") == 1e-11);
-  CHECK(referenced.reference.parameters.real("atol") == 1e-10);
-  CHECK(referenced.reference.parameters.boolean("restart_at_kinks"));
+  CHECK(referenced.adaptive_axes().reference.parameters.real("rtol") == 1e-11);
+  CHECK(referenced.adaptive_axes().reference.parameters.real("atol") == 1e-10);
+  CHECK(referenced.adaptive_axes().reference.parameters.boolean("restart_at_kinks"));
 }
 
 TEST_CASE("[adaptive] reference errors", "[adaptive][reference]") {

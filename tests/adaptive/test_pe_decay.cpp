@@ -100,9 +100,9 @@ TEST_CASE("pe_decay_ratio: the lap map's slowest rate is H(0) pe_level / Gamma t
     const double expected_rate = 0.5 * (1.0 / 24.0) / gamma;
     const double lap_time = 8.0 * std::numbers::pi / speed;
     for (std::size_t i = 0; i < 2; ++i) {  // rkhs, rkhs_embedding
-      INFO("v = " << speed << ", Gamma = " << gamma << ", law " << out.trials[i].law.name
-                  << ": pe_decay_ratio " << out.metric(i, "pe_decay_ratio") << ", lag factor "
-                  << lag_factor(speed));
+      INFO("v = " << speed << ", Gamma = " << gamma << ", law "
+                  << out.trials[i].adaptive_axes().law.name << ": pe_decay_ratio "
+                  << out.metric(i, "pe_decay_ratio") << ", lag factor " << lag_factor(speed));
       CHECK(std::abs(out.metric(i, "pe_level") - 1.0 / 24.0) < 1e-12);
       CHECK(std::abs(out.metric(i, "averaged_decay_rate") - expected_rate) <
             1e-12 * expected_rate);

@@ -263,7 +263,7 @@ TEST_CASE("rkhs_embedding trials: the same estimate as the rkhs law on H_n = H",
         embedding_study + "laps = 2\nsnapshot_laps = [2]\nroad = \"" + road + "\"\n",
         "embedding.toml");
     REQUIRE(out.trials.size() == 2);
-    REQUIRE(out.trials[1].law.name == "rkhs_embedding");
+    REQUIRE(out.trials[1].adaptive_axes().law.name == "rkhs_embedding");
     INFO("road = " << road);
     for (const char* metric :
          {"l2_error", "sup_error", "gap_to_projection", "final_state_error", "max_state_error",

@@ -243,16 +243,17 @@ laps = )" + laps + "\n",
     INFO(trial.key);
     const auto shape = adaptive_trial_shape(study, trial);
     CHECK(shape.n == trial.n);
-    CHECK(shape.plant_dimension == (trial.plant.name == "quarter_car" ? 4u : 1u));
+    const auto& own = trial.adaptive_axes();
+    CHECK(shape.plant_dimension == (own.plant.name == "quarter_car" ? 4u : 1u));
     CHECK(shape.laps == Approx(2.0));
-    CHECK(shape.implicit_integrator == (trial.integrator.name == "rodas4"));
+    CHECK(shape.implicit_integrator == (own.integrator.name == "rodas4"));
     CHECK_FALSE(shape.lap_map);  // no study forces the lap map yet
     CHECK(estimated_trial_cost(study, trial) ==
           adaptive_trial_cost(shape, study.evaluation_points));
     // Each axis moves the estimate the way it moves the work.
     for (const auto& other : trials) {
-      const bool same_but_n = other.plant.name == trial.plant.name &&
-                              other.integrator.name == trial.integrator.name;
+      const bool same_but_n = other.adaptive_axes().plant.name == own.plant.name &&
+                              other.adaptive_axes().integrator.name == own.integrator.name;
       if (same_but_n && other.n > trial.n)
         CHECK(estimated_trial_cost(study, other) > estimated_trial_cost(study, trial));
     }
@@ -264,7 +265,7 @@ laps = )" + laps + "\n",
     CHECK(estimated_trial_cost(longer, longer_trials[i]) > estimated_trial_cost(study, trials[i]));
   // A horizon given as a final time counts in laps too: one lap's time at 10 m/s is 1 lap.
   auto timed = study;
-  timed.adaptive.final_time = study.domain.length / 10.0;
+  timed.adaptive_axes().settings.final_time = study.domain.length / 10.0;
   CHECK(adaptive_trial_shape(timed, trials[0]).laps == Approx(1.0));
 }
 
@@ -321,8 +322,9 @@ laps = 2
     INFO(trial.key);
     const auto shape = adaptive_trial_shape(study, trial);
     const bool dense = trial.key.find("dense") != std::string::npos;
-    CHECK(shape.implicit_integrator == (trial.integrator.name == "rodas4"));
-    CHECK(shape.structured_solves == (trial.integrator.name == "rodas4" && !dense));
+    const auto& integrator = trial.adaptive_axes().integrator;
+    CHECK(shape.implicit_integrator == (integrator.name == "rodas4"));
+    CHECK(shape.structured_solves == (integrator.name == "rodas4" && !dense));
   }
 }
 
@@ -575,7 +577,7 @@ snapshot_points = 8
   const auto axis = study_with("laps = [1, 2]", "[1, 2]");
   const auto trials = axis.trials();
   REQUIRE(trials.size() == 2);
-  const double lap_time = axis.domain.length / axis.adaptive.speed;
+  const double lap_time = axis.domain.length / axis.adaptive_axes().settings.speed;
   for (std::size_t i = 0; i < 2; ++i) {
     const double laps = static_cast<double>(i + 1);
     const auto result = run_trial(axis, trials[i]);

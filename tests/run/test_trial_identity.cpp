@@ -9,6 +9,8 @@
 #include <set>
 #include <string>
 #include <type_traits>
+#include <typeinfo>
+#include <variant>
 #include <vector>
 
 #include "rkhs/run/run.hpp"
@@ -30,6 +32,10 @@ template <class T>
 struct is_optional : std::false_type {};
 template <class T>
 struct is_optional<std::optional<T>> : std::true_type {};
+template <class T>
+struct is_variant : std::false_type {};
+template <class... T>
+struct is_variant<std::variant<T...>> : std::true_type {};
 
 // A different value of the same type.
 template <class T>
@@ -74,18 +80,45 @@ bool same_metrics(const TrialResult& a, const TrialResult& b) {
   return true;
 }
 
-// Calls check(path) once per leaf of `value` (nested aggregates are walked field by field),
-// with that leaf changed; the leaf is restored afterwards.
+// The exclusion `field` is (by address and type: a struct's first field shares its address).
+template <class T>
+const ExcludedField* exclusion_of(const T& field, const std::vector<ExcludedField>& excluded) {
+  for (const auto& e : excluded)
+    if (e.address == static_cast<const void*>(&field) && *e.type == typeid(T)) return &e;
+  return nullptr;
+}
+
+// Calls check(path, exclusion) once per leaf of `value` (nested aggregates are walked field by
+// field; a variant, a kind's own part, is switched to another alternative, then its own
+// alternative's fields are walked), with that leaf changed; the leaf is restored afterwards.
+// `exclusion`: the field of not_in_identity() the leaf is in, or nullptr.
 template <class T, class Check>
-void each_leaf_changed(T& value, const std::string& path, const Check& check) {
-  if constexpr (is_leaf<T>) {
+void each_leaf_changed(T& value, const std::string& path,
+                       const std::vector<ExcludedField>& excluded, const ExcludedField* exclusion,
+                       const Check& check) {
+  if (!exclusion) exclusion = exclusion_of(value, excluded);
+  if constexpr (is_variant<T>::value) {
+    const T saved = value;
+    if (value.index() == 0)
+      value.template emplace<1>();
+    else
+      value.template emplace<0>();
+    check(path + ".kind", exclusion);
+    value = saved;
+    std::visit(
+        [&](auto& alternative) {
+          each_leaf_changed(alternative, path + "." + std::to_string(value.index()), excluded,
+                            exclusion, check);
+        },
+        value);
+  } else if constexpr (is_leaf<T>) {
     const T saved = value;
     perturb(value);
-    check(path);
+    check(path, exclusion);
     value = saved;
   } else {
     boost::pfr::for_each_field(value, [&](auto& field, std::size_t i) {
-      each_leaf_changed(field, path + "." + std::to_string(i), check);
+      each_leaf_changed(field, path + "." + std::to_string(i), excluded, exclusion, check);
     });
   }
 }
@@ -133,34 +166,33 @@ TEST_CASE("every study setting that can change a result changes the trial identi
   std::set<std::string> excluded_seen;
   std::size_t included_leaves = 0;
   boost::pfr::for_each_field(changed, [&](auto& field, std::size_t i) {
-    const ExcludedField* exclusion = nullptr;
-    for (const auto& e : excluded)
-      if (e.address == static_cast<const void*>(&field)) exclusion = &e;
-    each_leaf_changed(field, std::to_string(i), [&](const std::string& path) {
-      const auto text = study_settings_text(changed);
-      if (exclusion) {
-        INFO("StudyDefinition field " << exclusion->name << " (" << path << "): "
-                                      << exclusion->reason);
-        CHECK(text == base_text);
-        // The claim that it cannot change a result, checked: the trial computes the same.
-        CHECK(same_metrics(run_trial(changed, trials.front(), {}), base_result));
-        excluded_seen.insert(exclusion->name);
-      } else {
-        INFO("StudyDefinition field " << path << " changed, identity text: " << text);
-        CHECK(text != base_text);
-        CHECK(trial_hashes(changed, trials) != base_hashes);
-        ++included_leaves;
-      }
-    });
+    each_leaf_changed(
+        field, std::to_string(i), excluded, nullptr,
+        [&](const std::string& path, const ExcludedField* exclusion) {
+          const auto text = study_settings_text(changed);
+          if (exclusion) {
+            INFO("StudyDefinition field " << exclusion->name << " (" << path
+                                          << "): " << exclusion->reason);
+            CHECK(text == base_text);
+            // The claim that it cannot change a result, checked: the trial computes the same.
+            CHECK(same_metrics(run_trial(changed, trials.front(), {}), base_result));
+            excluded_seen.insert(exclusion->name);
+          } else {
+            INFO("StudyDefinition field " << path << " changed, identity text: " << text);
+            CHECK(text != base_text);
+            CHECK(trial_hashes(changed, trials) != base_hashes);
+            ++included_leaves;
+          }
+        });
   });
   // Every exclusion names a field of the study definition (none is stale).
   CHECK(excluded_seen.size() == excluded.size());
-  // kind, domain (2), evaluation points, solver (2), limits (2), adaptive (11: with engine,
-  // lap_map_rtol and lap_map_atol) at least.
+  // kind, domain (2), evaluation points, solver (2), limits (2), the adaptive settings (11: with
+  // engine, lap_map_rtol and lap_map_atol) at least.
   CHECK(included_leaves >= 19);
   // The engine is written by its name.
   CHECK_THAT(base_text, Catch::Contains("automatic"));
-  changed.adaptive.engine = AdaptiveEngine::time_stepping;
+  changed.adaptive_axes().settings.engine = AdaptiveEngine::time_stepping;
   CHECK_THAT(study_settings_text(changed), Catch::Contains("time_stepping"));
 }
 

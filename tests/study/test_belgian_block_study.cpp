@@ -58,7 +58,7 @@ TEST_CASE("belgian_block: the study's configuration learns the held-out long sec
                       study.kernels.end());
   REQUIRE(study.kernels.size() == 2);
   study.n_values = {50};
-  study.adaptive.snapshot_laps.clear();
+  study.adaptive_axes().settings.snapshot_laps.clear();
   const auto original = study.targets.front();
   study.targets = {with_file(original, "belgian_block/long_section_v+0.50.csv"),
                    with_file(original, "belgian_block/long_section_v-0.50.csv")};
@@ -101,17 +101,19 @@ TEST_CASE("belgian_block_heldout.toml is belgian_block.toml but for the files an
     return out;
   };
   CHECK(labels(heldout.kernels) == labels(study.kernels));
-  CHECK(labels(heldout.plants) == labels(study.plants));
-  CHECK(labels(heldout.laws) == labels(study.laws));
-  CHECK(labels(heldout.integrators) == labels(study.integrators));
+  const auto& held = heldout.adaptive_axes();
+  const auto& own = study.adaptive_axes();
+  CHECK(labels(held.plants) == labels(own.plants));
+  CHECK(labels(held.laws) == labels(own.laws));
+  CHECK(labels(held.integrators) == labels(own.integrators));
   CHECK(labels(heldout.centres) == labels(study.centres));
   CHECK(heldout.domain.length == study.domain.length);
   CHECK(heldout.domain.periodic == study.domain.periodic);
   CHECK(heldout.metrics == study.metrics);
-  CHECK(heldout.adaptive.speed == study.adaptive.speed);
-  CHECK(heldout.adaptive.laps == study.adaptive.laps);
-  CHECK(heldout.adaptive.q == study.adaptive.q);
-  CHECK(heldout.adaptive.snapshot_laps == study.adaptive.snapshot_laps);
+  CHECK(held.settings.speed == own.settings.speed);
+  CHECK(held.settings.laps == own.settings.laps);
+  CHECK(held.settings.q == own.settings.q);
+  CHECK(held.settings.snapshot_laps == own.settings.snapshot_laps);
   REQUIRE(heldout.targets.size() == 2);
   for (const auto& target : heldout.targets) {
     CHECK(target.parameters.text("file") != study.targets.front().parameters.text("file"));

@@ -1,12 +1,14 @@
 // Study files: valid grids expand as documented; every kind of mistake is reported with
 // file:line:column, the key, what was found and what is allowed.
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <set>
+#include <string>
+#include <variant>
+#include <vector>
 
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/trial_grid.hpp"
@@ -324,16 +326,17 @@ TEST_CASE("[adaptive] laps: one value is a setting, a list is an axis of the gri
           "[study][laps]") {
   SECTION("one number: no axis, keys as before") {
     const auto study = parse_study(adaptive_text("laps = 3\n"), "s.toml");
-    CHECK(study.adaptive.laps == 3);
-    CHECK(study.laps_values.empty());
+    CHECK(study.adaptive_axes().settings.laps == 3);
+    CHECK(study.adaptive_axes().laps_values.empty());
     const auto trials = study.trials();
     REQUIRE(trials.size() == 2);
     for (const auto& trial : trials) {
-      CHECK_FALSE(trial.laps.has_value());
+      CHECK_FALSE(trial.adaptive_axes().laps.has_value());
       CHECK_THAT(trial.key, !Catch::Contains("laps"));
     }
     CHECK(trials[0].key == trials[0].group_key + " | n=4");
-    CHECK(trials[0].group_key.ends_with(" | integrator=" + trials[0].integrator.label()));
+    CHECK(trials[0].group_key.ends_with(" | integrator=" +
+                                        trials[0].adaptive_axes().integrator.label()));
     const auto columns = rkhs::axis_columns(trials);
     CHECK(std::find(columns.begin(), columns.end(), "laps") == columns.end());
     CHECK(rkhs::trial_adaptive_settings(study, trials[0]).laps == 3);
@@ -343,9 +346,9 @@ TEST_CASE("[adaptive] laps: one value is a setting, a list is an axis of the gri
   }
   SECTION("\"limit\" alone: +infinity, still no axis") {
     const auto study = parse_study(adaptive_text("laps = \"limit\"\n"), "s.toml");
-    CHECK(std::isinf(study.adaptive.laps));
-    CHECK(study.adaptive.limit());
-    CHECK(study.laps_values.empty());
+    CHECK(std::isinf(study.adaptive_axes().settings.laps));
+    CHECK(study.adaptive_axes().settings.limit());
+    CHECK(study.adaptive_axes().laps_values.empty());
     CHECK_THAT(study.trials().front().key, !Catch::Contains("laps"));
     CHECK(rkhs::trial_adaptive_settings(study, study.trials().front()).limit());
   }
@@ -353,8 +356,8 @@ TEST_CASE("[adaptive] laps: one value is a setting, a list is an axis of the gri
     const auto study =
         parse_study(adaptive_text("laps = [1000, 10, \"limit\", 1e4, 100, 2.5]\n"), "s.toml");
     const double inf = std::numeric_limits<double>::infinity();
-    CHECK(study.laps_values == std::vector<double>{2.5, 10, 100, 1000, 10000, inf});
-    CHECK(std::isnan(study.adaptive.laps));
+    CHECK(study.adaptive_axes().laps_values == std::vector<double>{2.5, 10, 100, 1000, 10000, inf});
+    CHECK(std::isnan(study.adaptive_axes().settings.laps));
     const auto trials = study.trials();
     REQUIRE(trials.size() == 6 * 2);
     const std::vector<std::string> laps_texts{"2.5", "10", "100", "1000", "10000", "limit"};
@@ -363,15 +366,15 @@ TEST_CASE("[adaptive] laps: one value is a setting, a list is an axis of the gri
       INFO(trial.key);
       CHECK(trial.index == i);
       CHECK(trial.n == (i % 2 == 0 ? 4u : 6u));  // n varies fastest
-      REQUIRE(trial.laps.has_value());
-      CHECK(*trial.laps == study.laps_values[i / 2]);
+      REQUIRE(trial.adaptive_axes().laps.has_value());
+      CHECK(*trial.adaptive_axes().laps == study.adaptive_axes().laps_values[i / 2]);
       CHECK(trial.group_key.ends_with(" | laps=" + laps_texts[i / 2]));
       CHECK(trial.key == trial.group_key + (i % 2 == 0 ? " | n=4" : " | n=6"));
       // The same random centres for every lap count of a series.
       CHECK(trial.seed == trials[i % 2].seed);
       // run_trial's settings: the trial's lap count.
       const auto settings = rkhs::trial_adaptive_settings(study, trial);
-      CHECK(settings.laps == *trial.laps);
+      CHECK(settings.laps == *trial.adaptive_axes().laps);
     }
     CHECK(trials[0].seed != trials[1].seed);
     CHECK(trials.back().key.ends_with("| laps=limit | n=6"));
@@ -411,21 +414,58 @@ TEST_CASE("[adaptive] laps: one value is a setting, a list is an axis of the gri
   }
 }
 
+TEST_CASE("a study's kind is the alternative of its own part, which only its kind's code reads",
+          "[study][kind]") {
+  const auto approximation = parse_study(minimal, "s.toml");
+  CHECK(approximation.kind() == rkhs::StudyKind::approximation);
+  CHECK(approximation.adaptive_axes_if() == nullptr);
+  CHECK_THROWS_WITH(approximation.adaptive_axes(),
+                    "StudyDefinition::adaptive_axes: approximation studies have none");
+  const auto trials = approximation.trials();
+  REQUIRE(!trials.empty());
+  CHECK(trials.front().kind() == rkhs::StudyKind::approximation);
+  CHECK(trials.front().adaptive_axes_if() == nullptr);
+  CHECK_THROWS_WITH(trials.front().adaptive_axes(),
+                    "TrialSpec::adaptive_axes: approximation trials have none");
+  std::vector<std::string> axes;
+  for (const auto& entry : trials.front().plugin_choices()) axes.emplace_back(entry.first);
+  CHECK(axes == std::vector<std::string>{"kernel", "target", "centres", "projection"});
+
+  const auto adaptive = parse_study(adaptive_text("laps = [2, 3]\n"), "s.toml");
+  CHECK(adaptive.kind() == rkhs::StudyKind::adaptive);
+  REQUIRE(adaptive.adaptive_axes_if() == &adaptive.adaptive_axes());
+  CHECK(adaptive.adaptive_axes().laps_values == std::vector<double>{2, 3});
+  std::vector<std::string> study_axes;
+  for (const auto& entry : adaptive.plugin_axes()) study_axes.emplace_back(entry.first);
+  CHECK(study_axes == std::vector<std::string>{"kernel", "target", "centres", "projection", "plant",
+                                               "law", "integrator"});
+  for (const auto& trial : adaptive.trials()) {
+    CHECK(trial.kind() == rkhs::StudyKind::adaptive);
+    CHECK(trial.adaptive_axes().plant.name == "linear");
+    CHECK(trial.adaptive_axes().laps.has_value());
+  }
+  // A kind's empty part: what a reader sets before filling it in.
+  CHECK(rkhs::study_kind_axes(rkhs::StudyKind::adaptive).index() ==
+        static_cast<std::size_t>(rkhs::StudyKind::adaptive));
+  CHECK(std::holds_alternative<rkhs::ApproximationTrialAxes>(
+      rkhs::trial_kind_axes(rkhs::StudyKind::approximation)));
+}
+
 TEST_CASE("[adaptive] engine and the lap map's tolerances", "[study][laps]") {
   const auto defaults = parse_study(adaptive_text("laps = 2\n"), "s.toml");
-  CHECK(defaults.adaptive.engine == rkhs::AdaptiveEngine::automatic);
-  CHECK(defaults.adaptive.lap_map_rtol == 1e-10);
-  CHECK(defaults.adaptive.lap_map_atol == 1e-10);
+  CHECK(defaults.adaptive_axes().settings.engine == rkhs::AdaptiveEngine::automatic);
+  CHECK(defaults.adaptive_axes().settings.lap_map_rtol == 1e-10);
+  CHECK(defaults.adaptive_axes().settings.lap_map_atol == 1e-10);
   const auto chosen = parse_study(
       adaptive_text("laps = 2\nengine = \"lap_map\"\nlap_map_rtol = 1e-8\nlap_map_atol = 1e-9\n"),
       "s.toml");
-  CHECK(chosen.adaptive.engine == rkhs::AdaptiveEngine::lap_map);
-  CHECK(chosen.adaptive.lap_map_rtol == 1e-8);
-  CHECK(chosen.adaptive.lap_map_atol == 1e-9);
+  CHECK(chosen.adaptive_axes().settings.engine == rkhs::AdaptiveEngine::lap_map);
+  CHECK(chosen.adaptive_axes().settings.lap_map_rtol == 1e-8);
+  CHECK(chosen.adaptive_axes().settings.lap_map_atol == 1e-9);
   const auto stepping =
       parse_study(adaptive_text("laps = 2.5\nengine = \"time_stepping\"\n"), "s.toml");
-  CHECK(stepping.adaptive.engine == rkhs::AdaptiveEngine::time_stepping);
-  CHECK(stepping.adaptive.laps == 2.5);
+  CHECK(stepping.adaptive_axes().settings.engine == rkhs::AdaptiveEngine::time_stepping);
+  CHECK(stepping.adaptive_axes().settings.laps == 2.5);
   for (const auto engine : {rkhs::AdaptiveEngine::automatic, rkhs::AdaptiveEngine::lap_map,
                             rkhs::AdaptiveEngine::time_stepping})
     CHECK(rkhs::adaptive_engine_from_name(rkhs::adaptive_engine_name(engine)) == engine);

@@ -53,7 +53,7 @@ std::string computed_metrics_text(const StudyDefinition& study) {
   const auto total = study.all_metrics().size();
   if (computed.size() == total)
     return fmt::format("metrics computed: all {} of an {} trial", total,
-                       study_kind_name(study.kind));
+                       study_kind_name(study.kind()));
   std::vector<std::string> extra;
   for (const auto& metric : computed)
     if (std::find(study.metrics.begin(), study.metrics.end(), metric) == study.metrics.end())

@@ -53,10 +53,11 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
   std::vector<std::string> panels;
   std::map<std::string, std::vector<std::size_t>> members;  // panel -> trials
   for (const auto& trial : run.trials) {
+    const auto& own = trial.adaptive_axes();
     std::string panel = fmt::format("kernel={} | target={} | centres={} | plant={} | law={}",
                                     trial.kernel.label(), trial.target.label(),
-                                    trial.centres.label(), trial.plant.label(), trial.law.label());
-    if (trial.laps) panel += " | laps=" + laps_text(*trial.laps);
+                                    trial.centres.label(), own.plant.label(), own.law.label());
+    if (own.laps) panel += " | laps=" + laps_text(*own.laps);
     panel += fmt::format(" | n={}", trial.n);
     if (!members.contains(panel)) panels.push_back(panel);
     members[panel].push_back(trial.index);
@@ -71,7 +72,7 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
       if (!result.ok || !usable_on_log_axis(result.metrics[error_index]) ||
           !usable_on_log_axis(result.seconds))
         continue;
-      const auto key = line_key(run.trials[index].integrator);
+      const auto key = line_key(run.trials[index].adaptive_axes().integrator);
       if (!points.contains(key)) lines.push_back(key);
       points[key].push_back(index);
       seconds.add(result.seconds);
@@ -79,6 +80,7 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
       errors.add(result.metrics[error_index]);
     }
     const auto& first = run.trials[members[panels[p]].front()];
+    const auto& first_own = first.adaptive_axes();
     const auto time_stem = fmt::format("work_precision_time_panel{}", p + 1);
     const auto steps_stem = fmt::format("work_precision_steps_panel{}", p + 1);
     if (lines.empty()) {
@@ -92,7 +94,8 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
     for (std::size_t l = 0; l < lines.size(); ++l) {
       auto& indices = points[lines[l]];
       std::stable_sort(indices.begin(), indices.end(), [&](std::size_t a, std::size_t b) {
-        return looseness(run.trials[a].integrator) > looseness(run.trials[b].integrator);
+        return looseness(run.trials[a].adaptive_axes().integrator) >
+               looseness(run.trials[b].adaptive_axes().integrator);
       });
       // seconds, steps, integration_error, tolerance
       data += fmt::format("$line{} << EOD\n", l);
@@ -100,7 +103,7 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
         data += fmt::format("{} {} {} {}\n", format_real(run.results[index].seconds),
                             format_real(run.results[index].metrics[steps_index]),
                             format_real(run.results[index].metrics[error_index]),
-                            format_real(looseness(run.trials[index].integrator)));
+                            format_real(looseness(run.trials[index].adaptive_axes().integrator)));
       data += "EOD\n";
       const auto title = gp_text(lines[l]);
       for (const auto& [plot, column] : {std::pair<std::string*, int>{&plot_time, 1},
@@ -110,13 +113,15 @@ void work_precision_scripts(const RunRecord& run, PlotPlan& plan) {
             "('%g', $4)) with labels offset char 0.6,0.6 font ',8' tc lt {} notitle",
             plot->empty() ? "" : ", ", l, column, l + 1, title, l, column, l + 1);
     }
-    const auto where = fmt::format("{}, {}, n = {}{}", first.kernel.label(), first.law.name,
-                                   first.n, first.laps ? ", laps=" + laps_text(*first.laps) : "");
+    const auto where =
+        fmt::format("{}, {}, n = {}{}", first.kernel.label(), first_own.law.name, first.n,
+                    first_own.laps ? ", laps=" + laps_text(*first_own.laps) : "");
+    const auto& reference = run.study.adaptive_axes().reference;
     std::string tolerances;
-    for (const auto& [parameter, value] : run.study.reference.parameters.values())
+    for (const auto& [parameter, value] : reference.parameters.values())
       if (is_tolerance(parameter)) tolerances += " " + parameter + "=" + format_value(value);
-    const auto title = fmt::format("work precision: {}; reference {}{}", where,
-                                   run.study.reference.name, tolerances);
+    const auto title =
+        fmt::format("work precision: {}; reference {}{}", where, reference.name, tolerances);
     const std::string ylabel = "integration error (relative L2 of fhat(T))";
     plan.scripts.emplace_back(
         time_stem,
@@ -151,7 +156,8 @@ void time_series_scripts(const RunRecord& run, PlotPlan& plan) {
   std::vector<const TrialSpec*> firsts;
   for (const auto& key : order) firsts.push_back(&run.trials[groups[key].front()]);
   const auto identity = identify(firsts);
-  const auto grid = run.study.domain.uniform_points(run.study.adaptive.snapshot_points);
+  const auto grid =
+      run.study.domain.uniform_points(run.study.adaptive_axes().settings.snapshot_points);
   for (std::size_t g = 0; g < order.size(); ++g) {
     const auto& members = groups[order[g]];
     const auto& last = run.results[members.back()];
@@ -180,7 +186,7 @@ void time_series_scripts(const RunRecord& run, PlotPlan& plan) {
                          header(fmt::format("{} (n = {})", group_name, trial.n), "arc length s (m)",
                                 "elevation (m)", false, false) +
                              "set autoscale xfix\nset key outside below\nplot " + plot + "\n"));
-    } else if (!run.study.adaptive.snapshot_laps.empty()) {
+    } else if (!run.study.adaptive_axes().settings.snapshot_laps.empty()) {
       plan.notes.push_back(
           fmt::format("estimates_group{}: not plotted: the trial with the largest n of group {} {}",
                       g + 1, g + 1, last.ok ? "has no snapshot" : "failed"));

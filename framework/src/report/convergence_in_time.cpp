@@ -74,7 +74,8 @@ std::vector<TimeConvergence> time_convergence(const RunRecord& run) {
                   gap_value, error_value);
     sentence += fmt::format(" (n = {})", run.trials[trial].n);
     if (const double predicted = value_at(laps, trial); std::isfinite(predicted)) {
-      const double ran = run.trials[trial].laps.value_or(study.adaptive.laps);
+      const double ran =
+          run.trials[trial].adaptive_axes().laps.value_or(study.adaptive_axes().settings.laps);
       sentence += fmt::format(
           "; the lap map predicts {:.0f} laps to within 1% of the limit ({})", predicted,
           std::isinf(ran) ? std::string("ran to the limit") : fmt::format("ran {:.4g}", ran));

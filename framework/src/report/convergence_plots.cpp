@@ -150,6 +150,7 @@ Identity merge_identical(std::vector<Curve>& curves, const Identity& identity) {
   }
   Identity out;
   out.constants = identity.constants;
+  out.plugin_axes = identity.plugin_axes;
   out.values.resize(kept.size());
   std::vector<std::string> same_for;
   std::vector<std::size_t> index(factors, std::string::npos);  // old factor -> new
@@ -418,7 +419,7 @@ void convergence_scripts(const RunRecord& run, const std::string& metric, PlotPl
             ? (style.title->empty() ? std::string("''") : gp_text(*style.title) + " enhanced")
             : gp_text(title) + " noenhanced";
     const auto ylabel = style.labels.contains(metric) ? style.labels.at(metric)
-                                                      : metric_axis_label(run.study.kind, metric);
+                                                      : metric_axis_label(run.study.kind(), metric);
 
     std::string data, drawing = line_types();
     drawing += fmt::format(

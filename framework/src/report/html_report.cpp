@@ -309,7 +309,7 @@ li.inconclusive b {{ color: #7a5b00; }}
 {12}</table>
 )",
       escape_html(study.name), escape_html(study.description), escape_html(study.source),
-      escape_html(std::string(study_kind_name(study.kind))), build.version, build.git_commit,
+      escape_html(std::string(study_kind_name(study.kind()))), build.version, build.git_commit,
       build.compiler, build.build_type, escape_html(run.started), run.threads, run.wall_seconds,
       run.trials.size(), mpi_rows, answer_section(run, verdicts));
 
@@ -385,7 +385,9 @@ li.inconclusive b {{ color: #7a5b00; }}
             "machine, its load and the {} threads the trials shared (and includes the trial's "
             "static part; the reference integration is not counted in steps, but it is in wall "
             "time); steps and errors are reproducible.</p>\n",
-            escape_html(study.reference.label()), run.threads) +
+            escape_html(study.adaptive_axes_if() ? study.adaptive_axes_if()->reference.label()
+                                                 : std::string()),
+            run.threads) +
         work_precision;
   if (!others.empty()) page += "<h2>Estimates and state errors</h2>\n" + others;
   // The page reports whether every plot loaded (read by the project's browser test).

@@ -119,7 +119,7 @@ std::string trials_csv(const RunRecord& run) {
   // The floors of the metrics that have one (MetricInfo::floor), after the other columns.
   std::vector<std::string> floored;
   for (const auto& metric : run.study.metrics)
-    if (metric_floor_rule(run.study.kind, metric) != FloorRule::exact) {
+    if (metric_floor_rule(run.study.kind(), metric) != FloorRule::exact) {
       floored.push_back(metric);
       header.push_back(metric + "_floor");
     }
@@ -290,7 +290,8 @@ std::string estimates_csv(const RunRecord& run) {
   std::vector<std::string> header = columns;
   for (const char* extra : {"n", "lap", "s", "road", "estimate"}) header.push_back(extra);
   std::string out = csv_row(header);
-  const auto grid = run.study.domain.uniform_points(run.study.adaptive.snapshot_points);
+  const auto grid =
+      run.study.domain.uniform_points(run.study.adaptive_axes().settings.snapshot_points);
   for (const auto& trial : run.trials) {
     const auto& result = run.results[trial.index];
     if (!result.ok) continue;
@@ -315,7 +316,7 @@ std::string timeseries_csv(const RunRecord& run) {
   std::vector<std::string> header = columns;
   for (const char* extra : {"n", "t", "lap", "state_error", "lyapunov"}) header.push_back(extra);
   std::string out = csv_row(header);
-  const double lap_time = run.study.adaptive.lap_time(run.study.domain.length);
+  const double lap_time = run.study.adaptive_axes().settings.lap_time(run.study.domain.length);
   for (const auto& trial : run.trials) {
     const auto& result = run.results[trial.index];
     const auto axes = axis_values(columns, trial);

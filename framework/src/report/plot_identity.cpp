@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "plot_parts.hpp"
 #include "rkhs/core/printable.hpp"
@@ -13,13 +14,11 @@ namespace rkhs::plot_detail {
 
 namespace {
 
-// The plugin axes of a trial, in the order of trials.csv's columns.
-using PluginAxis = std::pair<const char*, PluginChoice TrialSpec::*>;
-constexpr PluginAxis plugin_axes[] = {
-    {"kernel", &TrialSpec::kernel},        {"target", &TrialSpec::target},
-    {"centres", &TrialSpec::centres},      {"projection", &TrialSpec::projection},
-    {"plant", &TrialSpec::plant},          {"law", &TrialSpec::law},
-    {"integrator", &TrialSpec::integrator}};
+// The lap count of a trial of a study with a laps axis.
+std::optional<double> laps_of(const TrialSpec& trial) {
+  const auto* adaptive = trial.adaptive_axes_if();
+  return adaptive ? adaptive->laps : std::nullopt;
+}
 
 }  // namespace
 
@@ -50,21 +49,26 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
     out.owner.push_back(owner);
     return out.factors.size() - 1;
   };
-  for (const auto& axis_and_member : plugin_axes) {
-    // Named copies, not structured bindings: clang 14 cannot capture those in a lambda.
-    const auto axis = axis_and_member.first;
-    const auto member = axis_and_member.second;
+  // The plugin axes of each trial (those of its kind), in the order of trials.csv's columns.
+  std::vector<std::vector<std::pair<const char*, const PluginChoice*>>> choices;
+  for (const auto* trial : trials) choices.push_back(trial->plugin_choices());
+  const std::size_t axis_count = choices.empty() ? 0 : choices.front().size();
+  for (std::size_t a = 0; a < axis_count; ++a) {
+    const auto axis = choices.front()[a].first;
+    out.plugin_axes.emplace_back(axis);
+    // The trial's choice of this axis.
+    auto choice_of = [&](std::size_t t) -> const PluginChoice& { return *choices[t][a].second; };
     std::vector<std::string> names;
-    for (const auto* trial : trials)
-      if (const auto& name = ((*trial).*member).name;
+    for (std::size_t t = 0; t < trials.size(); ++t)
+      if (const auto& name = choice_of(t).name;
           std::find(names.begin(), names.end(), name) == names.end())
         names.push_back(name);
     if (names.size() == 1 && names.front().empty()) continue;  // an axis the study has not
     // The parameters of each plugin of the axis, in order, with their distinct values.
     auto spread = [&](const std::string& name) {
       std::vector<std::pair<std::string, std::vector<std::string>>> parameters;
-      for (const auto* trial : trials) {
-        const auto& choice = (*trial).*member;
+      for (std::size_t t = 0; t < trials.size(); ++t) {
+        const auto& choice = choice_of(t);
         if (choice.name != name) continue;
         for (const auto& parameter_and_value : choice.parameters.values()) {
           const auto& parameter = parameter_and_value.first;
@@ -102,12 +106,12 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
     if (names.size() > 1) {
       plugin = add_factor(axis, axis, std::string::npos);
       for (std::size_t t = 0; t < trials.size(); ++t)
-        out.values[t].push_back(std::string(axis) + "=" + ((*trials[t]).*member).name);
+        out.values[t].push_back(std::string(axis) + "=" + choice_of(t).name);
     }
     for (const auto& parameter : differing) {
       parameter_factors.emplace_back(parameter, add_factor(parameter, axis, plugin));
       for (std::size_t t = 0; t < trials.size(); ++t) {
-        const auto& choice = (*trials[t]).*member;
+        const auto& choice = choice_of(t);
         std::string text;
         const auto& own = differing_in[choice.name];
         if (std::find(own.begin(), own.end(), parameter) != own.end())
@@ -137,8 +141,8 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
   // Laps, nested just outside n.
   std::vector<std::string> laps;
   for (const auto* trial : trials)
-    if (trial->laps) {
-      if (const auto text = "laps=" + laps_text(*trial->laps);
+    if (const auto count = laps_of(*trial)) {
+      if (const auto text = "laps=" + laps_text(*count);
           std::find(laps.begin(), laps.end(), text) == laps.end())
         laps.push_back(text);
     }
@@ -146,7 +150,7 @@ Identity identify(const std::vector<const TrialSpec*>& trials) {
   if (laps.size() > 1) {
     add_factor("laps", "laps", std::string::npos);
     for (std::size_t t = 0; t < trials.size(); ++t)
-      out.values[t].push_back("laps=" + laps_text(*trials[t]->laps));
+      out.values[t].push_back("laps=" + laps_text(*laps_of(*trials[t])));
   }
   return out;
 }
@@ -223,9 +227,12 @@ std::vector<std::size_t> panel_factors(const Identity& identity, std::size_t mos
 // count of a laps axis.
 std::string legend(const TrialSpec& trial) {
   std::string out = trial.kernel.label();
-  for (const auto* choice : {&trial.law, &trial.integrator})
-    if (!choice->name.empty()) out += ", " + choice->name;
-  if (trial.laps) out += ", laps=" + laps_text(*trial.laps);  // a laps axis: one curve per count
+  if (const auto* adaptive = trial.adaptive_axes_if()) {
+    for (const auto* choice : {&adaptive->law, &adaptive->integrator})
+      if (!choice->name.empty()) out += ", " + choice->name;
+    if (adaptive->laps)  // a laps axis: one curve per count
+      out += ", laps=" + laps_text(*adaptive->laps);
+  }
   return out;
 }
 
@@ -237,8 +244,8 @@ std::string short_constants(const Identity& identity) {
   for (const auto& constant : identity.constants) {
     const auto equals = constant.find('=');
     const auto axis = constant.substr(0, equals);
-    const bool plugin = std::any_of(std::begin(plugin_axes), std::end(plugin_axes),
-                                    [&](const PluginAxis& a) { return axis == a.first; });
+    const bool plugin = std::find(identity.plugin_axes.begin(), identity.plugin_axes.end(), axis) !=
+                        identity.plugin_axes.end();
     if (equals != std::string::npos && (plugin || axis == "laps"))
       names.push_back(constant.substr(0, constant.find(' ')));
     else if (constant.starts_with("the same for every"))

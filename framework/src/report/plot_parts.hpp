@@ -104,6 +104,8 @@ struct Identity {
   std::vector<std::size_t> owner;
   std::vector<std::vector<std::string>> values;  ///< [trial][factor]: "name=value" or ""
   std::vector<std::string> constants;
+  /// The plugin axes the trials' kind has ("kernel", ..., TrialSpec::plugin_choices()).
+  std::vector<std::string> plugin_axes;
 };
 
 /// The text of `factors` of one trial: "name=value" pairs separated by commas, a plugin's own

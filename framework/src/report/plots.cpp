@@ -44,7 +44,9 @@ PlotPlan plot_scripts(const RunRecord& run) {
   for (const auto& metric : plotted_metrics(run.study))
     plot_detail::convergence_scripts(run, metric, plan);
   if (!run.study.kind_descriptor().outputs().time_series_plots) return plan;
-  if (!run.study.reference.name.empty()) plot_detail::work_precision_scripts(run, plan);
+  // The kind with time-series plots has the adaptive axes.
+  if (!run.study.adaptive_axes().reference.name.empty())
+    plot_detail::work_precision_scripts(run, plan);
   plot_detail::time_series_scripts(run, plan);
   return plan;
 }

@@ -169,7 +169,8 @@ PluginChoice plugin_from_label(const std::string& label) {
 }
 
 // The axes of a group key that summary.json holds only there: " | projection=...",
-// " | plant=...", " | law=...", " | integrator=...", " | laps=...".
+// " | plant=...", " | law=...", " | integrator=...", " | laps=..." (the last four of an
+// adaptive trial: `trial.kind_axes` says which kind it is).
 void read_key_axes(TrialSpec& trial) {
   const std::string separator = " | ";
   std::size_t start = 0;
@@ -182,17 +183,18 @@ void read_key_axes(TrialSpec& trial) {
     if (equals == std::string::npos) continue;
     const auto axis = segment.substr(0, equals);
     const auto value = segment.substr(equals + 1);
+    auto* adaptive = trial.adaptive_axes_if();
     if (axis == "projection")
       trial.projection = plugin_from_label(value);
-    else if (axis == "plant")
-      trial.plant = plugin_from_label(value);
-    else if (axis == "law")
-      trial.law = plugin_from_label(value);
-    else if (axis == "integrator")
-      trial.integrator = plugin_from_label(value);
-    else if (axis == "laps")
-      trial.laps = value == "limit" ? std::numeric_limits<double>::infinity()
-                                    : std::strtod(value.c_str(), nullptr);
+    else if (axis == "plant" && adaptive)
+      adaptive->plant = plugin_from_label(value);
+    else if (axis == "law" && adaptive)
+      adaptive->law = plugin_from_label(value);
+    else if (axis == "integrator" && adaptive)
+      adaptive->integrator = plugin_from_label(value);
+    else if (axis == "laps" && adaptive)
+      adaptive->laps = value == "limit" ? std::numeric_limits<double>::infinity()
+                                        : std::strtod(value.c_str(), nullptr);
   }
 }
 
@@ -283,7 +285,7 @@ StudyDefinition read_study(const Reader& reader, const Json& json) {
   const auto parsed_kind = study_kind_from_name(kind);
   if (!parsed_kind)
     reader.fail("kind", fmt::format("\"{}\" is not a study kind; approximation or adaptive", kind));
-  study.kind = *parsed_kind;
+  study.kind_axes = study_kind_axes(*parsed_kind);
   const auto abscissa = reader.text(json, "", "abscissa");
   if (abscissa != "n" && abscissa != "h")
     reader.fail("abscissa", fmt::format("\"{}\" is not an abscissa; n or h", abscissa));
@@ -326,6 +328,7 @@ std::pair<TrialSpec, TrialResult> read_trial(const Reader& reader, const Json& t
   const auto path = Reader::at("trials", t);
   const auto& entry = trials[t];
   TrialSpec trial;
+  trial.kind_axes = trial_kind_axes(study.kind());
   trial.index = reader.count(entry, path, "index");
   if (trial.index != t)
     reader.fail(Reader::join(path, "index"),
@@ -372,7 +375,7 @@ std::pair<TrialSpec, TrialResult> read_trial(const Reader& reader, const Json& t
     const auto position = std::find(all.begin(), all.end(), name);
     if (position == all.end())
       reader.fail(metrics_path + "." + name,
-                  fmt::format("not a metric of an {} study", study_kind_name(study.kind)));
+                  fmt::format("not a metric of an {} study", study_kind_name(study.kind())));
     result.metrics[static_cast<std::size_t>(position - all.begin())] =
         reader.number(value, metrics_path + "." + name);
     names.push_back(name);
@@ -515,7 +518,7 @@ ResultsFolder read_results_folder(const std::filesystem::path& directory) {
     folder.wall_seconds = reader.number(provenance, "provenance", "wall_seconds");
 
   // Trials: their plugins, n and keys; their results aligned with the kind's metrics.
-  const auto& all = metric_names(study.kind);
+  const auto& all = metric_names(study.kind());
   const auto& trials = reader.array(json, "", "trials");
   for (std::size_t t = 0; t < trials.size(); ++t) {
     auto [trial, result] = read_trial(reader, trials, t, all, study);

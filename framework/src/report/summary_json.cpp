@@ -165,7 +165,7 @@ std::string summary_json(const RunRecord& run) {
   out +=
       fmt::format("  \"study\": {},\n  \"description\": {},\n  \"source\": {},\n  \"kind\": {},\n",
                   json_string(study.name), json_string(study.description),
-                  json_string(study.source), json_string(study_kind_name(study.kind)));
+                  json_string(study.source), json_string(study_kind_name(study.kind())));
   // A distributed run names its ranks: host, threads and trials run on each.
   std::string mpi;
   if (!run.ranks.empty()) {
@@ -212,7 +212,7 @@ std::string summary_json(const RunRecord& run) {
     for (const auto& metric : study.metrics) {
       const auto position = study.metric_index(metric);
       metrics.push_back(json_string(metric) + ": " + json_number(result.metrics[position]));
-      if (metric_floor_rule(study.kind, metric) != FloorRule::exact)
+      if (metric_floor_rule(study.kind(), metric) != FloorRule::exact)
         floors.push_back(json_string(metric) + ": " +
                          json_number(position < result.floors.size()
                                          ? result.floors[position]

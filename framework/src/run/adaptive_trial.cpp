@@ -23,15 +23,17 @@ namespace {
 double measure_adaptive_trial(const TrialInputs& in, TrialResult& result) {
   const auto& study = in.study;
   const auto& trial = in.trial;
-  const auto plant = plant_registry().find(trial.plant.name)->factory(trial.plant.parameters);
-  const auto law = law_registry().find(trial.law.name)->factory(trial.law.parameters);
+  const auto& own = trial.adaptive_axes();
+  const auto& study_reference = study.adaptive_axes().reference;
+  const auto plant = plant_registry().find(own.plant.name)->factory(own.plant.parameters);
+  const auto law = law_registry().find(own.law.name)->factory(own.law.parameters);
   const auto integrator =
-      integrator_registry().find(trial.integrator.name)->factory(trial.integrator.parameters);
+      integrator_registry().find(own.integrator.name)->factory(own.integrator.parameters);
   // The reference integrator of integration_error, when the study has one.
   std::unique_ptr<Integrator> reference;
-  if (!study.reference.name.empty())
+  if (!study_reference.name.empty())
     reference =
-        integrator_registry().find(study.reference.name)->factory(study.reference.parameters);
+        integrator_registry().find(study_reference.name)->factory(study_reference.parameters);
   // rkhs_embedding with a kernel without features: H_N at the law's reference resolution
   // stands in for H (rkhs/adaptive/reference_resolution.hpp).
   std::unique_ptr<ReferenceResolvedKernel> resolved;
@@ -68,8 +70,8 @@ double measure_adaptive_trial(const TrialInputs& in, TrialResult& result) {
   if (reference) {
     double& floor = measured.floors[AdaptiveMetric::integration_error];
     floor = 0.9 * measured.metrics[AdaptiveMetric::integration_error];
-    for (const auto& [name, value] : study.reference.parameters.values())
-      if (name == "rtol") floor = std::max(floor, study.reference.parameters.real(name));
+    for (const auto& [name, value] : study_reference.parameters.values())
+      if (name == "rtol") floor = std::max(floor, study_reference.parameters.real(name));
   }
   result.metrics = std::move(measured.metrics).values();
   result.floors = std::move(measured.floors).values();

@@ -135,7 +135,7 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
     const auto centres = placement->place(trial.n, study.domain, trial.seed);
     check_cancelled();
     const TrialInputs inputs{study, trial, computed, *kernel, *target, centres, lap_maps};
-    reference_seconds = trial_kind(study.kind).measure(inputs, result);
+    reference_seconds = trial_kind(study.kind()).measure(inputs, result);
     const auto& catalogue = study.kind_descriptor().metrics();
     apply_floors(catalogue, result);
     check_cancelled();

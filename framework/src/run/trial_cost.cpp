@@ -77,9 +77,10 @@ double adaptive_trial_cost(const AdaptiveTrialShape& shape, std::size_t evaluati
 AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const TrialSpec& trial) {
   AdaptiveTrialShape shape;
   shape.n = trial.n;
-  shape.plant_dimension = plant_dimension(trial.plant);
+  const auto& own = trial.adaptive_axes();
+  shape.plant_dimension = plant_dimension(own.plant);
   const auto settings = trial_adaptive_settings(study, trial);
-  const auto integrator = integrator_properties(trial.integrator);
+  const auto integrator = integrator_properties(own.integrator);
   shape.implicit_integrator = integrator.implicit();
   shape.structured_solves = integrator.structured_stage_solves;
   try {
@@ -96,7 +97,7 @@ AdaptiveTrialShape adaptive_trial_shape(const StudyDefinition& study, const Tria
 }
 
 double estimated_trial_cost(const StudyDefinition& study, const TrialSpec& trial) {
-  return trial_kind(study.kind).cost(study, trial, nullptr);
+  return trial_kind(study.kind()).cost(study, trial, nullptr);
 }
 
 std::string lap_map_key(const TrialSpec& trial) {
@@ -115,7 +116,7 @@ std::vector<std::size_t> largest_first_order(const StudyDefinition& study,
                                              const std::vector<TrialSpec>& trials) {
   std::vector<double> cost(trials.size());
   std::set<std::string> shared;  // work shared by several trials, already counted (lap maps)
-  const auto& kind = trial_kind(study.kind);
+  const auto& kind = trial_kind(study.kind());
   for (std::size_t i = 0; i < trials.size(); ++i) cost[i] = kind.cost(study, trials[i], &shared);
   std::vector<std::size_t> order(trials.size());
   std::iota(order.begin(), order.end(), std::size_t{0});

@@ -7,7 +7,9 @@
 #include <map>
 #include <stdexcept>
 #include <type_traits>
+#include <typeinfo>
 #include <utility>
+#include <variant>
 
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/build_info.hpp"
@@ -23,9 +25,29 @@ struct is_vector : std::false_type {};
 template <class T, class A>
 struct is_vector<std::vector<T, A>> : std::true_type {};
 
-// Writes `value` canonically to `out`. Returns false for a type it cannot write.
 template <class T>
-bool write_value(const T& value, std::string& out) {
+struct is_variant : std::false_type {};
+template <class... T>
+struct is_variant<std::variant<T...>> : std::true_type {};
+
+template <class T>
+ExcludedField exclusion(const T& field, const char* name, const char* reason) {
+  return {&field, &typeid(T), name, reason};
+}
+
+// Whether `field` is one of `excluded` (by address and type: a struct's first field shares its
+// address).
+template <class T>
+bool is_excluded(const T& field, const std::vector<ExcludedField>& excluded) {
+  for (const auto& e : excluded)
+    if (e.address == static_cast<const void*>(&field) && *e.type == typeid(T)) return true;
+  return false;
+}
+
+// Writes `value` canonically to `out`, leaving out the fields of nested aggregates that are
+// `excluded`. Returns false for a type it cannot write.
+template <class T>
+bool write_value(const T& value, std::string& out, const std::vector<ExcludedField>& excluded) {
   if constexpr (std::is_same_v<T, std::string>) {
     out += '"';
     for (char c : value) {
@@ -44,7 +66,7 @@ bool write_value(const T& value, std::string& out) {
     out += std::to_string(value);
     return true;
   } else if constexpr (std::is_same_v<T, WeightMatrix>) {
-    return write_value(value.text(), out);  // as written, as when q was a string
+    return write_value(value.text(), out, excluded);  // as written, as when q was a string
   } else if constexpr (std::is_same_v<T, AdaptiveEngine>) {
     out += adaptive_engine_name(value);
     return true;
@@ -58,17 +80,24 @@ bool write_value(const T& value, std::string& out) {
     out += '[';
     for (std::size_t i = 0; i < value.size(); ++i) {
       if (i) out += ',';
-      if (!write_value(value[i], out)) return false;
+      if (!write_value(value[i], out, excluded)) return false;
     }
     out += ']';
     return true;
+  } else if constexpr (is_variant<T>::value) {
+    // A kind's own part: the alternative (the kind), then its fields.
+    out += std::to_string(value.index()) + ':';
+    return std::visit(
+        [&](const auto& alternative) { return write_value(alternative, out, excluded); }, value);
   } else if constexpr (std::is_aggregate_v<T>) {
-    bool ok = true;
+    bool ok = true, first = true;
     out += '{';
     boost::pfr::for_each_field(value, [&](const auto& field, std::size_t i) {
-      if (i) out += ' ';
+      if (is_excluded(field, excluded)) return;
+      if (!first) out += ' ';
+      first = false;
       out += std::to_string(i) + '=';
-      ok = ok && write_value(field, out);
+      ok = ok && write_value(field, out, excluded);
     });
     out += '}';
     return ok;
@@ -80,44 +109,49 @@ bool write_value(const T& value, std::string& out) {
 }  // namespace
 
 std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
-  return {
-      {&study.name, "name", "a label: renaming a study keeps its results"},
-      {&study.description, "description", "a label"},
-      {&study.source, "source", "where the file was read from, not what it says"},
-      {&study.n_values, "n_values", "each trial's n is in its key"},
-      {&study.laps_values, "laps_values", "each trial's lap count is in its key"},
-      {&study.kernels, "kernels", "each trial's kernel and its parameters are in its key"},
-      {&study.targets, "targets", "each trial's target is in its key"},
-      {&study.centres, "centres", "each trial's centre placement is in its key"},
-      {&study.projections, "projections", "each trial's projection is in its key"},
-      {&study.plants, "plants", "each trial's plant is in its key"},
-      {&study.laws, "laws", "each trial's learning law is in its key"},
-      {&study.integrators, "integrators", "each trial's integrator is in its key"},
-      {&study.metrics, "metrics",
-       "which metrics are written and fitted; what trials compute of them enters as "
-       "computed_metrics()"},
-      {&study.abscissa, "abscissa",
-       "what rates are fitted against, after the trials; what trials compute for it enters as "
-       "computed_metrics()"},
-      {&study.rates_window, "rates_window", "which points rates are fitted on, after the trials"},
-      {&study.constant_within, "constant_within",
-       "which series are reported as constant, after the trials"},
-      {&study.expectations, "expectations",
-       "judged after the trials; what trials compute for them enters as computed_metrics()"},
-      {&study.warnings, "warnings", "messages about the file"},
-      {&study.plot, "plot", "how the figures look ([plot]), drawn after the trials"},
+  std::vector<ExcludedField> out{
+      exclusion(study.name, "name", "a label: renaming a study keeps its results"),
+      exclusion(study.description, "description", "a label"),
+      exclusion(study.source, "source", "where the file was read from, not what it says"),
+      exclusion(study.n_values, "n_values", "each trial's n is in its key"),
+      exclusion(study.kernels, "kernels", "each trial's kernel and its parameters are in its key"),
+      exclusion(study.targets, "targets", "each trial's target is in its key"),
+      exclusion(study.centres, "centres", "each trial's centre placement is in its key"),
+      exclusion(study.projections, "projections", "each trial's projection is in its key"),
+      exclusion(study.metrics, "metrics",
+                "which metrics are written and fitted; what trials compute of them enters as "
+                "computed_metrics()"),
+      exclusion(study.abscissa, "abscissa",
+                "what rates are fitted against, after the trials; what trials compute for it "
+                "enters as computed_metrics()"),
+      exclusion(study.rates_window, "rates_window",
+                "which points rates are fitted on, after the trials"),
+      exclusion(study.constant_within, "constant_within",
+                "which series are reported as constant, after the trials"),
+      exclusion(study.expectations, "expectations",
+                "judged after the trials; what trials compute for them enters as "
+                "computed_metrics()"),
+      exclusion(study.warnings, "warnings", "messages about the file"),
+      exclusion(study.plot, "plot", "how the figures look ([plot]), drawn after the trials"),
   };
+  if (const auto* adaptive = study.adaptive_axes_if())
+    out.insert(
+        out.end(),
+        {exclusion(adaptive->laps_values, "laps_values", "each trial's lap count is in its key"),
+         exclusion(adaptive->plants, "plants", "each trial's plant is in its key"),
+         exclusion(adaptive->laws, "laws", "each trial's learning law is in its key"),
+         exclusion(adaptive->integrators, "integrators", "each trial's integrator is in its key")});
+  return out;
 }
 
 std::string study_settings_text(const StudyDefinition& study) {
   const auto excluded = not_in_identity(study);
   std::string out;
   boost::pfr::for_each_field(study, [&](const auto& field, std::size_t i) {
-    for (const auto& e : excluded)
-      if (e.address == static_cast<const void*>(&field)) return;
+    if (is_excluded(field, excluded)) return;
     if (!out.empty()) out += ' ';
     out += std::to_string(i) + '=';
-    if (!write_value(field, out))
+    if (!write_value(field, out, excluded))
       throw std::logic_error(fmt::format(
           "trial identity: field {} of StudyDefinition has a type the identity cannot write; "
           "teach write_value() in trial_identity.cpp, or list it in not_in_identity() with why "
@@ -136,12 +170,8 @@ std::string plugin_modules_text(
     const TrialSpec& trial,
     const std::map<std::pair<std::string, std::string>, std::string>& module_of) {
   if (module_of.empty()) return {};
-  const std::pair<const char*, const PluginChoice*> choices[] = {
-      {"kernel", &trial.kernel},         {"target", &trial.target}, {"centres", &trial.centres},
-      {"projection", &trial.projection}, {"plant", &trial.plant},   {"law", &trial.law},
-      {"integrator", &trial.integrator}};
   std::string text;
-  for (const auto& [kind, choice] : choices) {
+  for (const auto& [kind, choice] : trial.plugin_choices()) {
     if (choice->name.empty()) continue;
     auto it = module_of.find({kind, choice->name});
     if (it == module_of.end()) continue;

@@ -1,6 +1,9 @@
 // The adaptive study kind: a trial drives a plant along the track (or a state-dependent plant
 // through time) and learns the target with an estimator and a learning law (docs/adaptive.md);
 // it computes every metric of its catalogue.
+#include <type_traits>
+#include <variant>
+
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/study_kind.hpp"
@@ -8,6 +11,16 @@
 
 namespace rkhs {
 namespace {
+
+// The kind's own part of a study and of a trial is the alternative of its enumerator's index.
+static_assert(
+    std::is_same_v<
+        std::variant_alternative_t<static_cast<std::size_t>(StudyKind::adaptive), StudyKindAxes>,
+        AdaptiveStudyAxes>);
+static_assert(
+    std::is_same_v<
+        std::variant_alternative_t<static_cast<std::size_t>(StudyKind::adaptive), TrialKindAxes>,
+        AdaptiveTrialAxes>);
 
 class AdaptiveKind final : public StudyKindDescriptor {
  public:

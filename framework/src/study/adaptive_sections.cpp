@@ -188,7 +188,7 @@ std::vector<std::pair<double, const toml::node*>> read_lap_counts(const Reporter
                               show(*node)));
   }
   if (laps_node && laps_node->is_array()) {
-    settings.laps = std::numeric_limits<double>::quiet_NaN();  // each trial's: TrialSpec::laps
+    settings.laps = std::numeric_limits<double>::quiet_NaN();  // per trial (AdaptiveTrialAxes)
     for (const auto& [laps, node] : lap_counts) section.laps_values.push_back(laps);
   } else {
     settings.laps = lap_counts.front().first;
@@ -333,21 +333,23 @@ class AdaptiveFileSections final : public StudyFileSections {
     axes.push_back(read_plugins(report, root, "integrator", catalogue_of(integrator_registry()),
                                 std::string("rosenbrock4")));
     auto adaptive = parse_adaptive(report, root, study.domain.length);
-    study.adaptive = std::move(adaptive.settings);
-    study.laps_values = std::move(adaptive.laps_values);
-    study.reference = std::move(adaptive.reference);
-    if (study.adaptive.snapshot_points == 0)
-      study.adaptive.snapshot_points = study.evaluation_points;
+    auto& own = study.adaptive_axes();
+    own.settings = std::move(adaptive.settings);
+    own.laps_values = std::move(adaptive.laps_values);
+    own.reference = std::move(adaptive.reference);
+    if (own.settings.snapshot_points == 0) own.settings.snapshot_points = study.evaluation_points;
   }
 
-  std::vector<std::vector<PluginChoice> StudyDefinition::*> axis_members() const override {
-    return {&StudyDefinition::plants, &StudyDefinition::laws, &StudyDefinition::integrators};
+  std::vector<std::vector<PluginChoice>*> axis_members(StudyDefinition& study) const override {
+    auto& own = study.adaptive_axes();
+    return {&own.plants, &own.laws, &own.integrators};
   }
 
   void check(const Reporter& report, const toml::table& root, StudyDefinition& study,
              const std::vector<PluginAxis>& kind_axes) const override {
     const PluginAxis& plant_axis = kind_axes.at(0);
     const PluginAxis& law_axis = kind_axes.at(1);
+    const auto& own = study.adaptive_axes();
     // Theorem 4.1 trials: the law is the infinite-dimensional estimator, the road is f.
     if (!study.projections.empty()) {
       const auto* node = root.get("projection");
@@ -360,12 +362,12 @@ class AdaptiveFileSections final : public StudyFileSections {
               "\"rkhs_embedding\" (see docs/theorems.md)",
               c.label()));
       });
-      if (study.adaptive.projected_road)
+      if (own.settings.projected_road)
         report.fail(node->source(), "projection",
                     "with [[projection]] the road must be the target f (adaptive.road = "
                     "\"target\"): Theorem 4.1 compares two estimators of f");
-      if (study.adaptive.limit() || std::any_of(study.laps_values.begin(), study.laps_values.end(),
-                                                [](double laps) { return std::isinf(laps); }))
+      if (own.settings.limit() || std::any_of(own.laps_values.begin(), own.laps_values.end(),
+                                              [](double laps) { return std::isinf(laps); }))
         report.fail(node->source(), "projection",
                     "with [[projection]] the gaps are taken along the integration: laps = "
                     "\"limit\" has none");
@@ -373,7 +375,7 @@ class AdaptiveFileSections final : public StudyFileSections {
     check_instances(report, root, plant_axis, [&](const PluginChoice& c, const PluginEntry&) {
       const auto plant = plant_registry().find(c.name)->factory(c.parameters);
       const auto d = plant->A().rows();
-      const auto Q = study.adaptive.q.for_dimension(d, "adaptive.q");
+      const auto Q = own.settings.q.for_dimension(d, "adaptive.q");
       solve_lyapunov(plant->A(), Q);
       const int dimension = study.domain.dimension;
       if (!plant->state_dependent() && dimension > 1)
@@ -383,8 +385,8 @@ class AdaptiveFileSections final : public StudyFileSections {
             dimension, dimension));
       if (plant->state_dependent()) {
         // f of the plant's state: a nonlinear system stepped through time on an interval or circle.
-        AdaptiveSettings settings = study.adaptive;
-        if (std::any_of(study.laps_values.begin(), study.laps_values.end(),
+        AdaptiveSettings settings = own.settings;
+        if (std::any_of(own.laps_values.begin(), own.laps_values.end(),
                         [](double laps) { return std::isinf(laps); }))
           settings.laps = std::numeric_limits<double>::infinity();
         if (const auto error = state_dependent_settings_error(settings, plant->period());
@@ -395,7 +397,7 @@ class AdaptiveFileSections final : public StudyFileSections {
               "its read-out y = C x + y0 has {} coordinate{}, and f is a function on the domain of "
               "d = {}: they must agree",
               plant->readout().rows(), plant->readout().rows() == 1 ? "" : "s", dimension));
-        if (dimension > 1 && !study.adaptive.snapshot_laps.empty())
+        if (dimension > 1 && !own.settings.snapshot_laps.empty())
           throw std::invalid_argument(
               "adaptive.snapshot_laps records profiles of the estimate along a domain of d = 1; "
               "remove it in d > 1");

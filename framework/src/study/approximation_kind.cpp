@@ -1,6 +1,8 @@
 // The approximation study kind: a trial places n centres and measures the projection Pi_n of
 // the target (docs/metrics.md); it computes only what its study asks for.
 #include <algorithm>
+#include <type_traits>
+#include <variant>
 
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/study_kind.hpp"
@@ -8,6 +10,14 @@
 
 namespace rkhs {
 namespace {
+
+// The kind's own part of a study and of a trial is the alternative of its enumerator's index.
+static_assert(std::is_same_v<std::variant_alternative_t<
+                                 static_cast<std::size_t>(StudyKind::approximation), StudyKindAxes>,
+                             ApproximationStudyAxes>);
+static_assert(std::is_same_v<std::variant_alternative_t<
+                                 static_cast<std::size_t>(StudyKind::approximation), TrialKindAxes>,
+                             ApproximationTrialAxes>);
 
 // The rules of computed_metrics(), once: calls need(metric, reason) for every metric an
 // approximation study's trials compute, reason "" for those of study.metrics.
@@ -69,7 +79,7 @@ class NoFileSections final : public StudyFileSections {
   void add_grid_factors(const toml::table&, std::vector<GridFactor>&) const override {}
   void read(const Reporter&, const toml::table&, StudyDefinition&,
             std::vector<PluginAxis>&) const override {}
-  std::vector<std::vector<PluginChoice> StudyDefinition::*> axis_members() const override {
+  std::vector<std::vector<PluginChoice>*> axis_members(StudyDefinition&) const override {
     return {};
   }
   void check(const Reporter&, const toml::table&, StudyDefinition&,

@@ -201,7 +201,7 @@ class ExpectationReader {
         fail(src, theory->source(), "expect.theory",
              fmt::format("theory rates are known for {} studies only (this study is "
                          "kind = \"{}\")",
-                         theory_kind_names(), study_kind_name(study_.kind)));
+                         theory_kind_names(), study_kind_name(study_.kind())));
     } else if (rate) {
       e.kind = ExpectationKind::rate;
       read_rate(*rate, tolerance != nullptr, e);
@@ -390,25 +390,19 @@ class ExpectationReader {
 // others at their last choice once theirs run out): as many trials as the longest axis, with
 // the axis columns of the whole grid.
 std::vector<TrialSpec> one_trial_per_choice(const StudyDefinition& study) {
-  struct Axis {
-    std::vector<PluginChoice> StudyDefinition::*choices;
-    PluginChoice TrialSpec::*choice;
-  };
-  static constexpr Axis axes[] = {{&StudyDefinition::kernels, &TrialSpec::kernel},
-                                  {&StudyDefinition::targets, &TrialSpec::target},
-                                  {&StudyDefinition::centres, &TrialSpec::centres},
-                                  {&StudyDefinition::projections, &TrialSpec::projection},
-                                  {&StudyDefinition::plants, &TrialSpec::plant},
-                                  {&StudyDefinition::laws, &TrialSpec::law},
-                                  {&StudyDefinition::integrators, &TrialSpec::integrator}};
+  const auto axes = study.plugin_axes();  // in the order of TrialSpec::plugin_choices()
   std::size_t count = 1;
-  for (const auto& axis : axes) count = std::max(count, (study.*axis.choices).size());
+  for (const auto& axis : axes) count = std::max(count, axis.second->size());
+  const auto* adaptive = study.adaptive_axes_if();
   std::vector<TrialSpec> out(count);
   for (std::size_t i = 0; i < count; ++i) {
-    for (const auto& axis : axes)
-      if (const auto& choices = study.*axis.choices; !choices.empty())
-        out[i].*axis.choice = choices[std::min(i, choices.size() - 1)];
-    if (!study.laps_values.empty()) out[i].laps = study.laps_values.front();
+    out[i].kind_axes = trial_kind_axes(study.kind());
+    const auto choices = out[i].plugin_choices();
+    for (std::size_t a = 0; a < axes.size(); ++a)
+      if (const auto& options = *axes[a].second; !options.empty())
+        *choices[a].second = options[std::min(i, options.size() - 1)];
+    if (adaptive && !adaptive->laps_values.empty())
+      out[i].adaptive_axes().laps = adaptive->laps_values.front();
     out[i].n = study.n_values.empty() ? 0 : study.n_values.front();
   }
   return out;

@@ -54,7 +54,7 @@ PlotStyle parse_plot(const Reporter& report, const toml::table& table,
   auto check_metric = [&](const toml::node& node, const std::string& metric,
                           const std::string& key) {
     if (std::find(plotted.begin(), plotted.end(), metric) != plotted.end()) return;
-    const auto& all = metric_names(study.kind);
+    const auto& all = metric_names(study.kind());
     report.fail(
         node.source(), key,
         std::find(all.begin(), all.end(), metric) == all.end()

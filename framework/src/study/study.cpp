@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
+#include <utility>
+#include <variant>
 
 #include "rkhs/adaptive/adaptive.hpp"
 #include "rkhs/core/random.hpp"
@@ -55,7 +58,9 @@ const std::vector<std::string>& PlotStyle::legend_positions() {
   return positions;
 }
 
-const std::vector<std::string>& StudyDefinition::all_metrics() const { return metric_names(kind); }
+const std::vector<std::string>& StudyDefinition::all_metrics() const {
+  return metric_names(kind());
+}
 
 std::size_t StudyDefinition::metric_index(std::string_view metric) const {
   const auto& names = all_metrics();
@@ -81,6 +86,103 @@ std::vector<std::string> StudyDefinition::computed_metric_names() const {
   return out;
 }
 
+namespace {
+
+// The alternative of `Variant` with index `index`, default-constructed.
+template <class Variant, std::size_t... I>
+Variant default_alternative(std::size_t index, std::index_sequence<I...>) {
+  using Make = Variant (*)();
+  static constexpr Make make[] = {[] { return Variant(std::in_place_index<I>); }...};
+  if (index >= sizeof...(I))
+    throw std::logic_error(fmt::format("study kind {} has no kind axes", index));
+  return make[index]();
+}
+
+// The Axes `kind_axes` holds; throws std::logic_error naming the kind it holds otherwise.
+template <class Axes, class Variant>
+Axes& axes_or_throw(Variant& kind_axes, const char* what, const char* plural) {
+  if (auto* axes = std::get_if<std::remove_const_t<Axes>>(&kind_axes)) return *axes;
+  throw std::logic_error(fmt::format("{}: {} {} have none", what,
+                                     study_kind_name(static_cast<StudyKind>(kind_axes.index())),
+                                     plural));
+}
+
+}  // namespace
+
+StudyKindAxes study_kind_axes(StudyKind kind) {
+  return default_alternative<StudyKindAxes>(
+      static_cast<std::size_t>(kind),
+      std::make_index_sequence<std::variant_size_v<StudyKindAxes>>());
+}
+
+TrialKindAxes trial_kind_axes(StudyKind kind) {
+  return default_alternative<TrialKindAxes>(
+      static_cast<std::size_t>(kind),
+      std::make_index_sequence<std::variant_size_v<TrialKindAxes>>());
+}
+
+const AdaptiveStudyAxes& StudyDefinition::adaptive_axes() const {
+  return axes_or_throw<const AdaptiveStudyAxes>(kind_axes, "StudyDefinition::adaptive_axes",
+                                                "studies");
+}
+AdaptiveStudyAxes& StudyDefinition::adaptive_axes() {
+  return axes_or_throw<AdaptiveStudyAxes>(kind_axes, "StudyDefinition::adaptive_axes", "studies");
+}
+const AdaptiveTrialAxes& TrialSpec::adaptive_axes() const {
+  return axes_or_throw<const AdaptiveTrialAxes>(kind_axes, "TrialSpec::adaptive_axes", "trials");
+}
+AdaptiveTrialAxes& TrialSpec::adaptive_axes() {
+  return axes_or_throw<AdaptiveTrialAxes>(kind_axes, "TrialSpec::adaptive_axes", "trials");
+}
+
+namespace {
+
+// StudyDefinition::plugin_axes(), const or not.
+template <class Study>
+auto plugin_axes_of(Study& study) {
+  std::vector<std::pair<const char*, decltype(&study.kernels)>> out{
+      {"kernel", &study.kernels},
+      {"target", &study.targets},
+      {"centres", &study.centres},
+      {"projection", &study.projections}};
+  if (auto* adaptive = study.adaptive_axes_if())
+    out.insert(out.end(), {{"plant", &adaptive->plants},
+                           {"law", &adaptive->laws},
+                           {"integrator", &adaptive->integrators}});
+  return out;
+}
+
+// TrialSpec::plugin_choices(), const or not.
+template <class Trial>
+auto plugin_choices_of(Trial& trial) {
+  std::vector<std::pair<const char*, decltype(&trial.kernel)>> out{
+      {"kernel", &trial.kernel},
+      {"target", &trial.target},
+      {"centres", &trial.centres},
+      {"projection", &trial.projection}};
+  if (auto* adaptive = trial.adaptive_axes_if())
+    out.insert(out.end(), {{"plant", &adaptive->plant},
+                           {"law", &adaptive->law},
+                           {"integrator", &adaptive->integrator}});
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::pair<const char*, const std::vector<PluginChoice>*>> StudyDefinition::plugin_axes()
+    const {
+  return plugin_axes_of(*this);
+}
+std::vector<std::pair<const char*, std::vector<PluginChoice>*>> StudyDefinition::plugin_axes() {
+  return plugin_axes_of(*this);
+}
+std::vector<std::pair<const char*, const PluginChoice*>> TrialSpec::plugin_choices() const {
+  return plugin_choices_of(*this);
+}
+std::vector<std::pair<const char*, PluginChoice*>> TrialSpec::plugin_choices() {
+  return plugin_choices_of(*this);
+}
+
 std::vector<StudyDefinition::GridAxis> StudyDefinition::grid_axes() const {
   std::vector<GridAxis> axes{{"kernel", "kernels", kernels.size()},
                              {"target", "targets", targets.size()},
@@ -88,11 +190,14 @@ std::vector<StudyDefinition::GridAxis> StudyDefinition::grid_axes() const {
   if (!projections.empty())
     axes.push_back({"projection", "projections", projections.size()});
   // The adaptive axes are there when the study has them (trials() nests them the same way).
-  for (const auto& axis : {GridAxis{"plant", "plants", plants.size()},
-                           GridAxis{"learning law", "learning laws", laws.size()},
-                           GridAxis{"integrator", "integrators", integrators.size()}})
-    if (axis.count) axes.push_back(axis);
-  if (!laps_values.empty()) axes.push_back({"value of laps", "values of laps", laps_values.size()});
+  if (const auto* adaptive = adaptive_axes_if()) {
+    for (const auto& axis : {GridAxis{"plant", "plants", adaptive->plants.size()},
+                             GridAxis{"learning law", "learning laws", adaptive->laws.size()},
+                             GridAxis{"integrator", "integrators", adaptive->integrators.size()}})
+      if (axis.count) axes.push_back(axis);
+    if (const auto& laps = adaptive->laps_values; !laps.empty())
+      axes.push_back({"value of laps", "values of laps", laps.size()});
+  }
   axes.push_back({"value of n", "values of n", n_values.size()});
   return axes;
 }
@@ -104,7 +209,12 @@ std::vector<TrialSpec> StudyDefinition::trials() const {
   auto or_none = [&](const std::vector<PluginChoice>& axis) -> const std::vector<PluginChoice>& {
     return axis.empty() ? none : axis;
   };
-  std::vector<std::optional<double>> lap_counts(laps_values.begin(), laps_values.end());
+  const auto* adaptive = adaptive_axes_if();
+  const auto& plants = adaptive ? adaptive->plants : none;
+  const auto& laws = adaptive ? adaptive->laws : none;
+  const auto& integrators = adaptive ? adaptive->integrators : none;
+  std::vector<std::optional<double>> lap_counts;
+  if (adaptive) lap_counts.assign(adaptive->laps_values.begin(), adaptive->laps_values.end());
   if (lap_counts.empty()) lap_counts.emplace_back();
   std::vector<TrialSpec> out;
   for (const auto& kernel : kernels)
@@ -122,11 +232,9 @@ std::vector<TrialSpec> StudyDefinition::trials() const {
                     trial.target = target;
                     trial.centres = placement;
                     trial.projection = projection;
-                    trial.plant = plant;
-                    trial.law = law;
-                    trial.integrator = integrator;
+                    trial.kind_axes = trial_kind_axes(kind());
+                    if (auto* own = trial.adaptive_axes_if()) *own = {plant, law, integrator, laps};
                     trial.n = n;
-                    trial.laps = laps;
                     trial.group_key =
                         fmt::format("kernel={} | target={} | centres={}", kernel.label(),
                                     target.label(), placement.label());
@@ -154,15 +262,17 @@ std::string laps_text(double laps) {
 }
 
 AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial) {
-  AdaptiveSettings settings = study.adaptive;
-  if (!study.reference.name.empty()) settings.engine = AdaptiveEngine::time_stepping;
-  for (const auto& [name, value] : trial.integrator.parameters.values()) {
+  const auto& adaptive = study.adaptive_axes();
+  const auto& own = trial.adaptive_axes();
+  AdaptiveSettings settings = adaptive.settings;
+  if (!adaptive.reference.name.empty()) settings.engine = AdaptiveEngine::time_stepping;
+  for (const auto& [name, value] : own.integrator.parameters.values()) {
     if (name != "rtol" && name != "atol") continue;
     (name == "rtol" ? settings.integrator_rtol : settings.integrator_atol) =
-        trial.integrator.parameters.real(name);
+        own.integrator.parameters.real(name);
   }
-  if (!trial.laps) return settings;
-  settings.laps = *trial.laps;
+  if (!own.laps) return settings;
+  settings.laps = *own.laps;
   std::erase_if(settings.snapshot_laps, [&](double lap) { return lap > settings.laps; });
   return settings;
 }

@@ -259,7 +259,7 @@ const toml::table& read_header(const Reporter& report, const toml::table& root,
   study.description = get_string(report, *header, "description", "study.", std::string{});
   const auto kind = get_string(report, *header, "kind", "study.", std::string("approximation"));
   if (const auto known = study_kind_from_name(kind))
-    study.kind = *known;
+    study.kind_axes = study_kind_axes(*known);
   else
     report.fail(header->get("kind")->source(), "study.kind",
                 fmt::format("unknown study kind '{}' (known: {})", kind, study_kind_names()));
@@ -287,7 +287,7 @@ const toml::table& read_header(const Reporter& report, const toml::table& root,
 // [study] metrics: the metrics written and fitted, in output order (all of the kind's when the
 // file names none).
 void read_metrics(const Reporter& report, const toml::table& header, StudyDefinition& study) {
-  const auto& all_metrics = metric_names(study.kind);
+  const auto& all_metrics = metric_names(study.kind());
   if (const auto* metrics = header.get("metrics")) {
     const auto* array = metrics->as_array();
     if (!array || array->empty())
@@ -547,17 +547,15 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   check_evaluation_grid(report, header, study);
 
   // Where each axis of `axes` goes, in the same order.
-  std::vector<std::vector<PluginChoice> StudyDefinition::*> axis_members{
-      &StudyDefinition::kernels, &StudyDefinition::targets, &StudyDefinition::centres};
-  for (const auto member : kind_sections.axis_members()) axis_members.push_back(member);
+  std::vector<std::vector<PluginChoice>*> axis_members{&study.kernels, &study.targets,
+                                                       &study.centres};
+  for (auto* member : kind_sections.axis_members(study)) axis_members.push_back(member);
   // [[expect]] tables first against an outline of the grid (the first choice of each entry:
   // the same axis columns), then the axes expanded.
-  for (std::size_t a = 0; a < axes.size(); ++a)
-    study.*axis_members[a] = first_choices(report, axes[a]);
+  for (std::size_t a = 0; a < axes.size(); ++a) *axis_members[a] = first_choices(report, axes[a]);
   if (projections) study.projections = first_choices(report, *projections);
   auto expectations = detail::read_expectations(root, study);
-  for (std::size_t a = 0; a < axes.size(); ++a)
-    study.*axis_members[a] = expand_plugins(report, axes[a]);
+  for (std::size_t a = 0; a < axes.size(); ++a) *axis_members[a] = expand_plugins(report, axes[a]);
   if (projections) study.projections = expand_plugins(report, *projections);
 
   check_common_instances(report, root, n_node, study, axes, projections);

@@ -134,8 +134,8 @@ class StudyFileSections {
   /// sections into `study`.
   virtual void read(const Reporter& report, const toml::table& root, StudyDefinition& study,
                     std::vector<PluginAxis>& axes) const = 0;
-  /// Where the kind's axes go in StudyDefinition, in the order read() appends them.
-  virtual std::vector<std::vector<PluginChoice> StudyDefinition::*> axis_members() const = 0;
+  /// Where the kind's axes go in `study` (its kind's axes), in the order read() appends them.
+  virtual std::vector<std::vector<PluginChoice>*> axis_members(StudyDefinition& study) const = 0;
   /// Checks what the kind's sections and axes must agree on, once every axis is expanded;
   /// `kind_axes` are the axes read() appended.
   virtual void check(const Reporter& report, const toml::table& root, StudyDefinition& study,

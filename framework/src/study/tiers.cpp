@@ -17,9 +17,8 @@ bool in_tier(const std::vector<std::string>& tiers, std::string_view tier) {
 
 std::vector<std::string> study_tiers(const StudyDefinition& study) {
   std::set<std::string> tiers;
-  for (const auto* axis : {&study.kernels, &study.targets, &study.centres, &study.projections,
-                           &study.plants, &study.laws, &study.integrators})
-    for (const auto& choice : *axis) tiers.insert(choice.tiers.begin(), choice.tiers.end());
+  for (const auto& axis : study.plugin_axes())
+    for (const auto& choice : *axis.second) tiers.insert(choice.tiers.begin(), choice.tiers.end());
   for (const auto& expectation : study.expectations)
     tiers.insert(expectation.tiers.begin(), expectation.tiers.end());
   return {tiers.begin(), tiers.end()};
@@ -31,12 +30,7 @@ StudyDefinition restrict_to_tier(StudyDefinition study, std::string_view tier) {
     throw StudyError(fmt::format("{}: tier '{}' is not named in this study (tiers: {})",
                                  study.source, tier,
                                  known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
-  using Axis = std::pair<const char*, std::vector<PluginChoice>*>;
-  for (auto [section, axis] : {Axis{"kernel", &study.kernels}, Axis{"target", &study.targets},
-                               Axis{"centres", &study.centres},
-                               Axis{"projection", &study.projections},
-                               Axis{"plant", &study.plants},
-                               Axis{"law", &study.laws}, Axis{"integrator", &study.integrators}}) {
+  for (auto [section, axis] : study.plugin_axes()) {
     const bool marked = std::any_of(axis->begin(), axis->end(),
                                     [](const PluginChoice& c) { return !c.tiers.empty(); });
     if (!marked) continue;

@@ -2,16 +2,21 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 
 namespace rkhs {
 
 namespace {
 // The plugin axes of a trial in column order; the kernel's parameters are not prefixed.
 std::vector<std::pair<std::string, const PluginChoice*>> plugin_axes(const TrialSpec& trial) {
-  return {{"kernel", &trial.kernel},         {"target", &trial.target},
-          {"centres", &trial.centres},       {"projection", &trial.projection},
-          {"plant", &trial.plant},           {"law", &trial.law},
-          {"integrator", &trial.integrator}};
+  std::vector<std::pair<std::string, const PluginChoice*>> out;
+  for (const auto& [axis, choice] : trial.plugin_choices()) out.emplace_back(axis, choice);
+  return out;
+}
+// The lap count of a trial of a study with a laps axis.
+std::optional<double> laps_of(const TrialSpec& trial) {
+  const auto* adaptive = trial.adaptive_axes_if();
+  return adaptive ? adaptive->laps : std::nullopt;
 }
 std::string parameter_column(const std::string& axis, const std::string& parameter) {
   if (axis == "kernel") return parameter;
@@ -37,7 +42,7 @@ std::vector<std::string> axis_columns(const std::vector<TrialSpec>& trials) {
               columns.push_back(column);
     out.insert(out.end(), columns.begin(), columns.end());
   }
-  if (trials.front().laps) out.push_back("laps");  // nested just outside n
+  if (laps_of(trials.front())) out.push_back("laps");  // nested just outside n
   return out;
 }
 
@@ -48,7 +53,7 @@ std::vector<std::string> axis_values(const std::vector<std::string>& columns, co
     for (const auto& [name, value] : choice->parameters.values())
       values[parameter_column(axis, name)] = format_value(value);
   }
-  if (trial.laps) values["laps"] = laps_text(*trial.laps);
+  if (const auto laps = laps_of(trial)) values["laps"] = laps_text(*laps);
   std::vector<std::string> out;
   for (const auto& column : columns) out.push_back(values.contains(column) ? values[column] : "");
   return out;

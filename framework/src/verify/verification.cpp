@@ -421,7 +421,7 @@ class Verifier {
     const auto by_index = has_by ? study_.metric_index(e.bound.by) : 0;
     const auto times_index = has_times ? study_.metric_index(e.bound.times) : 0;
     auto flagged = [this](const TrialResult& r, const std::string& metric) {
-      const auto flag = excluding_flag(study_.kind, metric);
+      const auto flag = excluding_flag(study_.kind(), metric);
       return !metric.empty() && !flag.empty() &&
              std::find(r.flags.begin(), r.flags.end(), flag) != r.flags.end();
     };

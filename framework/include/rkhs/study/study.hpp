@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include "rkhs/adaptive/adaptive.hpp"
@@ -42,28 +44,60 @@ struct PluginChoice {
   std::string given_label() const;
 };
 
+/// What only an approximation trial has: nothing yet ([[projection]] is an axis of both kinds).
+struct ApproximationTrialAxes {};
+
+/// What only an adaptive trial has: its plant, learning law and integrator, and its lap count.
+struct AdaptiveTrialAxes {
+  PluginChoice plant;
+  PluginChoice law;
+  PluginChoice integrator;
+  /// The trial's lap count when the study has a laps axis ([adaptive] laps = [10, 100,
+  /// "limit"]): a positive number, +infinity for "limit". std::nullopt when laps is one value
+  /// (AdaptiveStudyAxes::settings.laps applies, and nothing about laps is in the keys).
+  std::optional<double> laps;
+};
+
+/// A trial's kind's own part: one alternative per StudyKind, in the enum's order (checked where
+/// each kind is described, study/approximation_kind.cpp and study/adaptive_kind.cpp).
+using TrialKindAxes = std::variant<ApproximationTrialAxes, AdaptiveTrialAxes>;
+
 /// One point of the trial grid.
 struct TrialSpec {
   std::size_t index = 0;  ///< position in the grid (the order of trials.csv)
   PluginChoice kernel;
   PluginChoice target;
   PluginChoice centres;
-  /// Approximation trials of a study with a [[projection]] axis (empty name otherwise: the
-  /// projection is interpolation at the centres, and nothing about it is in the keys).
+  /// Trials of a study with a [[projection]] axis (empty name otherwise: an approximation trial
+  /// projects by interpolation at the centres, and nothing about it is in the keys).
   PluginChoice projection;
-  PluginChoice plant;       ///< adaptive trials only (empty name otherwise)
-  PluginChoice law;         ///< adaptive trials only
-  PluginChoice integrator;  ///< adaptive trials only
+  /// What only its kind's trials have; its alternative is the kind of its study.
+  TrialKindAxes kind_axes;
   std::size_t n = 0;
-  /// The trial's lap count when the study has a laps axis ([adaptive] laps = [10, 100,
-  /// "limit"]): a positive number, +infinity for "limit". std::nullopt when laps is one value
-  /// (StudyDefinition::adaptive.laps applies, and nothing about laps is in the keys).
-  std::optional<double> laps;
   std::string group_key;  ///< every axis but n: trials of a group form one convergence series
   std::string key;        ///< every axis: identifies the trial
   /// Hash of key (without its laps part: every lap count of a series has the same random
   /// centres): the seed of any randomness in the trial.
   std::uint64_t seed = 0;
+
+  /// The kind of the study the trial is of: the alternative kind_axes holds.
+  StudyKind kind() const noexcept { return static_cast<StudyKind>(kind_axes.index()); }
+  /// The adaptive trial's own part; throws std::logic_error naming the kind for a trial of
+  /// another kind.
+  const AdaptiveTrialAxes& adaptive_axes() const;
+  AdaptiveTrialAxes& adaptive_axes();
+  /// The same, nullptr for a trial of another kind.
+  const AdaptiveTrialAxes* adaptive_axes_if() const noexcept {
+    return std::get_if<AdaptiveTrialAxes>(&kind_axes);
+  }
+  AdaptiveTrialAxes* adaptive_axes_if() noexcept {
+    return std::get_if<AdaptiveTrialAxes>(&kind_axes);
+  }
+  /// The trial's plugin choices in the order of trials.csv's columns, each with its axis'
+  /// name: "kernel", "target", "centres", "projection", then its kind's own ("plant", "law",
+  /// "integrator"); an axis the study does not have is an empty choice.
+  std::vector<std::pair<const char*, const PluginChoice*>> plugin_choices() const;
+  std::vector<std::pair<const char*, PluginChoice*>> plugin_choices();
 };
 
 /// [limits]: what one trial may use (docs/study-files.md); a trial beyond them fails with the
@@ -108,18 +142,48 @@ struct PlotStyle {
   static const std::vector<std::string>& legend_positions();
 };
 
+/// What only an approximation study has: nothing yet ([[projection]] is an axis of both kinds).
+struct ApproximationStudyAxes {};
+
+/// What only an adaptive study has: the [[plant]], [[law]] and [[integrator]] axes and the
+/// [adaptive] section.
+struct AdaptiveStudyAxes {
+  std::vector<PluginChoice> plants, laws, integrators;
+  AdaptiveSettings settings;  ///< [adaptive]
+  /// [adaptive] laps given as a list: the values of the laps axis, in the file's order
+  /// (+infinity for "limit"), nested just outside n. Empty when laps is one value, which is
+  /// then settings.laps; with the axis, settings.laps is NaN and each trial's lap count is
+  /// AdaptiveTrialAxes::laps (run_trial gives measure_adaptive the settings with it).
+  std::vector<double> laps_values;
+  /// [adaptive] reference = { integrator = "radau5", rtol = 1e-11, atol = 1e-10 }: the
+  /// integrator (with its resolved parameters) every trial also integrates with, for
+  /// integration_error; its trials step through time. An empty name: no reference.
+  PluginChoice reference;
+};
+
+/// A study's kind's own part: one alternative per StudyKind, in the enum's order (checked where
+/// each kind is described, study/approximation_kind.cpp and study/adaptive_kind.cpp).
+using StudyKindAxes = std::variant<ApproximationStudyAxes, AdaptiveStudyAxes>;
+static_assert(std::variant_size_v<StudyKindAxes> == std::variant_size_v<TrialKindAxes>);
+
+/// The part of a study, and of a trial, of `kind` that only its kind has, with nothing set.
+StudyKindAxes study_kind_axes(StudyKind kind);
+TrialKindAxes trial_kind_axes(StudyKind kind);
+
 struct StudyDefinition {
   std::string name;
   std::string description;
   std::string source;  ///< the file it was read from
-  StudyKind kind{};    ///< the first kind of study_kind_table(), approximation, by default
+  /// What only its kind's studies have; its alternative is the study's kind (kind()), the
+  /// first kind of study_kind_table(), approximation, by default.
+  StudyKindAxes kind_axes;
   Domain domain;
   std::vector<std::size_t> n_values;  ///< increasing, distinct
   std::size_t evaluation_points = 4096;
   std::vector<PluginChoice> kernels, targets, centres;
-  /// [[projection]] entries (approximation studies only; empty when the file has none).
+  /// [[projection]] entries (empty when the file has none): in an adaptive study each trial
+  /// also runs the finite estimator of its projection (Theorem 4.1).
   std::vector<PluginChoice> projections;
-  std::vector<PluginChoice> plants, laws, integrators;  ///< adaptive studies only
   std::vector<std::string> metrics;  ///< the metrics written and fitted, in output order
   Abscissa abscissa = Abscissa::n;
   /// [rates]: the window every series is fitted on (empty: the automatic asymptotic window;
@@ -130,28 +194,36 @@ struct StudyDefinition {
   double constant_within = default_constant_within;
   SolverOptions solver;
   StudyLimits limits;
-  AdaptiveSettings adaptive;  ///< adaptive studies only
-  /// [adaptive] laps given as a list: the values of the laps axis, in the file's order
-  /// (+infinity for "limit"), nested just outside n. Empty when laps is one value, which is
-  /// then adaptive.laps; with the axis, adaptive.laps is NaN and each trial's lap count is
-  /// TrialSpec::laps (run_trial gives measure_adaptive the settings with it).
-  std::vector<double> laps_values;
   std::vector<Expectation> expectations;  ///< [[expect]] tables (rkhs/study/expectation.hpp)
   /// What the file asks for that is valid but doubtful, as "file:line:column: key: why" (e.g. an
   /// evaluation grid too coarse for the largest n); `validate`, `run` and `check` print them.
   std::vector<std::string> warnings;
-  /// [adaptive] reference = { integrator = "radau5", rtol = 1e-11, atol = 1e-10 }: the
-  /// integrator (with its resolved parameters) every trial also integrates with, for
-  /// integration_error; its trials step through time. An empty name: no reference.
-  PluginChoice reference;
   PlotStyle plot;  ///< [plot]
+
+  /// What this study's kind is: the alternative kind_axes holds.
+  StudyKind kind() const noexcept { return static_cast<StudyKind>(kind_axes.index()); }
+  /// The adaptive study's own part; throws std::logic_error naming the study's kind for a
+  /// study of another kind.
+  const AdaptiveStudyAxes& adaptive_axes() const;
+  AdaptiveStudyAxes& adaptive_axes();
+  /// The same, nullptr for a study of another kind.
+  const AdaptiveStudyAxes* adaptive_axes_if() const noexcept {
+    return std::get_if<AdaptiveStudyAxes>(&kind_axes);
+  }
+  AdaptiveStudyAxes* adaptive_axes_if() noexcept {
+    return std::get_if<AdaptiveStudyAxes>(&kind_axes);
+  }
+  /// The study's plugin axes in the order of TrialSpec::plugin_choices(), each with its name
+  /// ("kernel", ..., "projection", then its kind's own: "plant", "law", "integrator").
+  std::vector<std::pair<const char*, const std::vector<PluginChoice>*>> plugin_axes() const;
+  std::vector<std::pair<const char*, std::vector<PluginChoice>*>> plugin_axes();
 
   /// The Cartesian product kernels x targets x centres [x projections] [x plants x laws x
   /// integrators] [x laps] x n, n varying fastest.
   std::vector<TrialSpec> trials() const;
 
   /// What this study's kind is (rkhs/study/study_kind.hpp).
-  const StudyKindDescriptor& kind_descriptor() const noexcept { return describe(kind); }
+  const StudyKindDescriptor& kind_descriptor() const noexcept { return describe(kind()); }
 
   /// One axis of the trial grid: what it is called (singular and plural) and how many values
   /// it has. grid_axes() lists the axes this study's kind has, in the order trials() nests
@@ -186,9 +258,10 @@ struct StudyDefinition {
 /// whole number without an exponent ("1000000"), any other number as format_real does ("2.5").
 std::string laps_text(double laps);
 
-/// The adaptive settings `trial` runs with: study.adaptive with the trial's lap count when the
-/// study has a laps axis, keeping only the snapshot laps the trial reaches, and time stepping
-/// when the study has a reference integrator (the reference is never a lap map's).
+/// The adaptive settings `trial` (of an adaptive study) runs with: the study's settings with the
+/// trial's lap count when the study has a laps axis, keeping only the snapshot laps the trial
+/// reaches, and time stepping when the study has a reference integrator (the reference is never
+/// a lap map's).
 AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const TrialSpec& trial);
 
 /// Every metric a trial of `kind` measures, in output order.

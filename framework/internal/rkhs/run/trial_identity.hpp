@@ -13,21 +13,25 @@
 // (tests/run/test_trial_identity.cpp changes every field in turn and checks both directions).
 
 #include <string>
+#include <typeinfo>
 #include <vector>
 
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
 
-/// The study settings that can change a trial's result, as canonical text ("3=adaptive
-/// 4.0=25.13 ..." by field position). Throws std::logic_error naming the field position when a
+/// The study settings that can change a trial's result, as canonical text ("3=1:{3={0=25.13
+/// ...}} 4={...} ..." by field position; the kind's own part as its alternative, the kind, and
+/// its fields). Throws std::logic_error naming the field position when a
 /// field has a type this function cannot write (a new kind of field: teach it, or exclude it
 /// with its reason).
 std::string study_settings_text(const StudyDefinition& study);
 
-/// The fields of `study` left out of the identity (their addresses inside `study`), with why.
+/// The fields of `study` left out of the identity (their addresses inside `study`, those of its
+/// kind's own part included), with why.
 struct ExcludedField {
   const void* address;
+  const std::type_info* type;  ///< of the field (a struct's first field shares its address)
   const char* name;
   const char* reason;
 };
