@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
+#include <variant>
 
 #include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/approx/approximation.hpp"
@@ -29,23 +31,49 @@ std::vector<std::string> excluding_flags_of(const MetricInfo* row) {
 
 }  // namespace
 
-SeriesTheory series_theory(const StudyDefinition& study, const PluginChoice& kernel,
-                           std::string_view metric) {
+namespace {
+
+// A kernel's properties (rkhs/kernel/kernel.hpp), or why it cannot be rebuilt.
+using PropertiesOrError = std::variant<KernelProperties, std::string>;
+
+PropertiesOrError properties_of(const StudyDefinition& study, const PluginChoice& kernel) {
+  try {
+    return kernel_properties(kernel.name, kernel.parameters, study.domain);
+  } catch (const std::exception& e) {
+    return std::string(e.what());
+  }
+}
+
+// series_theory with the kernel's properties from `properties` (called only for a metric with
+// a theory law).
+template <class Properties>
+SeriesTheory theory_of(const StudyDefinition& study, std::string_view metric,
+                       Properties&& properties) {
   SeriesTheory out;
   const auto* row = study.kind_descriptor().find_metric(metric);
   if (!row || row->theory == TheoryLaw::none) {
     out.why_none = no_theory_law(metric);
     return out;
   }
-  try {
-    out.rate = theory_rate(*row, kernel_properties(kernel.name, kernel.parameters, study.domain),
-                           &out.why_none);
-  } catch (const std::exception& e) {
+  const PropertiesOrError& kernel = properties();
+  if (const auto* error = std::get_if<std::string>(&kernel)) {
     out.kernel_unavailable = true;
-    out.why_none = e.what();
+    out.why_none = *error;
+    return out;
   }
+  out.rate = theory_rate(*row, std::get<KernelProperties>(kernel), &out.why_none);
   if (out.rate) out.why_none.clear();
   return out;
+}
+
+}  // namespace
+
+SeriesTheory series_theory(const StudyDefinition& study, const PluginChoice& kernel,
+                           std::string_view metric) {
+  std::optional<PropertiesOrError> properties;
+  return theory_of(study, metric, [&]() -> const PropertiesOrError& {
+    return properties ? *properties : properties.emplace(properties_of(study, kernel));
+  });
 }
 
 std::string_view excluding_flag(StudyKind kind, std::string_view metric) {
@@ -132,6 +160,8 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
   const bool has_fill = std::find(names.begin(), names.end(), "fill_distance") != names.end();
   const std::size_t fill_index = has_fill ? study.metric_index("fill_distance") : 0;
 
+  // Each kernel's properties, rebuilt once for every series of a metric with a theory law.
+  std::map<std::string, PropertiesOrError> kernels;
   std::vector<MetricSeries> out;
   for (std::size_t g = 0; g < group_keys.size(); ++g) {
     auto indices = members[group_keys[g]];
@@ -146,7 +176,13 @@ std::vector<MetricSeries> compute_rates(const StudyDefinition& study,
       series.group = g;
       series.trials = indices;
       series.constant_within = study.constant_within;
-      series.theory = series_theory(study, trials[indices.front()].kernel, metric);
+      const auto& kernel = trials[indices.front()].kernel;
+      series.theory = theory_of(study, metric, [&]() -> const PropertiesOrError& {
+        auto found = kernels.find(kernel.label());
+        if (found == kernels.end())
+          found = kernels.emplace(kernel.label(), properties_of(study, kernel)).first;
+        return found->second;
+      });
       for (std::size_t k = 0; k < indices.size(); ++k) {
         const auto& result = results[indices[k]];
         const double x = study.abscissa == Abscissa::n ? static_cast<double>(trials[indices[k]].n)
