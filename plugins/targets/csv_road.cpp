@@ -18,10 +18,10 @@
 #include <sstream>
 #include <string_view>
 
+#include "rkhs/core/csv_text.hpp"
 #include "rkhs/core/data_root.hpp"
 #include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/targets/csv_text.hpp"
 
 namespace rkhs {
 namespace {

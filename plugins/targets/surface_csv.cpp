@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "rkhs/approx/target.hpp"
+#include "rkhs/core/csv_text.hpp"
 #include "rkhs/core/data_root.hpp"
 #include "rkhs/core/printable.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/targets/csv_text.hpp"
 
 namespace rkhs {
 namespace {

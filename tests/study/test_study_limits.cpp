@@ -205,7 +205,8 @@ amplitude = )" + values(100, 1.0, 0.01) +
   CHECK(timed_error(large + "[[expect]]\nmetric = \"power_function_sup\"\namplitud = 1.0\n"
                             "rate = -1.0\ntolerance = 0.1\n") ==
         "s.toml:17:1: expect.amplitud: unknown key (an expectation takes metric, name, tier, "
-        "xfail, theory, rate, tolerance, model, bound, constant, n_from, n_to, h_from, h_to, "
+        "xfail, theory, rate, tolerance, model, bound, constant, reference, n_from, n_to, h_from, "
+        "h_to, "
         "last, and "
         "this study's axis columns as group "
         "selectors: kernel, sigma, convention, target, target_amplitude, target_cycles, "

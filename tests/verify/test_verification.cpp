@@ -161,8 +161,10 @@ TEST_CASE("[[expect]] mistakes are errors with file:line:column", "[verification
                  Catch::Contains("no theory rate for metric 'fill_distance'"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\n")),
              Catch::Contains("expect: say what is expected"));
-  CHECK_THAT(error_of(with("metric = \"power_function_sup\"\ntheory = true\nrate = -1\n")),
-             Catch::Contains("give one of theory = true, rate = ..., bound = { ... } or constant"));
+  CHECK_THAT(
+      error_of(with("metric = \"power_function_sup\"\ntheory = true\nrate = -1\n")),
+      Catch::Contains(
+          "give one of theory = true, rate = ..., bound = { ... }, constant = ... or reference"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { min = 1, max = 0 }\n")),
              Catch::Contains("s.toml:18:8: expect.rate: min (1) is above max (0)"));
   CHECK_THAT(error_of(with("metric = \"power_function_sup\"\nrate = { low = 1 }\n")),

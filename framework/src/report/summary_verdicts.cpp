@@ -9,6 +9,22 @@
 
 namespace rkhs::report_detail {
 
+namespace {
+
+// "rate, theory, model, bound, constant or reference": the kinds, for messages.
+std::string kind_names() {
+  std::string names;
+  const auto count = std::size(expectation_kinds);
+  for (std::size_t k = 0; k < count; ++k)
+    names += (k == 0           ? ""
+              : k + 1 == count ? " or "
+                               : ", ") +
+             std::string(expectation_kind_name(expectation_kinds[k]));
+  return names;
+}
+
+}  // namespace
+
 void read_summary_verdicts(const Reader& reader, const Json& json, ResultsFolder& folder) {
   if (!json.contains("expectations") || json["expectations"].is_null()) return;
   const auto& expectations = json["expectations"];
@@ -36,16 +52,14 @@ void read_summary_verdicts(const Reader& reader, const Json& json, ResultsFolder
     e.xfail = reader.optional_text(outcomes[k], path, "xfail");
     const auto kind = reader.text(outcomes[k], path, "kind");
     bool known = false;
-    for (auto candidate : {ExpectationKind::rate, ExpectationKind::theory, ExpectationKind::model,
-                           ExpectationKind::bound})
+    for (auto candidate : expectation_kinds)
       if (expectation_kind_name(candidate) == kind) {
         e.kind = candidate;
         known = true;
       }
     if (!known)
-      reader.fail(
-          Reader::join(path, "kind"),
-          fmt::format("\"{}\" is not an expectation kind; rate, theory, model or bound", kind));
+      reader.fail(Reader::join(path, "kind"),
+                  fmt::format("\"{}\" is not an expectation kind; {}", kind, kind_names()));
     study.expectations.push_back(std::move(e));
   }
   for (std::size_t k = 0; k < outcomes.size(); ++k) {

@@ -69,8 +69,17 @@ std::string_view expectation_kind_name(ExpectationKind kind) {
     case ExpectationKind::bound: return "bound";
     case ExpectationKind::constant:
       return "constant";
+    case ExpectationKind::reference:
+      return "reference";
   }
   return "";
+}
+
+std::string ReferenceSpec::text() const {
+  std::string out = file + ", " + value_column;
+  for (std::size_t k = 0; k < where.size(); ++k)
+    out += (k == 0 ? " where " : " and ") + where[k].first + " = " + where[k].second;
+  return out;
 }
 
 }  // namespace rkhs

@@ -8,10 +8,11 @@
 #include <set>
 #include <sstream>
 
-#include "rkhs/kernel/kernel.hpp"
-#include "rkhs/study/trial_grid.hpp"
+#include "reference_values.hpp"
 #include "rkhs/core/registry.hpp"
+#include "rkhs/kernel/kernel.hpp"
 #include "rkhs/rates/theory.hpp"
+#include "rkhs/study/trial_grid.hpp"
 #include "toml_reader.hpp"
 
 namespace rkhs::detail {
@@ -59,8 +60,8 @@ class ExpectationReader {
 
  private:
   static inline const std::vector<std::string> reserved_{
-      "metric", "name",     "tier",   "xfail", "theory", "rate", "tolerance", "model",
-      "bound",  "constant", "n_from", "n_to",  "h_from", "h_to", "last"};
+      "metric", "name",     "tier",      "xfail",  "theory", "rate",   "tolerance", "model",
+      "bound",  "constant", "reference", "n_from", "n_to",   "h_from", "h_to",      "last"};
 
   // xfail = "reason": why the expectation is known not to hold, which reports repeat.
   std::string read_xfail(const toml::node& node) const {
@@ -153,22 +154,24 @@ class ExpectationReader {
     const auto* model = table.get("model");
     const auto* bound = table.get("bound");
     const auto* constant = table.get("constant");
+    const auto* reference = table.get("reference");
     const auto* tolerance = table.get("tolerance");
     if (theory && !(theory->is_boolean() && theory->as_boolean()->get())) {
       if (!theory->is_boolean())
         fail(src, theory->source(), "expect.theory", fmt::format("expected true, found {}", show(*theory)));
       theory = nullptr;  // theory = false: as if absent
     }
-    const int what = (theory ? 1 : 0) + (rate ? 1 : 0) + (bound ? 1 : 0) + (constant ? 1 : 0);
+    const int what = (theory ? 1 : 0) + (rate ? 1 : 0) + (bound ? 1 : 0) + (constant ? 1 : 0) +
+                     (reference ? 1 : 0);
     if (what > 1)
       fail(src, table.source(), "expect",
-           "give one of theory = true, rate = ..., bound = { ... } or constant = ... per "
-           "[[expect]] table");
+           "give one of theory = true, rate = ..., bound = { ... }, constant = ... or reference "
+           "= { ... } per [[expect]] table");
     if (what == 0 && !model)
       fail(src, table.source(), "expect",
            "say what is expected: theory = true, rate = -1.5 (or { min = ..., max = ... }), "
-           "model = \"exponential\", bound = { by = \"...\" }, or constant = { value = 1, "
-           "within = 1e-12 }");
+           "model = \"exponential\", bound = { by = \"...\" }, constant = { value = 1, "
+           "within = 1e-12 }, or reference = { file = \"...\", value = \"...\", within = 0.05 }");
     if (model) {
       const auto name = string_at(*model, "expect.model");
       if (name == "power_law") e.model = RateModel::power_law;
@@ -177,11 +180,12 @@ class ExpectationReader {
         fail(src, model->source(), "expect.model",
              fmt::format("found \"{}\", expected \"power_law\" (log-log) or \"exponential\" "
                          "(log-linear in n)", name));
-      if (theory || bound || constant)
+      if (theory || bound || constant || reference)
         fail(src, model->source(), "expect.model",
              theory  ? "theory = true chooses the model from the kernel's metadata: remove 'model'"
              : bound ? "a bound has no rate model: remove 'model'"
-                     : "a constant has no rate model: remove 'model'");
+             : reference ? "reference values have no rate model: remove 'model'"
+                         : "a constant has no rate model: remove 'model'");
     }
     if (tolerance) {
       e.tolerance = number_at(*tolerance, "expect.tolerance");
@@ -211,6 +215,9 @@ class ExpectationReader {
     } else if (constant) {
       e.kind = ExpectationKind::constant;
       read_constant(*constant, e);
+    } else if (reference) {
+      e.kind = ExpectationKind::reference;
+      read_reference(*reference, e);
     } else {
       e.kind = ExpectationKind::model;
     }
@@ -287,6 +294,58 @@ class ExpectationReader {
       if (!(e.constant.within >= 0))
         fail(src, within->source(), "expect.constant.within",
              fmt::format("must be >= 0 (an absolute band about value), found {}", show(*within)));
+    }
+  }
+
+  // reference = { file = "paper/table1.csv", value = "condition_number", where = { kernel =
+  // "bspline_first_order" }, within = 0.05 }; the file is read here, so its errors are found
+  // with the study file's.
+  void read_reference(const toml::node& node, Expectation& e) const {
+    const auto& src = study_.source;
+    const auto* table = node.as_table();
+    if (!table)
+      fail(src, node.source(), "expect.reference",
+           fmt::format("expected {{ file = \"paper/table1.csv\", value = \"column\", where = {{ "
+                       "column = \"...\" }}, within = 0.05 }}, found {}",
+                       show(node)));
+    for (auto&& [key, value] : *table)
+      if (key.str() != "file" && key.str() != "value" && key.str() != "where" &&
+          key.str() != "within")
+        fail(src, key.source(), fmt::format("expect.reference.{}", key.str()),
+             "unknown key (known: file, value, where, within)");
+    auto& spec = e.reference;
+    for (const auto* key : {"file", "value", "within"})
+      if (!table->contains(key))
+        fail(src, node.source(), fmt::format("expect.reference.{}", key),
+             std::string_view(key) == "file"    ? "missing: the CSV file of the published values, "
+                                                  "relative to the data root"
+             : std::string_view(key) == "value" ? "missing: the column of the published values"
+                                                : "missing: the relative tolerance of the ratio "
+                                                  "metric / reference about 1 (e.g. 0.05)");
+    spec.file = string_at(*table->get("file"), "expect.reference.file");
+    spec.value_column = string_at(*table->get("value"), "expect.reference.value");
+    spec.within = number_at(*table->get("within"), "expect.reference.within");
+    if (!(spec.within >= 0))
+      fail(src, table->get("within")->source(), "expect.reference.within",
+           fmt::format("must be >= 0 (relative: |metric / reference - 1| <= within), found {}",
+                       show(*table->get("within"))));
+    if (const auto* where = table->get("where")) {
+      const auto* selectors = where->as_table();
+      if (!selectors)
+        fail(src, where->source(), "expect.reference.where",
+             fmt::format("expected a table of column = value, found {}", show(*where)));
+      for (auto&& [key, value] : *selectors) {
+        const auto scalar = scalar_value(value);
+        if (!scalar)
+          fail(src, value.source(), fmt::format("expect.reference.where.{}", key.str()),
+               fmt::format("expected a string or a number, found {}", show(value)));
+        spec.where.emplace_back(std::string(key.str()), format_value(*scalar));
+      }
+    }
+    try {
+      read_reference_values(spec);
+    } catch (const std::invalid_argument& error) {
+      fail(src, table->get("file")->source(), "expect.reference.file", error.what());
     }
   }
 
@@ -370,6 +429,17 @@ class ExpectationReader {
                          selector.column,
                          fmt::join(std::vector<std::string>(values.begin(), values.end()), ", ")));
       }
+    }
+    if (e.kind == ExpectationKind::reference) {
+      // Every n of the reference must be an n of the study: a value nobody measures is a typo
+      // or another grid, not something to leave unjudged.
+      const auto& spec = e.reference;
+      const auto& ns = study_.n_values;
+      for (std::size_t k = 0; k < spec.n.size(); ++k)
+        if (std::find(ns.begin(), ns.end(), spec.n[k]) == ns.end())
+          fail(study_.source, table.get("reference")->source(), "expect.reference",
+               fmt::format("{} (line {}) gives n = {}, which this study does not run (n: {})",
+                           spec.file, spec.lines[k], spec.n[k], fmt::join(ns, ", ")));
     }
     if (e.kind != ExpectationKind::theory) return;
     for (const auto* group : selected) {

@@ -65,4 +65,12 @@ std::pair<bool, std::string> quasi_uniformity(int dimension, const StudyDefiniti
                                               const std::vector<TrialResult>& results,
                                               const MetricSeries& series);
 
+// reference = { ... }: judges `series` against e.reference's published values at the n where
+// `inside` holds (reference_judgement.cpp); `flags[k]` are the flags of the series' k-th trial,
+// joined, for the message on a value that is no number. Sets o.expected, found, reason,
+// verdict, window_points and effectivity_min / effectivity_max (the ratios' range).
+void judge_reference(const Expectation& e, const MetricSeries& series,
+                     const std::vector<bool>& inside, const std::vector<std::string>& flags,
+                     ExpectationOutcome& o);
+
 }  // namespace rkhs::verify_detail

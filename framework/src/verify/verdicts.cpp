@@ -187,6 +187,11 @@ std::string verdict_numbers(const ExpectationOutcome& outcome) {
     if (std::isnan(o.effectivity_max)) return std::string("no usable point");
     return fmt::format("effectivity up to {:.3g} against at most 1", o.effectivity_max);
   }
+  if (o.expectation->kind == ExpectationKind::reference) {
+    if (std::isnan(o.effectivity_max)) return std::string("no ratio");
+    return fmt::format("ratio to the reference {:.4g} to {:.4g}", o.effectivity_min,
+                       o.effectivity_max);
+  }
   if (std::isnan(o.rate)) return std::string("no fit");
   // 3 significant digits: a rate of -0.99999 with its CI is "-1 [-1, -1]".
   std::string out = fmt::format("rate {:.3g}", o.rate + 0.0);

@@ -73,9 +73,20 @@ class Verifier {
       case ExpectationKind::constant:
         judge_constant(e, series, o);
         break;
+      case ExpectationKind::reference: {
+        std::vector<std::string> flags;
+        for (auto t : series.trials) {
+          std::string joined;
+          for (const auto& flag : results_[t].flags) joined += (joined.empty() ? "" : ", ") + flag;
+          flags.push_back(std::move(joined));
+        }
+        judge_reference(e, series, window_members(e, series), flags, o);
+        break;
+      }
     }
     if (o.verdict != Verdict::pass && e.kind != ExpectationKind::bound &&
-        e.kind != ExpectationKind::constant && !series.constant())
+        e.kind != ExpectationKind::constant && e.kind != ExpectationKind::reference &&
+        !series.constant())
       o.advice =
           verdict_advice(series, o.window_points, study_.abscissa, fill_distance_scaling(series));
     note_missing_excitation(series, o);

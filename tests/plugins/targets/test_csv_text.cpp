@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/core/csv_text.hpp"
 #include "rkhs/core/sha256.hpp"
-#include "rkhs/targets/csv_text.hpp"
 
 using rkhs::csv_text::Lines;
 

@@ -7,7 +7,7 @@
 //   kernel = "bspline"                # group selector: any axis column of trials.csv
 //   degree = 1                        #   (a list accepts any of its values)
 //   theory = true                     # what is expected: theory = true | rate | model | bound
-//                                     #   | constant
+//                                     #   | constant | reference
 //   tier = "quick"                    # optional: the tiers this expectation belongs to
 //   xfail = "why"                     # optional: a known deviation (a fail does not fail check)
 //
@@ -36,12 +36,18 @@ struct AxisSelector {
 };
 
 enum class ExpectationKind {
-  rate,      ///< the fitted rate lies in an interval
-  theory,    ///< the rate the kernel's metadata predicts (rkhs/rates/theory.hpp)
-  model,     ///< a rate model describes the series better than the other
-  bound,     ///< metric <= constant * by [* times] at every n
-  constant,  ///< the series does not vary with n (at a given value, or any)
+  rate,       ///< the fitted rate lies in an interval
+  theory,     ///< the rate the kernel's metadata predicts (rkhs/rates/theory.hpp)
+  model,      ///< a rate model describes the series better than the other
+  bound,      ///< metric <= constant * by [* times] at every n
+  constant,   ///< the series does not vary with n (at a given value, or any)
+  reference,  ///< the series equals published values (a CSV file) within a relative tolerance
 };
+
+/// Every kind, in the order of the enum (for reading a kind back by its name).
+inline constexpr ExpectationKind expectation_kinds[] = {
+    ExpectationKind::rate,  ExpectationKind::theory,   ExpectationKind::model,
+    ExpectationKind::bound, ExpectationKind::constant, ExpectationKind::reference};
 
 /// constant = true: the series is constant (rkhs/rates/asymptotic.hpp, detect_constant);
 /// constant = { value = v, within = w }: |metric(n) - v| <= w + floor(n) at every usable n.
@@ -58,6 +64,24 @@ struct BoundSpec {
   std::string times;  ///< "" when absent (needs by)
   double constant = 1.0;
   std::optional<double> at_least;  ///< the lower constant; absent: one-sided
+};
+
+/// reference = { file = "paper/table1.csv", value = "condition_number", where = { kernel =
+/// "bspline_first_order" }, within = 0.05 }: at every n of the file's rows that `where` selects,
+/// |metric(n) / value(n) - 1| <= within + the measured value's relative floor. The file (below
+/// the data root, rkhs/core/data_root.hpp) is read when the study file is: a header line naming
+/// the columns, a column `n` and the `value` column; `where` compares each named column's text
+/// with the value as written (numbers numerically). docs/verification.md, "Reference values".
+struct ReferenceSpec {
+  std::string file;                                        ///< as the study file names it
+  std::string value_column;                                ///< the column of the published values
+  std::vector<std::pair<std::string, std::string>> where;  ///< column, value as written
+  double within = 0.0;          ///< relative half-width about a ratio of 1
+  std::vector<std::size_t> n;   ///< the selected rows' n, ascending and distinct
+  std::vector<double> values;   ///< their published values (finite, nonzero)
+  std::vector<unsigned> lines;  ///< each row's line in the file, for messages
+  /// "paper/table1.csv, condition_number where kernel = bspline_first_order"
+  std::string text() const;
 };
 
 /// One [[expect]] table, validated against the study it belongs to.
@@ -78,6 +102,7 @@ struct Expectation {
   double tolerance = 0.1;           ///< rate = x and theory: half-width of the accepted interval
   BoundSpec bound;                  ///< bound only
   ConstantSpec constant;            ///< constant only
+  ReferenceSpec reference;          ///< reference only
   /// n_from, n_to, h_from, h_to, last: the points judged (a rate: the window of the fit,
   /// replacing the automatic one; a bound: the n where it must hold). Empty: the study's.
   FitWindow window;
@@ -99,7 +124,8 @@ struct Expectation {
   std::string id() const;
 };
 
-/// The kind as the study file's key names it: "rate", "theory", "model", "bound", "constant".
+/// The kind as the study file's key names it: "rate", "theory", "model", "bound", "constant",
+/// "reference".
 std::string_view expectation_kind_name(ExpectationKind kind);
 
 /// The default tolerance of rate = x and theory expectations: 0.1 on the slope.

@@ -55,7 +55,8 @@ struct ExpectationOutcome {
   // The judged numbers (NaN where they do not apply), for machine-readable reports.
   double rate = 0.0, ci_low = 0.0, ci_high = 0.0;
   double accepted_low = 0.0, accepted_high = 0.0;
-  double effectivity_min = 0.0, effectivity_max = 0.0;  ///< bounds only
+  /// A bound: the effectivities metric / bound; a reference: the ratios metric / reference.
+  double effectivity_min = 0.0, effectivity_max = 0.0;
   std::size_t window_points = 0;
   std::size_t window_from = 0, window_to = 0;  ///< n range of the window (0 when none)
 };

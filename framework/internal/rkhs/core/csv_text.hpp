@@ -1,6 +1,7 @@
 #pragma once
 // Reading a CSV text so that every error can name the file's own line and column: the line
-// splitter and field splitter shared by the CSV targets (`csv`, `surface_csv`), reading a file
+// splitter and field splitter shared by the CSV targets (`csv`, `surface_csv`) and the
+// reference values of expectations (study/reference_values.cpp), reading a file
 // a block at a time with the line limit applied as it is read (its SHA-256, computed on the
 // way, is the target's provenance), and fields quoted in messages (control characters
 // escaped). A file is refused by type and size before it is read (open_file), and never more
