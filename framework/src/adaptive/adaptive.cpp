@@ -126,6 +126,7 @@ RoadTrial::RoadTrial(const AnyKernel& kernel_, const TargetFunction& target_,
   d = A.rows();
   const Eigen::MatrixXd Q = settings.q.for_dimension(d);
   P = solve_lyapunov(A, Q).P;
+  set_plant_hypotheses(A, Q, P, out);
 
   // The road that drives the plant: f itself, or its projection Pi_n f (then f lies in H_n).
   road_basis = kernel.basis(centres);
@@ -253,6 +254,28 @@ void RoadTrial::measure_final(const Integrator* reference) {
     const double weight = domain.length / static_cast<double>(grid.size());
     out.metrics[M::path_l2_error] = std::sqrt(weight * on);
     out.metrics[M::off_path_l2_error] = std::sqrt(weight * off);
+  }
+  // Theorem 3's hypothesis (i): at constant speed the time average of k(s(t), s(t)) is its mean
+  // over the part of the track the path covers (all of it on laps), so the integral over
+  // [0, T] is T times that mean; its floor, the round-off of the kernel's values.
+  {
+    const Eigen::VectorXd diagonal = kernel.diagonal(grid);
+    double sum = 0;
+    std::size_t covered = 0;
+    for (std::size_t k = 0; k < grid.size(); ++k)
+      if (!settings.shuttle() || (grid[k] >= settings.shuttle_from &&
+                                  grid[k] <= settings.shuttle_from + settings.shuttle_length)) {
+        sum += diagonal(static_cast<Eigen::Index>(k));
+        ++covered;
+      }
+    // In the periodic limit (laps = "limit") the horizon is infinite and so is the integral
+    // whenever k(s, s) > 0: NaN, not an overflow.
+    const double horizon = settings.final_time_or_laps(domain.length);
+    if (covered > 0 && std::isfinite(horizon)) {
+      out.metrics[M::kernel_diagonal_l1] = horizon * sum / static_cast<double>(covered);
+      out.floors[M::kernel_diagonal_l1] = 4.0 * std::numeric_limits<double>::epsilon() *
+                                          std::abs(out.metrics[M::kernel_diagonal_l1]);
+    }
   }
   set_decay_rates();
   set_integration_floors(

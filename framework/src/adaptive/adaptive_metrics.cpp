@@ -65,6 +65,30 @@ TimeSample adaptive_sample(double t, const double* z, Eigen::Index d,
   return {t, e.norm(), 0.5 * e.dot(P * e) + 0.5 * gamma * weighted};
 }
 
+void set_plant_hypotheses(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q,
+                          const Eigen::MatrixXd& P, AdaptiveMeasurement& out) {
+  using M = AdaptiveMetric;
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  const double d = static_cast<double>(A.rows());
+  // A symmetric eigensolver's eigenvalues are exact for a matrix within a few d eps ||S|| of S.
+  const Eigen::MatrixXd minus_symmetric = -0.5 * (A + A.transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> coercivity(minus_symmetric,
+                                                                  Eigen::EigenvaluesOnly);
+  out.metrics[M::coercivity_of_minus_a] = coercivity.eigenvalues()(0);
+  out.floors[M::coercivity_of_minus_a] = 4.0 * d * eps * minus_symmetric.norm();
+  const Eigen::MatrixXd away = P - Eigen::MatrixXd::Identity(P.rows(), P.cols());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> distance(0.5 * (away + away.transpose()),
+                                                                Eigen::EigenvaluesOnly);
+  out.metrics[M::lyapunov_p_distance_from_identity] = distance.eigenvalues().cwiseAbs().maxCoeff();
+  // P's error from its residual R = A^T P + P A + Q: ||R|| / (2 min |Re lambda(A)|), the norm of
+  // the inverse Lyapunov operator for a normal A (an estimate otherwise), and never below the
+  // round-off of P itself.
+  const Eigen::MatrixXd residual = A.transpose() * P + P * A + Q;
+  const double decay = A.eigenvalues().real().cwiseAbs().minCoeff();
+  out.floors[M::lyapunov_p_distance_from_identity] =
+      std::max(4.0 * d * eps * P.norm(), decay > 0 ? residual.norm() / (2.0 * decay) : 0.0);
+}
+
 Eigen::VectorXd set_shared_metrics(const FinalState& state, AdaptiveMeasurement& out) {
   using M = AdaptiveMetric;
   auto& metrics = out.metrics;

@@ -74,6 +74,12 @@ struct FinalState {
 /// floors of the static part (set_static_floors). Returns the residual f - fhat(T) on the grid.
 Eigen::VectorXd set_shared_metrics(const FinalState& state, AdaptiveMeasurement& out);
 
+/// Theorem 3's hypothesis (ii), which the plant and the law decide before any run:
+/// coercivity_of_minus_a = lambda_min(-(A + A^T) / 2) and lyapunov_p_distance_from_identity =
+/// ||P - I||_2 (P the solution of A^T P + P A = -Q), with their floors.
+void set_plant_hypotheses(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q,
+                          const Eigen::MatrixXd& P, AdaptiveMeasurement& out);
+
 /// The cost metrics: steps, rejected_steps, segments, rhs_evaluations, jacobian_evaluations.
 void set_cost_metrics(const IntegrationStats& stats, std::size_t rhs_evaluations,
                       std::size_t jacobian_evaluations, AdaptiveMeasurement& out);

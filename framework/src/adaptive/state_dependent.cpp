@@ -354,6 +354,7 @@ AdaptiveMeasurement measure_state_dependent(const AnyKernel& kernel, const Targe
   const Eigen::Index d = A.rows();
   const Eigen::MatrixXd Q = settings.q.for_dimension(d);
   const Eigen::MatrixXd P = solve_lyapunov(A, Q).P;
+  set_plant_hypotheses(A, Q, P, out);
   const PlantRoad road(kernel, target, centres, sections, alpha_star, settings.projected_road);
 
   std::unique_ptr<AdaptiveSystem> made;

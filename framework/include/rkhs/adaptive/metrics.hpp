@@ -57,6 +57,9 @@ enum class AdaptiveMetric : std::size_t {
   averaged_decay_rate,
   pe_decay_ratio,
   visited_rms_error,
+  kernel_diagonal_l1,
+  coercivity_of_minus_a,
+  lyapunov_p_distance_from_identity,
 };
 
 template <>
@@ -197,6 +200,22 @@ struct MetricTable<AdaptiveMetric> {
        "state-dependent plants: the root mean square of f - fhat(T) at the read-outs sampled over "
        "the second half of the run, where the trajectory went (what it can teach); NaN otherwise",
        true, ""}, M::visited_rms_error},
+      // The hypotheses of Theorem 3 (PE => ||f - fhat||_H -> 0; docs/theorems.md): (i) k(x(.),
+      // x(.)) in L^1(0, inf), or (ii) -A coercive with Gamma = P = I (law_gamma is a column).
+      { {"kernel_diagonal_l1", "L^1 norm of k(x, x) over the horizon", F::round_off, "[k] s",
+       "int_0^T k(x(t), x(t)) dt: T times the mean of k(s, s) over the part of the track the "
+       "path covers (constant speed); it grows like T unless k(x, x) -> 0, so hypothesis (i) "
+       "of Theorem 3 fails on every path that keeps k(x, x) > 0; NaN in the periodic limit "
+       "(laps = \"limit\", where it is infinite) and for state-dependent plants",
+       true, ""}, M::kernel_diagonal_l1},
+      { {"coercivity_of_minus_a", "coercivity constant of -A", F::round_off, "1/s",
+       "c = lambda_min(-(A + A^T) / 2), the largest c with (-A v, v) >= c |v|^2: hypothesis (ii) "
+       "of Theorem 3 needs c > 0",
+       false, ""}, M::coercivity_of_minus_a},
+      { {"lyapunov_p_distance_from_identity", "distance of P from I", F::round_off, "1",
+       "||P - I||_2, P the solution of A^T P + P A = -Q that the law uses: hypothesis (ii) of "
+       "Theorem 3 needs P = I (0)",
+       false, ""}, M::lyapunov_p_distance_from_identity},
   });
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());
