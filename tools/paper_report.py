@@ -18,6 +18,7 @@ the reason given here.
 import argparse
 import collections
 import csv
+import functools
 import json
 import math
 import pathlib
@@ -44,9 +45,15 @@ def toml(path):
         return tomllib.load(f)
 
 
+@functools.cache
+def plugin_listing(exe, kind):
+    """`rkhs-study list KIND`, run once per kind."""
+    return subprocess.run([exe, "list", kind], capture_output=True, text=True, check=True).stdout
+
+
 def plugin_default(exe, kind, plugin, parameter):
     """A plugin parameter's default as `rkhs-study list KIND` prints it."""
-    text = subprocess.run([exe, "list", kind], capture_output=True, text=True, check=True).stdout
+    text = plugin_listing(exe, kind)
     inside = False
     for line in text.splitlines():
         if re.match(r"^  \S", line):
@@ -261,12 +268,12 @@ def theorem3_section(results):
     trials = [t for t in read_trials(folder) if t["status"] == "ok"]
     value = lambda t, m: float(t[m])
     floor = lambda t, m: float(t[m + "_floor"]) if t.get(m + "_floor") not in (None, "") else 0.0
-    by_laps = collections.defaultdict(list)
+    by_laps = collections.defaultdict(dict)  # laps -> n -> trial
     for t in trials:
-        by_laps[float(t["laps"])].append(t)
+        by_laps[float(t["laps"])][int(t["n"])] = t
     short, long_ = min(by_laps), max(by_laps)
-    growth = [value(b, "kernel_diagonal_l1") / value(a, "kernel_diagonal_l1")
-              for a, b in zip(by_laps[short], by_laps[long_])]
+    growth = [value(by_laps[long_][n], "kernel_diagonal_l1") /
+              value(by_laps[short][n], "kernel_diagonal_l1") for n in by_laps[short]]
     c = [value(t, "coercivity_of_minus_a") for t in trials]
     c_floor = max(floor(t, "coercivity_of_minus_a") for t in trials)
     distance = [value(t, "lyapunov_p_distance_from_identity") for t in trials]
@@ -274,7 +281,7 @@ def theorem3_section(results):
     gammas = sorted({float(t["law_gamma"]) for t in trials})
     summary = json.loads((folder / "summary.json").read_text())
     pe = summary["expectations"]["outcomes"][0]
-    pe_levels = {int(t["n"]): value(t, "pe_level") for t in by_laps[short]}
+    pe_levels = {n: value(t, "pe_level") for n, t in by_laps[short].items()}
     verdict = lambda fails: "**fails**" if fails else "holds"
     rows = [
         ("strong persistence of excitation in H (Definition 1)",

@@ -242,14 +242,18 @@ void RoadTrial::measure_final(const Integrator* reference) {
   const Eigen::VectorXd alpha = z.tail(coefficients);
   const Eigen::VectorXd estimate = on_grid(alpha);
   const Eigen::VectorXd residual = measure_against_limit(f, alpha, estimate);
+  // Whether grid point k lies on the part of the track the path covers (all of it on laps).
+  const double from = settings.shuttle_from, to = from + settings.shuttle_length;
+  const auto on_path = [&](std::size_t k) {
+    return !settings.shuttle() || (grid[k] >= from && grid[k] <= to);
+  };
   if (settings.shuttle()) {
     // The error on and off the path's part of the track, on the grid points there (weights
     // L / M: the rectangle rule of the periodic grid, the trapezoid's interior on an interval).
-    const double from = settings.shuttle_from, to = from + settings.shuttle_length;
     double on = 0, off = 0;
     for (std::size_t k = 0; k < grid.size(); ++k) {
       const double r = residual(static_cast<Eigen::Index>(k));
-      (grid[k] >= from && grid[k] <= to ? on : off) += r * r;
+      (on_path(k) ? on : off) += r * r;
     }
     const double weight = domain.length / static_cast<double>(grid.size());
     out.metrics[M::path_l2_error] = std::sqrt(weight * on);
@@ -263,8 +267,7 @@ void RoadTrial::measure_final(const Integrator* reference) {
     double sum = 0;
     std::size_t covered = 0;
     for (std::size_t k = 0; k < grid.size(); ++k)
-      if (!settings.shuttle() || (grid[k] >= settings.shuttle_from &&
-                                  grid[k] <= settings.shuttle_from + settings.shuttle_length)) {
+      if (on_path(k)) {
         sum += diagonal(static_cast<Eigen::Index>(k));
         ++covered;
       }
