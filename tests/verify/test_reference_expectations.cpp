@@ -1,5 +1,7 @@
 // reference = { ... } expectations: a metric against published values from a CSV file, n by n
 // (docs/verification.md, "Reference values").
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -35,7 +37,8 @@ sigma = 1.0
 class PublishedValues {
  public:
   explicit PublishedValues(const std::string& csv)
-      : root_(fs::temp_directory_path() / "rkhs_reference_values") {
+      // One folder per process: ctest runs each test case as its own process, side by side.
+      : root_(fs::temp_directory_path() / ("rkhs_reference_values_" + std::to_string(::getpid()))) {
     fs::create_directories(root_);
     std::ofstream(root_ / "published.csv") << csv;
     set_data_root(root_);

@@ -1,6 +1,8 @@
 // The surface_csv target: a road surface z(u, v) on a regular grid, bilinear between samples,
 // against closed forms (a bilinear surface is reproduced exactly) and the shipped Belgian block
 // long sections; malformed grids are refused at their line and column.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -19,7 +21,9 @@ namespace {
 
 class SurfaceDirectory {
  public:
-  SurfaceDirectory() : path_(fs::temp_directory_path() / "rkhs_surface_csv") {
+  // One folder per process: ctest runs each test case as its own process, side by side.
+  SurfaceDirectory()
+      : path_(fs::temp_directory_path() / ("rkhs_surface_csv_" + std::to_string(::getpid()))) {
     fs::remove_all(path_);
     fs::create_directories(path_);
     set_data_root(path_);
