@@ -9,6 +9,11 @@ result store) and prints the page. With --results DIR it reads results written b
 of running. tests/docs/check_paper_doc.py runs it and compares the page with docs/paper.md, so
 the page cannot drift from what the studies show.
 
+With --out OUT it prints nothing and writes the report as files instead: OUT/paper.md (the page
+above), OUT/paper.html and OUT/paper.tex (the same page rendered by tools/report_render.py, with
+a last section of the plots the studies wrote, copied to OUT/figures/<study name>/). The studies
+then run with their plots (SVG, PNG and PDF by gnuplot); a study that wrote none shows none.
+
 Verdicts: *reproduced* (the study's reference expectation passes), *contradicted* and *not
 reproducible* (it fails, and its `xfail` reason says which and why); a parameter is *as stated*
 when the studies that run the paper's setting use the paper's value, *changed* otherwise, with
@@ -23,9 +28,12 @@ import json
 import math
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 import tomllib
+
+import report_render
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 DATA = ROOT / "studies" / "data" / "paper"
@@ -127,10 +135,10 @@ def show(value):
     return f"{value:.4g}"
 
 
-def run_studies(exe, work):
+def run_studies(exe, work, plots):
     studies = sorted(PAPER_STUDIES.glob("*.toml"))
     subprocess.run([exe, "check", *map(str, studies), "--out", str(work), "--no-store",
-                    "--no-plots", "--threads", "2"], cwd=ROOT, check=True,
+                    *([] if plots else ["--no-plots"]), "--threads", "2"], cwd=ROOT, check=True,
                    stdout=subprocess.DEVNULL)
 
 
@@ -290,7 +298,7 @@ def theorem3_section(results):
          verdict(pe["outcome"] == "passed" and pe_levels and min(pe_levels.values()) > 0),
          "the level in H_n falls like n^-2 as H_n grows towards H: no gamma > 0 bounds it in H, so "
          "the PE the theorem asks cannot hold in H along a one-dimensional path; it holds in each "
-         "H_n, where ||Pi_n f - fhat||_H decays at the averaged rate (studies/pe_decay.toml)"),
+         "H_n, where \\|\\|Pi_n f - fhat\\|\\|_H decays at the averaged rate (studies/pe_decay.toml)"),
         ("(i) k(x(.), x(.)) in L^1(0, inf)",
          f"kernel_diagonal_l1 at {long_:g} laps is {min(growth):.4g} to {max(growth):.4g} times "
          f"its value at {short:g} (the horizon {long_ / short:g} times)",
@@ -454,23 +462,71 @@ belgian_block.toml) but no comparison with the paper's numbers here yet.
 """
 
 
+def copy_figures(results, out):
+    """The plots of every paper study in `results`, copied to OUT/figures/<study name>/ in all
+    the formats written: (study name, plot name) pairs, sorted."""
+    figures = []
+    for svg in sorted(results.glob("*/plots/*.svg")):
+        study = svg.parent.parent.name
+        target = out / "figures" / study
+        target.mkdir(parents=True, exist_ok=True)
+        for drawn in sorted(svg.parent.glob(svg.stem + ".*")):
+            if drawn.suffix in (".svg", ".pdf", ".png"):
+                shutil.copyfile(drawn, target / drawn.name)
+        figures.append((study, svg.stem))
+    return figures
+
+
+def figures_section(figures):
+    """The plots the studies wrote, study by study (HTML and LaTeX only: docs/paper.md has none)."""
+    out = ["", "## Figures: the studies' plots", "",
+           "Every plot the paper studies wrote (`rkhs-study check` draws them with gnuplot from "
+           "the same results as the tables above), study by study. They are rkhs-study's "
+           "measurements, not redrawings of the paper's figures." if figures else
+           "The studies wrote no plots (gnuplot missing, or the results were written with "
+           "`--no-plots`)."]
+    for study in sorted({s for s, _ in figures}):
+        out += ["", f"### {study}"]
+        for name in (name for s, name in figures if s == study):
+            out += ["", f"![{study}: {name}](figures/{study}/{name}.svg)"]
+    return out
+
+
+def write_report(page, results, out):
+    """OUT/paper.md, OUT/paper.html and OUT/paper.tex, with the figures section appended to the
+    last two."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "paper.md").write_text(page)
+    rendered = page + "\n".join(figures_section(copy_figures(results, out))) + "\n"
+    (out / "paper.html").write_text(report_render.to_html(rendered))
+    (out / "paper.tex").write_text(report_render.to_latex(rendered, out))
+    for name in ("paper.md", "paper.html", "paper.tex"):
+        print(out / name)
+
+
 def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--exe", required=True, help="the rkhs-study executable")
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--work", help="run the paper studies, writing their results here")
     group.add_argument("--results", help="read results written before (DIR/<study name>)")
+    parser.add_argument("--out", help="write paper.md, paper.html, paper.tex and figures/ here "
+                                      "instead of printing the page")
     args = parser.parse_args(argv)
     exe = str(pathlib.Path(args.exe).resolve())
     results = pathlib.Path(args.work or args.results)
     if args.work:
-        run_studies(exe, results)
+        run_studies(exe, results, plots=args.out is not None)
     printed = printed_table1()
     lines = [HEADER] + table1_section(results, printed) + readings_section(results, printed)
     lines += measured_road_section(results) + condition_claim_section(results)
     lines += theorem3_section(results)
     lines += parameters_section(exe) + [NOT_YET]
-    sys.stdout.write("\n".join(lines).rstrip("\n") + "\n")
+    page = "\n".join(lines).rstrip("\n") + "\n"
+    if args.out:
+        write_report(page, results, pathlib.Path(args.out))
+    else:
+        sys.stdout.write(page)
 
 
 if __name__ == "__main__":
