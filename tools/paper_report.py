@@ -532,6 +532,101 @@ def condition_claim_section(results):
     return out
 
 
+def sig(value, digits=2):
+    """A value to `digits` significant digits (stable across processors)."""
+    return f"{value:.{digits}g}"
+
+
+def theorem4_section(results):
+    """Theorem 4: the gaps of the finite estimators, against n and against the horizon."""
+    folder = results / "paper_theorem4"
+    trials = [t for t in read_trials(folder) if t["status"] == "ok"]
+    outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
+    label = lambda t: (f"Gaussian sigma = {float(t['sigma']):g}" if t["kernel"] == "gaussian"
+                       else f"B-spline p = {t['degree']}")
+    gaps = collections.defaultdict(dict)  # (kernel, n) -> laps -> trial
+    for t in trials:
+        gaps[(label(t), int(t["n"]))][float(t["laps"])] = t
+    laps = sorted({float(t["laps"]) for t in trials})
+    shown = lambda t: ("at its floor" if "estimate_gap_H_at_floor" in t["flags"]
+                       else sig(float(t["estimate_gap_H"])))
+    out = ["", "## Theorem 4: the finite-dimensional estimators converge, and the horizon", "",
+           "Study `studies/paper/theorem4.toml`: the quarter car, v = 1e-4 m/s, Gamma = 2e4, the "
+           "rkhs_embedding law against the estimator of the interpolation projection onto n "
+           "uniform centres; the Gaussian (sigma = 1, H_32 standing in for H: "
+           "`resolution = 32`) and B-splines p = 1 (J = 5); horizons of "
+           f"{', '.join(f'{l:g}' for l in laps)} laps. estimate_gap_H = sup_t "
+           "\\|\\|fhat - Pi_j^* fhat_j\\|\\|_H against \\|\\|I - Pi_j\\|\\|_{H -> C}; growth: the gap "
+           f"after {laps[-1]:g} laps over the gap after {laps[0]:g}.", "",
+           "| kernel | n | norm \\|\\|I - Pi_j\\|\\| | " +
+           " | ".join(f"gap, laps = {l:g}" for l in laps) + " | growth |",
+           "|---|---|---|" + "---|" * len(laps) + "---|"]
+    growths = []
+    for (kernel, n), by_laps in sorted(gaps.items()):
+        first, last = by_laps[laps[0]], by_laps[laps[-1]]
+        if "estimate_gap_H_at_floor" in first["flags"] + last["flags"]:
+            growth = "-"
+        else:
+            g = float(last["estimate_gap_H"]) / float(first["estimate_gap_H"])
+            growths.append(g)
+            growth = sig(g)
+        out.append(f"| {kernel} | {n} | {sig(float(first['projection_norm_H_to_C']))} | " +
+                   " | ".join(shown(by_laps[l]) for l in laps) + f" | {growth} |")
+    out += ["", "| expectation | groups | verdict |", "|---|---|---|"]
+    names = list(dict.fromkeys(o["expectation_name"] for o in outcomes))
+    for name in names:
+        mine = [o for o in outcomes if o["expectation_name"] == name]
+        verdicts = sorted({verdict_of(o) for o in mine})
+        out.append(f"| {name.replace('|', chr(92) + '|')} | {len(mine)} | "
+                   f"**{', '.join(verdicts)}** |")
+    # How the gap grows with T: e^{C T} would multiply it by the same factor every lap.
+    out += ["", f"**Horizon.** From {laps[0]:g} to {laps[-1]:g} laps (T {laps[-1] / laps[0]:g} "
+            f"times longer) the gap at fixed n grows by a factor {sig(min(growths))} to "
+            f"{sig(max(growths))}, most of it in the first laps: bounded in T, neither linear nor "
+            "exponential. The proof's Gronwall bound, C_4 \\|\\|I - Pi_j\\|\\|^2 e^{C_2 T}, is "
+            "valid but far from sharp on this example: the error system is stable (Theorem 2), "
+            "so the gap does not compound. **Verdict: reproduced** (the gaps fall with n at "
+            "every horizon, at the projection norm's rate or faster for the B-spline)."]
+    return out
+
+
+def figures_10_12_section(results):
+    """Figures 10 to 12's estimates on the measured road, after one lap and several."""
+    folder = results / "paper_figures_10_12"
+    outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
+    errors = collections.defaultdict(dict)  # (kernel, laps) -> n -> l2_error
+    for t in read_trials(folder):
+        kernel = ("Gaussian sigma = 0.1" if t["kernel"] == "gaussian"
+                  else f"B-spline p = {t['degree']}")
+        errors[(kernel, float(t["laps"]))][int(t["n"])] = (
+            float(t["l2_error"]) if t["status"] == "ok" else math.nan)
+    shown = [35, 65, 95, 140]
+    out = ["", "## Figures 10 to 12: the estimates on a measured road, one lap and several", "",
+           "The paper plots fhat_n for n = 35..140 after one lap (Gaussian, second-order "
+           "B-splines) and after multiple laps (first-order B-splines), without numbers; the "
+           "claim compared is that the estimates approach the road as n grows and with the laps. "
+           "Study `studies/paper/figures_10_12.toml`: the Belgian block profile (the paper's "
+           "road is not published), the configuration of studies/belgian_block.toml (rkhs law, "
+           "Gamma = 2e4, v = 1e-5 m/s, sigma = 0.1), 1 and 3 laps. L2 errors in metres; "
+           "\\|\\|f\\|\\| = 0.0996.", "",
+           "| kernel | laps | " + " | ".join(f"l2_error, n = {n}" for n in shown) + " |",
+           "|---|---|" + "---|" * len(shown)]
+    for (kernel, laps), by_n in sorted(errors.items()):
+        out.append(f"| {kernel} | {laps:g} | " +
+                   " | ".join(sig(by_n[n]) for n in shown) + " |")
+    out += ["", "| claim | verdict | why |", "|---|---|---|"]
+    for o in outcomes:
+        why = (o["xfail"].split(": ", 1)[1].replace("|", "\\|") if o["xfail"] else
+               "holds at every n" if o["outcome"] == "passed" else o["outcome"])
+        out.append(f"| {o['expectation_name']} | **{verdict_of(o)}** | {why} |")
+    out += ["", "With the laps every estimate but the second-order B-spline's approaches the road; "
+            "with n none does beyond n = 65: after one or three laps learning time, not the "
+            "number of centres, limits the error (the interpolant of the same n reaches 0.010 at "
+            "n = 140). The paper's pictures cannot be compared on its own road; on this one the "
+            "claim holds for the laps and is contradicted for n."]
+    return out
+
+
 HEADER = """# The paper, item by item
 
 <!-- Generated by tools/paper_report.py from the studies in studies/paper/ and the paper's
@@ -557,8 +652,6 @@ numbers).
 NOT_YET = """
 ## Items without a verdict yet
 
-- Figures 10 to 12's estimates themselves after one lap and many (the adaptive estimator on the
-  measured road: studies/belgian_block.toml runs it in kind, after 1 to 10 laps).
 - Theorem 1 (Lipschitz dependence on the initial data).
 
 These have studies in kind (docs/theorems.md, studies/paper_literal.toml, paper_synthetic.toml,
@@ -626,6 +719,8 @@ def main(argv):
     lines += figures_7_8_section(results)
     lines += measured_road_section(results) + condition_claim_section(results)
     lines += theorem2_section(results) + theorem3_section(results)
+    lines += theorem4_section(results)
+    lines += figures_10_12_section(results)
     lines += parameters_section(exe) + [NOT_YET]
     page = "\n".join(lines).rstrip("\n") + "\n"
     if args.out:
