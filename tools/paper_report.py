@@ -561,7 +561,7 @@ def theorem4_section(results):
            "| kernel | n | norm \\|\\|I - Pi_j\\|\\| | " +
            " | ".join(f"gap, laps = {l:g}" for l in laps) + " | growth |",
            "|---|---|---|" + "---|" * len(laps) + "---|"]
-    growths = []
+    growths, late = [], []
     for (kernel, n), by_laps in sorted(gaps.items()):
         first, last = by_laps[laps[0]], by_laps[laps[-1]]
         if "estimate_gap_H_at_floor" in first["flags"] + last["flags"]:
@@ -569,6 +569,7 @@ def theorem4_section(results):
         else:
             g = float(last["estimate_gap_H"]) / float(first["estimate_gap_H"])
             growths.append(g)
+            late.append(float(last["estimate_gap_H"]) / float(by_laps[laps[-2]]["estimate_gap_H"]))
             growth = sig(g)
         out.append(f"| {kernel} | {n} | {sig(float(first['projection_norm_H_to_C']))} | " +
                    " | ".join(shown(by_laps[l]) for l in laps) + f" | {growth} |")
@@ -582,8 +583,9 @@ def theorem4_section(results):
     # How the gap grows with T: e^{C T} would multiply it by the same factor every lap.
     out += ["", f"**Horizon.** From {laps[0]:g} to {laps[-1]:g} laps (T {laps[-1] / laps[0]:g} "
             f"times longer) the gap at fixed n grows by a factor {sig(min(growths))} to "
-            f"{sig(max(growths))}, most of it in the first laps: bounded in T, neither linear nor "
-            "exponential. The proof's Gronwall bound, C_4 \\|\\|I - Pi_j\\|\\|^2 e^{C_2 T}, is "
+            f"{sig(max(growths))}, and from {laps[-2]:g} to {laps[-1]:g} laps by at most "
+            f"{math.ceil(100 * (max(late) - 1))} %: levelling off, far below linear growth in T "
+            "and not exponential. The proof's Gronwall bound, C_4 \\|\\|I - Pi_j\\|\\|^2 e^{C_2 T}, is "
             "valid but far from sharp on this example: the error system is stable (Theorem 2), "
             "so the gap does not compound. **Verdict: reproduced** (the gaps fall with n at "
             "every horizon, at the projection norm's rate or faster for the B-spline)."]
