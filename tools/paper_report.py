@@ -556,7 +556,7 @@ def theorem4_section(results):
            "uniform centres; the Gaussian (sigma = 1, H_32 standing in for H: "
            "`resolution = 32`) and B-splines p = 1 (J = 5); horizons of "
            f"{', '.join(f'{l:g}' for l in laps)} laps. estimate_gap_H = sup_t "
-           "\\|\\|fhat - Pi_j^* fhat_j\\|\\|_H against \\|\\|I - Pi_j\\|\\|_{H -> C}; growth: the gap "
+           "\\|\\|fhat - Pi_j^\\* fhat_j\\|\\|_H against \\|\\|I - Pi_j\\|\\|_{H -> C}; growth: the gap "
            f"after {laps[-1]:g} laps over the gap after {laps[0]:g}.", "",
            "| kernel | n | norm \\|\\|I - Pi_j\\|\\| | " +
            " | ".join(f"gap, laps = {l:g}" for l in laps) + " | growth |",
