@@ -203,6 +203,8 @@ Eigen::VectorXd RoadTrial::on_grid(const Eigen::VectorXd& c) const {
 void RoadTrial::sample(double t, const double* state) {
   out.samples.push_back(adaptive_sample(t, state, d, coefficients_star, P, gamma,
                                         gram_inverse ? &fixed.gram : nullptr, largest_state_pair));
+  if (settings.initial_data_dependence && engine == AdaptiveEngine::time_stepping)
+    sampled_states.emplace_back(Eigen::Map<const Eigen::VectorXd>(state, m));
 }
 
 void RoadTrial::snapshot(std::size_t index, const double* state) {
@@ -422,6 +424,7 @@ AdaptiveMeasurement measure_adaptive(const AnyKernel& kernel, const TargetFuncti
   else
     trial.run_lap_map(lap_maps, lap_map_key);
   trial.measure_final(reference);
+  if (settings.initial_data_dependence) trial.measure_initial_data_dependence();
   return std::move(trial.out);
 }
 

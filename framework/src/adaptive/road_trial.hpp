@@ -37,6 +37,10 @@ struct RoadTrial {
   void run_lap_map(LapMapCache* lap_maps, const std::string& key);
   /// The metrics and floors at the final time, and integration_error with a `reference`.
   void measure_final(const Integrator* reference);
+  /// Theorem 1's metrics (initial_data.cpp), after measure_final: the embedding and Lipschitz
+  /// constants, and, after time stepping, a second integration from perturbed initial data
+  /// against the states sampled by the first.
+  void measure_initial_data_dependence();
 
   // The trial's inputs.
   const AnyKernel& kernel;
@@ -79,6 +83,8 @@ struct RoadTrial {
 
   // What the integration leaves.
   double largest_state_pair = 0;  ///< max over the samples of |x| + |xhat| (the floors' scale)
+  /// z at each sample (aligned with out.samples), kept when settings.initial_data_dependence.
+  std::vector<Eigen::VectorXd> sampled_states;
   IntegrationStats stats;
   Eigen::VectorXd z;               ///< the state at the final time
   Eigen::VectorXd lap_map_spread;  ///< lap map: z from the perturbed map minus z (the floors)

@@ -266,6 +266,10 @@ AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const Tri
   const auto& own = trial.adaptive_axes();
   AdaptiveSettings settings = adaptive.settings;
   if (!adaptive.reference.name.empty()) settings.engine = AdaptiveEngine::time_stepping;
+  for (const auto& metric : study.metrics)
+    if (metric == "embedding_constant" || metric == "lipschitz_constant" ||
+        metric == "initial_data_lipschitz" || metric == "lipschitz_exponent")
+      settings.initial_data_dependence = true;
   for (const auto& [name, value] : own.integrator.parameters.values()) {
     if (name != "rtol" && name != "atol") continue;
     (name == "rtol" ? settings.integrator_rtol : settings.integrator_atol) =

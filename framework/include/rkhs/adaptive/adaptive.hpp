@@ -315,6 +315,11 @@ struct AdaptiveSettings {
   /// trip of length 2l. A shuttle over part of the track leaves the rest unexcited.
   double shuttle_from = 0;
   double shuttle_length = 0;
+  /// Theorem 1's metrics (embedding_constant, lipschitz_constant, initial_data_lipschitz,
+  /// lipschitz_exponent): set by trial_adaptive_settings when the study asks for one of them,
+  /// never read from a file. The measured two cost a second integration from perturbed initial
+  /// data (time stepping only).
+  bool initial_data_dependence = false;
   bool limit() const noexcept { return std::isinf(laps); }
   bool shuttle() const noexcept { return shuttle_length > 0; }
   /// The distance travelled in one lap: L, or 2l for a shuttle.
