@@ -162,3 +162,19 @@ TEST_CASE("reference expectations: a value that is not a number is an error at i
                                  "file = \"published.csv\", value = \"printed\", within = 0.1 }\n"),
       Catch::Contains("published.csv:3:4: printed: 'abc' is not a finite nonzero number"));
 }
+
+TEST_CASE("reference expectations: control characters from the file or the study are escaped",
+          "[verification][reference]") {
+  // A header with an escape sequence and a where value with a carriage return: the messages
+  // quote both, escaped, and no raw control character reaches the terminal.
+  const PublishedValues files("n,kind\x1b[31m,printed\n10,a,1.5\n");
+  const auto message =
+      test::study_error(header +
+                        "[[expect]]\nmetric = \"gram_condition_number\"\nreference = { file = "
+                        "\"published.csv\", value = \"printed\", where = { \"kind\\r\" = \"a\" }, "
+                        "within = 0.1 }\n");
+  CHECK_THAT(message, Catch::Contains("no column 'kind\\x0d' (reference.where); the columns "
+                                      "are n, kind\\x1b[31m, printed"));
+  CHECK(message.find('\x1b') == std::string::npos);
+  CHECK(message.find('\r') == std::string::npos);
+}

@@ -5,8 +5,9 @@
 #include <cstdint>
 #include <variant>
 
-#include "rkhs/study/trial_grid.hpp"
+#include "rkhs/core/printable.hpp"
 #include "rkhs/study/study.hpp"
+#include "rkhs/study/trial_grid.hpp"
 
 namespace rkhs {
 
@@ -76,9 +77,11 @@ std::string_view expectation_kind_name(ExpectationKind kind) {
 }
 
 std::string ReferenceSpec::text() const {
-  std::string out = file + ", " + value_column;
+  // Names from the study file, echoed: control characters escaped.
+  std::string out = printable(file) + ", " + printable(value_column);
   for (std::size_t k = 0; k < where.size(); ++k)
-    out += (k == 0 ? " where " : " and ") + where[k].first + " = " + where[k].second;
+    out += (k == 0 ? " where " : " and ") + printable(where[k].first) + " = " +
+           printable(where[k].second);
   return out;
 }
 

@@ -28,7 +28,8 @@ bool same_value(std::string_view field, const std::string& wanted) {
 
 void read_reference_values(ReferenceSpec& spec) {
   const auto path = resolve_data_file(spec.file);
-  const std::string name = path.string();
+  // Every string the file or the study gives is echoed through printable().
+  const std::string name = printable(path.string());
   auto in = csv_text::open_file(path, name);
   csv_text::Lines lines(in, name);
   auto error = [&](unsigned line, std::size_t column, const std::string& what) {
@@ -50,7 +51,7 @@ void read_reference_values(ReferenceSpec& spec) {
     if (it == header.end())
       throw error(header_line, 1,
                   fmt::format("no column '{}' ({}); the columns are {}", printable(column), role,
-                              fmt::join(header, ", ")));
+                              printable(fmt::format("{}", fmt::join(header, ", ")))));
     return static_cast<std::size_t>(it - header.begin());
   };
   const auto n_column = column_of("n", "the n of each value");
@@ -92,7 +93,7 @@ void read_reference_values(ReferenceSpec& spec) {
     if (!value || !std::isfinite(*value) || *value == 0.0)
       throw error(line, value_field.column,
                   fmt::format("{}: '{}' is not a finite nonzero number (a ratio to it is taken)",
-                              spec.value_column, printable(value_field.text)));
+                              printable(spec.value_column), printable(value_field.text)));
     for (const auto& row : rows)
       if (row.n == static_cast<std::size_t>(*n))
         throw error(line, n_field.column,
@@ -102,7 +103,8 @@ void read_reference_values(ReferenceSpec& spec) {
   if (rows.empty()) {
     std::vector<std::string> columns;
     for (std::size_t w = 0; w < spec.where.size(); ++w)
-      columns.push_back(fmt::format("{}: {}", spec.where[w].first, fmt::join(seen[w], ", ")));
+      columns.push_back(
+          printable(fmt::format("{}: {}", spec.where[w].first, fmt::join(seen[w], ", "))));
     throw error(header_line, 1,
                 spec.where.empty() ? std::string("no row of values under the header")
                                    : fmt::format("reference.where selects no row (the file has {})",
