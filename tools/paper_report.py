@@ -679,6 +679,15 @@ def figures_10_12_section(results):
         why = (o["xfail"].split(": ", 1)[1].replace("|", "\\|") if o["xfail"] else
                "holds at every n" if o["outcome"] == "passed" else o["outcome"])
         out.append(f"| {o['expectation_name']} | **{verdict_of(o)}** | {why} |")
+    # With the laps: the same n after the longest horizon against one lap, from trials.csv.
+    for kernel in sorted({k for k, _ in errors}):
+        horizons = sorted(laps for k, laps in errors if k == kernel)
+        first, last = errors[(kernel, horizons[0])], errors[(kernel, horizons[-1])]
+        ratios = [last[n] / first[n] for n in sorted(first) if n in last]
+        falls = all(r < 1 for r in ratios)
+        out.append(f"| {kernel}: the L2 error after {horizons[-1]:g} laps below the one after "
+                   f"{horizons[0]:g} at every n | **{'reproduced' if falls else 'contradicted'}** | "
+                   f"{min(ratios):.4g} to {max(ratios):.4g} times it |")
     out += ["", "With the laps every estimate but the second-order B-spline's approaches the road; "
             "with n none does beyond n = 65: after one or three laps learning time, not the "
             "number of centres, limits the error (the interpolant of the same n reaches 0.010 at "
