@@ -10,9 +10,10 @@ of running. tests/docs/check_paper_doc.py runs it and compares the page with doc
 the page cannot drift from what the studies show.
 
 With --out OUT it prints nothing and writes the report as files instead: OUT/paper.md (the page
-above), OUT/paper.html and OUT/paper.tex (the same page rendered by tools/report_render.py, with
-a last section of the plots the studies wrote, copied to OUT/figures/<study name>/). The studies
-then run with their plots (SVG, PNG and PDF by gnuplot); a study that wrote none shows none.
+above), OUT/paper.html and OUT/paper.tex (the same page rendered by tools/report_render.py, each
+study's plots, copied to OUT/figures/<study name>/, at the end of the section that names it).
+The studies then run with their plots (SVG, PNG and PDF by gnuplot); a study that wrote none
+shows none.
 
 Verdicts: *reproduced* (the study's reference expectation passes), *contradicted* and *not
 reproducible* (it fails, and its `xfail` reason says which and why); a parameter is *as stated*
@@ -733,19 +734,50 @@ def copy_figures(results, out):
     return figures
 
 
-def figures_section(figures):
-    """The plots the studies wrote, study by study (HTML and LaTeX only: docs/paper.md has none)."""
-    out = ["", "## Figures: the studies' plots", "",
-           "Every plot the paper studies wrote (`rkhs-study check` draws them with gnuplot from "
-           "the same results as the tables above), study by study. They are rkhs-study's "
-           "measurements, not redrawings of the paper's figures." if figures else
-           "The studies wrote no plots (gnuplot missing, or the results were written with "
-           "`--no-plots`)."]
-    for study in sorted({s for s, _ in figures}):
-        out += ["", f"### {study}"]
-        for name in (name for s, name in figures if s == study):
-            out += ["", f"![{study}: {name}](figures/{study}/{name}.svg)"]
+def study_names():
+    """The [study] name of every paper study, by its file's name (`table1.toml`)."""
+    return {path.name: toml(path.relative_to(ROOT))["study"]["name"]
+            for path in sorted(PAPER_STUDIES.glob("*.toml"))}
+
+
+def figure_lines(study, names):
+    """The plots `names` of `study` as figures, each its own paragraph."""
+    out = []
+    for name in names:
+        out += ["", f"![{study}: {name}](figures/{study}/{name}.svg)"]
     return out
+
+
+def with_figures(page, figures):
+    """The page with each study's plots at the end of the first section that names its study
+    file (`studies/paper/theorem1.toml`, or `theorem1.toml` after a first mention), and those of
+    studies no section names in a last section (HTML and LaTeX only: docs/paper.md has none)."""
+    by_study = collections.defaultdict(list)
+    for study, name in figures:
+        by_study[study].append(name)
+    files = study_names()
+    sections = re.split(r"(?m)^(?=## )", page)
+    placed = set()
+    out = []
+    for section in sections:
+        out.append(section.rstrip("\n"))
+        for file, study in files.items():
+            if study in placed or study not in by_study or f"{file}`" not in section:
+                continue
+            out += ["", f"Plots of `{study}` (rkhs-study's measurements, drawn by gnuplot):"]
+            out += figure_lines(study, by_study[study])
+            placed.add(study)
+        out.append("")
+    rest = sorted(set(by_study) - placed)
+    if rest or not figures:
+        out += ["## Figures: the other studies' plots", "",
+                "Every plot the paper studies wrote that no section above shows (`rkhs-study "
+                "check` draws them with gnuplot from the same results as the tables above)." if
+                figures else "The studies wrote no plots (gnuplot missing, or the results were "
+                "written with `--no-plots`)."]
+        for study in rest:
+            out += ["", f"### {study}"] + figure_lines(study, by_study[study])
+    return "\n".join(out).rstrip("\n") + "\n"
 
 
 def write_report(page, results, out):
@@ -753,7 +785,7 @@ def write_report(page, results, out):
     last two."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "paper.md").write_text(page)
-    rendered = page + "\n".join(figures_section(copy_figures(results, out))) + "\n"
+    rendered = with_figures(page, copy_figures(results, out))
     (out / "paper.html").write_text(report_render.to_html(rendered))
     (out / "paper.tex").write_text(report_render.to_latex(rendered, out))
     for name in ("paper.md", "paper.html", "paper.tex"):
