@@ -67,6 +67,7 @@ class Results:
     seconds: float        # wall time of the run
     outcomes: list = field(default_factory=list)  # the expectations' verdicts (dicts)
     verification: str = ""  # the verdicts as `rkhs-study check` prints them
+    warnings: list = field(default_factory=list)  # the study file's (validate's) warnings
 
 
 @dataclass
@@ -164,7 +165,8 @@ class Study:
                            rates=read_csv(os.path.join(folder, "rates.csv")),
                            failed=summary["failed"], seconds=summary["seconds"],
                            outcomes=summary["outcomes"],
-                           verification=summary["verification"])
+                           verification=summary["verification"],
+                           warnings=summary["warnings"])
 
         if out is not None:
             return run_into(os.fspath(out))

@@ -166,6 +166,7 @@ py::dict summary_dict(const StudyDefinition& study, const RunSummary& summary) {
   d["seconds"] = summary.seconds;
   d["started"] = summary.started;
   d["verification"] = summary.verification;
+  d["warnings"] = study.warnings;
   py::list outcomes;
   for (const auto& o : summary.outcomes) outcomes.append(outcome_dict(study, o));
   d["outcomes"] = outcomes;

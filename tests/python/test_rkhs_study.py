@@ -171,3 +171,29 @@ def test_installed_package_imports_and_runs(tmp_path, cli_out):
     subprocess.run([sys.executable, "-c", script, str(package), str(STUDY),
                     str(tmp_path / "t.csv")], check=True, env=environment, cwd=tmp_path)
     assert len(pd.read_csv(tmp_path / "t.csv")) == 30
+
+
+def test_run_releases_the_gil(tmp_path):
+    """Another Python thread goes on while the trials run."""
+    import threading
+    import time
+
+    definition = rkhs_study.Study.load(STUDY).definition()
+    ticks, stop = [], threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.monotonic())
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=tick)
+    thread.start()
+    try:
+        start = time.monotonic()
+        rkhs_study._core.run(definition, str(tmp_path), 1, None, False)
+        end = time.monotonic()
+    finally:
+        stop.set()
+        thread.join()
+    inside = [t for t in ticks if start + 0.02 < t < end - 0.02]
+    assert end - start > 0.1 and len(inside) > 10, (end - start, len(inside))
