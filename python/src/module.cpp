@@ -13,14 +13,15 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "rkhs/pipeline/executor.hpp"
 #include "rkhs/pipeline/study_pipeline.hpp"
 #include "rkhs/plugin/builtins.hpp"
 #include "rkhs/plugin/plugin_loader.hpp"
-#include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
+#include "rkhs/report/run_folder.hpp"
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/tiers.hpp"
 #include "rkhs/study/trial_grid.hpp"
@@ -140,11 +141,7 @@ RunSummary run_study_into(const StudyDefinition& study, const std::string& out_d
   summary.outcomes = rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
   auto record = run.record();
   record.verdicts = &summary.outcomes;
-  rkhs::mark_outputs_incomplete(record, out_dir, rkhs::output_file_names(record, true, false));
-  rkhs::write_outputs(record, out_dir);
-  rkhs::write_file_atomically(std::filesystem::path(out_dir) / "report.html",
-                              rkhs::html_report(record, {}, &summary.outcomes));
-  rkhs::mark_outputs_complete(out_dir);
+  rkhs::write_run_folder(record, out_dir, false);
   summary.trials = trials.size();
   summary.failed = run.failed;
   summary.reused = run.stored.reused;
@@ -188,7 +185,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("description", [](const StudyDefinition& s) { return s.description; })
       .def_property_readonly("source", [](const StudyDefinition& s) { return s.source; })
       .def_property_readonly(
-          "kind", [](const StudyDefinition& s) { return std::string(rkhs::study_kind_name(s.kind())); })
+          "kind",
+          [](const StudyDefinition& s) { return std::string(rkhs::study_kind_name(s.kind())); })
       .def_property_readonly("warnings", [](const StudyDefinition& s) { return s.warnings; })
       .def_property_readonly("metrics", [](const StudyDefinition& s) { return s.metrics; })
       .def_property_readonly("computed_metrics",
@@ -197,22 +195,24 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("tiers", [](const StudyDefinition& s) { return rkhs::study_tiers(s); })
       .def_property_readonly("expectation_count",
                              [](const StudyDefinition& s) { return s.expectations.size(); })
-      .def("grid_axes",
-           [](const StudyDefinition& s) {
-             std::vector<std::tuple<std::string, std::string, std::size_t>> axes;
-             for (const auto& a : s.grid_axes()) axes.emplace_back(a.singular, a.plural, a.count);
-             return axes;
-           },
-           "(singular, plural, count) of each axis of the trial grid, in the order trials nest "
-           "them (n last)")
+      .def(
+          "grid_axes",
+          [](const StudyDefinition& s) {
+            std::vector<std::tuple<std::string, std::string, std::size_t>> axes;
+            for (const auto& a : s.grid_axes()) axes.emplace_back(a.singular, a.plural, a.count);
+            return axes;
+          },
+          "(singular, plural, count) of each axis of the trial grid, in the order trials nest "
+          "them (n last)")
       .def("grid_csv", &grid_csv,
            "The trial grid as CSV text: the axis columns of trials.csv and n, one row per trial")
       .def("restrict_to_tier", &rkhs::restrict_to_tier, py::arg("tier"),
            "The study restricted to one tier's entries and expectations (`check --tier`)");
 
-  m.def("load_study",
-        [](const std::filesystem::path& file) { return rkhs::load_study(file); }, py::arg("file"),
-        "Reads and validates a study file; raises StudyError (file:line:column: ...)");
+  m.def(
+      "load_study", [](const std::filesystem::path& file) { return rkhs::load_study(file); },
+      py::arg("file"),
+      "Reads and validates a study file; raises StudyError (file:line:column: ...)");
   m.def("parse_study", &rkhs::parse_study, py::arg("text"), py::arg("source_name"),
         "Reads and validates a study from TOML text; messages name `source_name`");
 
