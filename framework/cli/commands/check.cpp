@@ -24,8 +24,8 @@
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
 #include "commands/options.hpp"
-#include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
+#include "rkhs/report/run_folder.hpp"
 #include "rkhs/study/tiers.hpp"
 #include "rkhs/verify/expectation_cases.hpp"
 #include "rkhs/verify/junit.hpp"
@@ -240,23 +240,10 @@ class Check {
     record.tier = arguments_.tier;
     record.verdicts = &checked.outcomes;
     record.deselected = checked.deselected;
-    // INCOMPLETE first, removed after the last file: a write that fails part-way leaves it.
-    mark_outputs_incomplete(record, directory, output_file_names(record, true, arguments_.plots));
     std::size_t plots = 0;
-    try {
-      write_outputs(record, directory);
+    write_run_folder(record, directory, arguments_.plots, [&] {
       plots = arguments_.plots ? render_plots(record, directory, quiet()) : 0;
-      write_file_atomically(
-          directory / "report.html",
-          html_report(record, arguments_.plots ? directory / "plots" : std::filesystem::path(),
-                      &checked.outcomes));
-    } catch (const std::exception& e) {
-      throw std::runtime_error(fmt::format(
-          "{}; the outputs in {} may now be partly this run's and partly an earlier run's: {} "
-          "says so and lists them",
-          e.what(), directory.string(), (directory / incomplete_marker).string()));
-    }
-    mark_outputs_complete(directory);
+    });
     if (!quiet())
       std::cerr << fmt::format("  wrote {}/trials.csv, rates.csv, summary.json, report.html{}\n",
                                directory.string(),

@@ -20,8 +20,8 @@
 #include "progress.hpp"
 #include "rkhs/core/printable.hpp"
 #include "rkhs/pipeline/journal.hpp"
-#include "rkhs/report/html_report.hpp"
 #include "rkhs/report/output.hpp"
+#include "rkhs/report/run_folder.hpp"
 
 namespace rkhs::cli {
 
@@ -163,26 +163,11 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
   const auto verdicts = verify_expectations(study, trials, run.stored.results, run.rates);
   auto record = run.record();
   record.verdicts = &verdicts;
-  // INCOMPLETE first, removed after the last file: a write that fails part-way leaves it.
-  mark_outputs_incomplete(record, out_dir, output_file_names(record, true, arguments.plots));
   std::size_t plot_count = 0;
-  try {
-    write_outputs(record, out_dir);
+  write_run_folder(record, out_dir, arguments.plots, [&] {
     journal->remove();
     plot_count = arguments.plots ? render_plots(record, out_dir, quiet) : 0;
-    // Without plots this run, the page embeds none (not those an earlier run left in plots/).
-    write_file_atomically(std::filesystem::path(out_dir) / "report.html",
-                          html_report(record,
-                                      arguments.plots ? std::filesystem::path(out_dir) / "plots"
-                                                      : std::filesystem::path(),
-                                      &verdicts));
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format(
-        "{}; the outputs in {} may now be partly this run's and partly an earlier run's: {} "
-        "says so and lists them",
-        e.what(), out_dir, (std::filesystem::path(out_dir) / incomplete_marker).string()));
-  }
-  mark_outputs_complete(out_dir);
+  });
   if (stop_was_requested()) {  // while the plots were rendered: gnuplot was killed
     std::cerr << fmt::format(
         "rkhs-study: interrupted while rendering plots; every other output in {} is complete\n",

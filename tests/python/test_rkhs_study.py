@@ -1,0 +1,199 @@
+"""The Python package rkhs_study (docs/python.md) against the rkhs-study command.
+
+Run by ctest (python.rkhs_study, tests/CMakeLists.txt) as
+    PYTHONPATH=<build>/python /usr/bin/python3 -m pytest tests/python
+with RKHS_STUDY_EXECUTABLE (the command), RKHS_STUDY_SOURCE_DIR (this tree) and
+RKHS_STUDY_BINARY_DIR (the build, for the installed-package test) set.
+"""
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import rkhs_study
+
+SOURCE_DIR = Path(os.environ.get("RKHS_STUDY_SOURCE_DIR", Path(__file__).resolve().parents[2]))
+EXECUTABLE = os.environ.get("RKHS_STUDY_EXECUTABLE",
+                            str(SOURCE_DIR / "build" / "release" / "rkhs-study"))
+STUDY = SOURCE_DIR / "studies" / "gram_and_power.toml"
+
+
+def cli(*arguments, check=True):
+    return subprocess.run([EXECUTABLE, *map(str, arguments)], capture_output=True, text=True,
+                          check=check, cwd=SOURCE_DIR)
+
+
+@pytest.fixture(scope="module")
+def cli_out(tmp_path_factory):
+    """What `rkhs-study run STUDY --out DIR --no-store` writes (without plots)."""
+    out = tmp_path_factory.mktemp("cli")
+    cli("run", STUDY, "--out", out, "--no-store", "--no-plots", "--quiet")
+    return out
+
+
+def assert_frames_identical(found: pd.DataFrame, expected: pd.DataFrame):
+    """Same columns, dtypes and values, every double to the last bit (NaN where NaN)."""
+    assert list(found.columns) == list(expected.columns)
+    assert found.dtypes.to_dict() == expected.dtypes.to_dict()
+    assert found.shape == expected.shape
+    for column in expected.columns:
+        a, b = found[column], expected[column]
+        if pd.api.types.is_float_dtype(b):
+            both_nan = a.isna() & b.isna()
+            # equal as doubles, and with the same sign of zero: the bits agree
+            assert ((a == b) | both_nan).all(), column
+            assert [repr(x) for x in a] == [repr(x) for x in b], column
+        else:
+            assert a.tolist() == b.tolist(), column
+
+
+def test_run_into_a_folder_writes_the_commands_files(cli_out, tmp_path):
+    results = rkhs_study.Study.load(STUDY).run(threads=1, out=tmp_path / "py")
+    assert results.out == tmp_path / "py"
+    assert results.failed == 0
+    for name in ("trials.csv", "rates.csv", "rates.md", "rates.tex"):
+        assert (tmp_path / "py" / name).read_bytes() == (cli_out / name).read_bytes(), name
+    assert (tmp_path / "py" / "summary.json").is_file()
+    assert (tmp_path / "py" / "report.html").is_file()
+    assert not (tmp_path / "py" / "INCOMPLETE").exists()
+
+
+def test_run_returns_the_commands_tables(cli_out):
+    results = rkhs_study.Study.load(STUDY).run()  # a temporary folder, all cores
+    assert results.out is None
+    expected_trials = rkhs_study.read_csv(cli_out / "trials.csv")
+    expected_rates = rkhs_study.read_csv(cli_out / "rates.csv")
+    assert len(results.trials) == 30
+    assert_frames_identical(results.trials, expected_trials)
+    assert_frames_identical(results.rates, expected_rates)
+    # The same through pandas' own reader with round-trip parsing.
+    assert results.trials.equals(pd.read_csv(cli_out / "trials.csv", float_precision="round_trip"))
+    # and the verdicts the command prints
+    assert [o["outcome"] for o in results.outcomes] == ["passed"] * 11
+
+
+def test_from_toml_runs_the_same_study(cli_out):
+    text = STUDY.read_text()
+    results = rkhs_study.Study.from_toml(text, source_name=str(STUDY)).run(threads=2)
+    assert_frames_identical(results.trials, rkhs_study.read_csv(cli_out / "trials.csv"))
+
+
+def test_trials_is_the_grid_without_running(cli_out):
+    study = rkhs_study.Study.load(STUDY)
+    grid = study.trials()
+    ran = rkhs_study.read_csv(cli_out / "trials.csv")
+    assert list(grid.columns)[-1] == "n"
+    assert_frames_identical(grid, ran[list(grid.columns)])
+    assert grid["n"].tolist() == list(range(10, 101, 10)) * 3
+    assert study.validate().trial_count == len(grid) == 30
+
+
+def test_validate_reports_what_the_command_counts():
+    validation = rkhs_study.Study.load(STUDY).validate()
+    assert validation.name == "gram_and_power"
+    assert validation.kind == "approximation"
+    assert [(singular, count) for singular, _, count in validation.axes] == [
+        ("kernel", 3), ("target", 1), ("centre placement", 1), ("value of n", 10)]
+    assert validation.warnings == []
+    out = cli("validate", STUDY).stdout
+    assert f"= {validation.trial_count} trials" in out
+
+
+BAD_STUDY = STUDY.read_text().replace('abscissa = "n"', 'abscissa = "m"', 1)
+
+
+def test_validation_error_is_the_commands_message(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(BAD_STUDY)
+    with pytest.raises(rkhs_study.StudyError) as error:
+        rkhs_study.Study.load(bad).validate()
+    message = str(error.value)
+    assert re.match(re.escape(str(bad)) + r":\d+:\d+: study\.abscissa: ", message), message
+    command = cli("validate", bad, check=False)
+    assert command.returncode == 2
+    assert command.stderr.strip() == message
+    # A StudyError is a ValueError; run() and trials() raise it too.
+    with pytest.raises(ValueError):
+        rkhs_study.Study.load(bad).trials()
+
+
+def test_validation_error_from_text_names_the_source():
+    with pytest.raises(rkhs_study.StudyError, match=r"^mine\.toml:\d+:\d+: study\.abscissa: "):
+        rkhs_study.Study.from_toml(BAD_STUDY, source_name="mine.toml").validate()
+
+
+def test_missing_file_is_an_error(tmp_path):
+    with pytest.raises(Exception, match=re.escape(str(tmp_path / "none.toml"))):
+        rkhs_study.Study.load(tmp_path / "none.toml").validate()
+
+
+def test_check_of_a_passing_study_passes():
+    result = rkhs_study.check([STUDY], threads=2)
+    assert result.passed and result
+    assert result.exit_code == 0
+    assert len(result.outcomes) == 11
+    assert {o["outcome"] for o in result.outcomes} == {"passed"}
+    assert all(o["location"].startswith(f"{STUDY}:") for o in result.outcomes)
+    assert result.counts.startswith("11 passed, 0 failed, 0 inconclusive")
+    command = cli("check", STUDY, "--no-store", "--quiet", check=False)
+    assert command.returncode == result.exit_code
+
+
+def test_check_with_a_store_reuses_the_trials(tmp_path):
+    store = tmp_path / "store.sqlite"
+    first = rkhs_study.check(STUDY, store=store, tier="quick")
+    second = rkhs_study.check(STUDY, store=store, tier="quick")
+    assert first.passed and second.passed
+    assert first.studies[0]["ran"] == first.studies[0]["trials"] > 0
+    assert second.studies[0]["reused"] == second.studies[0]["trials"]
+    assert second.studies[0]["ran"] == 0
+
+
+@pytest.mark.skipif("RKHS_STUDY_BINARY_DIR" not in os.environ,
+                    reason="needs the build folder (RKHS_STUDY_BINARY_DIR)")
+def test_installed_package_imports_and_runs(tmp_path, cli_out):
+    prefix = tmp_path / "prefix"
+    subprocess.run(["cmake", "--install", os.environ["RKHS_STUDY_BINARY_DIR"], "--prefix",
+                    str(prefix)], check=True, capture_output=True)
+    package = prefix / "lib" / "python3" / "dist-packages"
+    assert (package / "rkhs_study" / "__init__.py").is_file()
+    script = (
+        "import sys, rkhs_study\n"
+        "assert rkhs_study.__file__.startswith(sys.argv[1]), rkhs_study.__file__\n"
+        "r = rkhs_study.Study.load(sys.argv[2]).run(threads=1)\n"
+        "r.trials.to_csv(sys.argv[3], index=False)\n")
+    environment = dict(os.environ, PYTHONPATH=str(package))
+    subprocess.run([sys.executable, "-c", script, str(package), str(STUDY),
+                    str(tmp_path / "t.csv")], check=True, env=environment, cwd=tmp_path)
+    assert len(pd.read_csv(tmp_path / "t.csv")) == 30
+
+
+def test_run_releases_the_gil(tmp_path):
+    """Another Python thread goes on while the trials run."""
+    import threading
+    import time
+
+    definition = rkhs_study.Study.load(STUDY).definition()
+    ticks, stop = [], threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.monotonic())
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=tick)
+    thread.start()
+    try:
+        start = time.monotonic()
+        rkhs_study._core.run(definition, str(tmp_path), 1, None, False)
+        end = time.monotonic()
+    finally:
+        stop.set()
+        thread.join()
+    inside = [t for t in ticks if start + 0.02 < t < end - 0.02]
+    assert end - start > 0.1 and len(inside) > 10, (end - start, len(inside))
