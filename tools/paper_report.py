@@ -148,6 +148,21 @@ def read_trials(folder):
         return list(csv.DictReader(f))
 
 
+def read_outcomes(folder):
+    """The expectation outcomes of a study's summary.json."""
+    return json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
+
+
+def by_kernel_law_gain(trials):
+    """The trials of an adaptive study grouped by (kernel label, law, gain), in their order."""
+    groups = collections.defaultdict(list)
+    for t in trials:
+        kernel = (f"Gaussian sigma = {float(t['sigma']):g}" if t["kernel"] == "gaussian"
+                  else f"B-spline p = {t['degree']}")
+        groups[(kernel, t["law"], float(t["law_gamma"]))].append(t)
+    return groups
+
+
 def condition(row):
     """The condition number a trial measured, or inf when it is flagged singular or failed."""
     if row["status"] != "ok" or "gram_singular" in row["flags"]:
@@ -194,8 +209,8 @@ def verdict_of(outcome):
 
 
 def table1_section(results, printed):
-    summary = json.loads((results / "paper_table1_literal" / "summary.json").read_text())
-    outcomes = {o["expectation_name"]: o for o in summary["expectations"]["outcomes"]}
+    outcomes = {o["expectation_name"]: o
+                for o in read_outcomes(results / "paper_table1_literal")}
     trials = read_trials(results / "paper_table1_literal")
     measured = collections.defaultdict(dict)
     for row in trials:
@@ -288,8 +303,7 @@ def theorem3_section(results):
     distance = [value(t, "lyapunov_p_distance_from_identity") for t in trials]
     distance_floor = max(floor(t, "lyapunov_p_distance_from_identity") for t in trials)
     gammas = sorted({float(t["law_gamma"]) for t in trials})
-    summary = json.loads((folder / "summary.json").read_text())
-    pe = summary["expectations"]["outcomes"][0]
+    pe = read_outcomes(folder)[0]
     pe_levels = {n: value(t, "pe_level") for n, t in by_laps[short].items()}
     verdict = lambda fails: "**fails**" if fails else "holds"
     rows = [
@@ -331,13 +345,8 @@ def theorem3_section(results):
 def theorem1_section(results):
     """Theorem 1 on the quarter car, as the paper_theorem1 study measured it."""
     folder = results / "paper_theorem1"
-    trials = read_trials(folder)
-    outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
-    groups = collections.defaultdict(list)
-    for t in trials:
-        kernel = (f"Gaussian sigma = {float(t['sigma']):g}" if t["kernel"] == "gaussian"
-                  else f"B-spline p = {t['degree']}")
-        groups[(kernel, t["law"], float(t["law_gamma"]))].append(t)
+    trials, outcomes = read_trials(folder), read_outcomes(folder)
+    groups = by_kernel_law_gain(trials)
     span = lambda values, f: (f"{f(min(values))} to {f(max(values))}"
                               if f(min(values)) != f(max(values)) else f(min(values)))
     out = ["", "## Theorem 1: Lipschitz dependence on the initial data", "",
@@ -389,13 +398,8 @@ def theorem1_section(results):
 def theorem2_section(results):
     """Theorem 2 on the quarter car, as the paper_theorem2 study measured it."""
     folder = results / "paper_theorem2"
-    trials = read_trials(folder)
-    outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
-    groups = collections.defaultdict(list)
-    for t in trials:
-        kernel = (f"Gaussian sigma = {float(t['sigma']):g}" if t["kernel"] == "gaussian"
-                  else f"B-spline p = {t['degree']}")
-        groups[(kernel, t["law"], float(t["law_gamma"]))].append(t)
+    trials, outcomes = read_trials(folder), read_outcomes(folder)
+    groups = by_kernel_law_gain(trials)
     out = ["", "## Theorem 2 on the quarter car: V does not increase", "",
            "Study `studies/paper/theorem2.toml`: the quarter car of Section 5 at v = 1 m/s, Q = I, "
            "one lap, both laws at the paper's Gamma = 1e-3 and at the gain that learns (2e4), "
@@ -449,7 +453,7 @@ def figures_7_8_section(results):
     for study, domain in (("paper_figures_7_8", "closed track (periodised)"),
                           ("paper_figures_7_8_interval", "interval (not periodised)")):
         folder = results / study
-        outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
+        outcomes = read_outcomes(folder)
         groups = collections.defaultdict(dict)  # (sigma, law, gamma) -> n -> trial
         for t in read_trials(folder):
             groups[(float(t["sigma"]), t["law"], float(t["law_gamma"]))][int(t["n"])] = t
@@ -600,7 +604,7 @@ def theorem4_section(results):
     """Theorem 4: the gaps of the finite estimators, against n and against the horizon."""
     folder = results / "paper_theorem4"
     trials = [t for t in read_trials(folder) if t["status"] == "ok"]
-    outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
+    outcomes = read_outcomes(folder)
     label = lambda t: (f"Gaussian sigma = {float(t['sigma']):g}" if t["kernel"] == "gaussian"
                        else f"B-spline p = {t['degree']}")
     gaps = collections.defaultdict(dict)  # (kernel, n) -> laps -> trial
@@ -654,7 +658,7 @@ def theorem4_section(results):
 def figures_10_12_section(results):
     """Figures 10 to 12's estimates on the measured road, after one lap and several."""
     folder = results / "paper_figures_10_12"
-    outcomes = json.loads((folder / "summary.json").read_text())["expectations"]["outcomes"]
+    outcomes = read_outcomes(folder)
     errors = collections.defaultdict(dict)  # (kernel, laps) -> n -> l2_error
     for t in read_trials(folder):
         kernel = ("Gaussian sigma = 0.1" if t["kernel"] == "gaussian"
