@@ -24,8 +24,14 @@ import pandas as pd
 
 from . import _core
 from ._core import StudyError
+from .plugins import (CentrePlacement, Domain, Kernel, Parameter, PluginVerification, Target,
+                      kernel_matrix, register_centres, register_kernel, register_target,
+                      unregister, verify_plugin)
 
-__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "check", "read_csv"]
+__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "check", "read_csv",
+           "Parameter", "Domain", "Kernel", "Target", "CentrePlacement", "register_kernel",
+           "register_target", "register_centres", "unregister", "verify_plugin",
+           "PluginVerification", "kernel_matrix"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -68,6 +74,8 @@ class Results:
     outcomes: list = field(default_factory=list)  # the expectations' verdicts (dicts)
     verification: str = ""  # the verdicts as `rkhs-study check` prints them
     warnings: list = field(default_factory=list)  # the study file's (validate's) warnings
+    ran: int = 0          # trials computed by this run
+    reused: int = 0       # trials read back from the result store
 
 
 @dataclass
@@ -166,7 +174,8 @@ class Study:
                            failed=summary["failed"], seconds=summary["seconds"],
                            outcomes=summary["outcomes"],
                            verification=summary["verification"],
-                           warnings=summary["warnings"])
+                           warnings=summary["warnings"], ran=summary["ran"],
+                           reused=summary["reused"])
 
         if out is not None:
             return run_into(os.fspath(out))

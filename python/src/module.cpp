@@ -29,6 +29,11 @@
 
 namespace py = pybind11;
 
+namespace rkhs::python {
+// Kernels, targets and centre placements written in Python (plugins.cpp).
+void bind_plugins(py::module_& m);
+}  // namespace rkhs::python
+
 namespace {
 
 using rkhs::StudyDefinition;
@@ -179,6 +184,7 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<rkhs::StudyError>(m, "StudyError", PyExc_ValueError);
 
   prepare_registries();
+  rkhs::python::bind_plugins(m);
 
   py::class_<StudyDefinition>(m, "StudyDefinition")
       .def_property_readonly("name", [](const StudyDefinition& s) { return s.name; })

@@ -82,7 +82,8 @@ std::vector<std::string> roll_back(const RegistryState& before) {
 
 struct Module {
   LoadedPlugin plugin;
-  void* handle = nullptr;  // closed only by unload_plugin: the registries hold its factories
+  void* handle = nullptr;  // closed only by unload_plugin: the registries hold its factories;
+                           // null for a host's plugins (record_host_plugins)
 };
 
 std::mutex& loader_mutex() {
@@ -317,9 +318,33 @@ bool unload_plugin(const fs::path& file) {
   auto& loaded = modules();
   const auto it = std::find_if(loaded.begin(), loaded.end(),
                                [&](const Module& m) { return m.plugin.file == canonical; });
-  if (error || it == loaded.end()) return false;
+  if (error || it == loaded.end() || it->handle == nullptr) return false;
   remove_all(it->plugin.registered);
   dlclose(it->handle);
+  loaded.erase(it);
+  return true;
+}
+
+void record_host_plugins(LoadedPlugin plugin) {
+  std::lock_guard lock(loader_mutex());
+  auto& loaded = modules();
+  const auto it = std::find_if(loaded.begin(), loaded.end(), [&](const Module& m) {
+    return m.handle == nullptr && m.plugin.file == plugin.file;
+  });
+  if (it != loaded.end())
+    it->plugin = std::move(plugin);
+  else
+    loaded.push_back({std::move(plugin), nullptr});
+}
+
+bool forget_host_plugins(const fs::path& file) {
+  std::lock_guard lock(loader_mutex());
+  auto& loaded = modules();
+  const auto it = std::find_if(loaded.begin(), loaded.end(), [&](const Module& m) {
+    return m.handle == nullptr && m.plugin.file == file;
+  });
+  if (it == loaded.end()) return false;
+  remove_all(it->plugin.registered);
   loaded.erase(it);
   return true;
 }

@@ -16,8 +16,10 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
@@ -26,6 +28,26 @@
 #include "rkhs/kernel/kernel_assembly.hpp"
 
 namespace rkhs {
+
+/// A kernel whose values come cheapest a block at a time: a kernel written in another
+/// language whose every call has a fixed cost (a Python kernel, numpy-vectorised,
+/// python/src/plugins.cpp), where one call per value would dominate. `k.block(a, b, out)`
+/// writes out(i, j) = k(a_i, b_j) for two flat point sets (core/domain.hpp; out is sized by the
+/// caller, a rows x b rows) and `k.diagonal(points, out)` writes out[m] = k(s_m, s_m). Through
+/// KernelModel a Gram matrix is one block (its upper triangle mirrored, so it is exactly
+/// symmetric), a cross matrix one block per chunk of at most block_chunk_values entries (the run
+/// can stop between chunks), and a basis evaluation one block of the n centres against the
+/// point. The per-value k(x, y) of KernelFunction is still used, for single values.
+template <class K>
+concept BlockKernel = KernelFunction<K> &&
+    requires(const K& k, std::span<const double> a, std::span<const double> b,
+             Eigen::Ref<Eigen::MatrixXd> out, std::span<double> diagonal) {
+  k.block(a, b, out);
+  k.diagonal(a, diagonal);
+};
+
+/// The largest number of entries one BlockKernel::block call of a cross matrix computes.
+inline constexpr std::size_t block_chunk_values = std::size_t{1} << 20;
 
 /// KernelBasis of a kernel without a feature map: n inlined evaluations per point. Derivatives:
 /// K::derivative when K is a DifferentiableKernel, otherwise `stencil` (n evaluations per
@@ -81,7 +103,13 @@ class DirectBasis final : public KernelBasis {
 
  private:
   void sections(double s, double* phi) const {
-    for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
+    if constexpr (BlockKernel<K>) {
+      const auto n = static_cast<Eigen::Index>(centres_.size());
+      kernel_.block(centres_, std::span<const double>(&s, 1),
+                    Eigen::Map<Eigen::MatrixXd>(phi, n, 1));
+    } else {
+      for (std::size_t i = 0; i < centres_.size(); ++i) phi[i] = kernel_(centres_[i], s);
+    }
   }
   void derivatives(double s, double* dphi) const {
     if constexpr (DifferentiableKernel<K>) {
@@ -305,9 +333,13 @@ class FeatureCoordinateBasis final : public KernelBasis {
 template <KernelFunction K>
 class KernelModel final : public AnyKernel {
  public:
-  KernelModel(const ParameterSet& parameters, const Domain& domain)
-      : kernel_(checked_domain(domain, parameters), domain),
-        name_(K::info().name),
+  /// K(parameters, domain, extra...): `extra` for a kernel type whose instances need more than
+  /// their parameters (a Python kernel: the class it calls). A K with a member name() is named
+  /// by it (one C++ type behind several registered kernels), any other by K::info().name.
+  template <class... Extra>
+  KernelModel(const ParameterSet& parameters, const Domain& domain, Extra&&... extra)
+      : kernel_(checked_domain(domain, parameters), domain, std::forward<Extra>(extra)...),
+        name_(registered_name(kernel_)),
         parameters_(parameters),
         domain_(domain),
         properties_(kernel_.properties()),
@@ -399,7 +431,12 @@ class KernelModel final : public AnyKernel {
     require_flat(centres, "gram_into");
     require_size(out.rows(), out.cols(), n, n, "gram_into");
     count_kernel_evaluations(std::uint64_t{n} * (n + 1) / 2);
-    assemble_gram_into(kernel_, domain_, centres, out);
+    if constexpr (BlockKernel<K>) {
+      kernel_.block(centres, centres, out);
+      out.template triangularView<Eigen::StrictlyLower>() = out.transpose();
+    } else {
+      assemble_gram_into(kernel_, domain_, centres, out);
+    }
   }
   void cross_into(std::span<const double> points, std::span<const double> centres,
                   Eigen::Ref<Eigen::MatrixXd> out) const override {
@@ -409,13 +446,31 @@ class KernelModel final : public AnyKernel {
                  "cross_into");
     count_kernel_evaluations(std::uint64_t{domain_.point_count(points)} *
                              domain_.point_count(centres));
-    out = assemble_cross(kernel_, domain_, points, centres);
+    if constexpr (BlockKernel<K>) {
+      const std::size_t rows = domain_.point_count(points), cols = domain_.point_count(centres);
+      const std::size_t chunk =
+          std::max<std::size_t>(1, block_chunk_values / std::max<std::size_t>(1, cols));
+      const auto dim = static_cast<std::size_t>(domain_.dimension);
+      for (std::size_t first = 0; first < rows; first += chunk) {
+        check_cancelled();
+        const std::size_t count = std::min(chunk, rows - first);
+        kernel_.block(
+            points.subspan(first * dim, count * dim), centres,
+            out.middleRows(static_cast<Eigen::Index>(first), static_cast<Eigen::Index>(count)));
+      }
+    } else {
+      out = assemble_cross(kernel_, domain_, points, centres);
+    }
   }
   void diagonal_into(std::span<const double> points, std::span<double> out) const override {
     require_flat(points, "diagonal_into");
     const std::size_t count = domain_.point_count(points);
     require_size(static_cast<Eigen::Index>(out.size()), 1, count, 1, "diagonal_into");
     count_kernel_evaluations(count);
+    if constexpr (BlockKernel<K>) {
+      kernel_.diagonal(points, out);
+      return;
+    }
     if (domain_.dimension == 1) {
       for (std::size_t m = 0; m < count; ++m) {
         if (m % detail::cancellation_stride == 0) check_cancelled();
@@ -456,6 +511,12 @@ class KernelModel final : public AnyKernel {
   }
 
  private:
+  static std::string registered_name(const K& kernel) {
+    if constexpr (requires { kernel.name(); })
+      return std::string(kernel.name());
+    else
+      return K::info().name;
+  }
   // The kink points of K (if it names any) and the seam of a periodic domain when K is not
   // periodic, sorted and unique.
   static std::vector<double> sorted_kinks(const K& kernel, const Domain& domain,

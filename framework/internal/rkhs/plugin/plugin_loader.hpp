@@ -73,6 +73,19 @@ std::vector<LoadedPlugin> loaded_plugins();
 /// destroyed. Returns false when no module was loaded from `file`. Not for use during a run.
 bool unload_plugin(const std::filesystem::path& file);
 
+/// Records plugins a host registered at run time rather than a module (kernels, targets and
+/// centre placements written in Python: python/src/plugins.cpp) as a module of their own:
+/// `file` names their origin ("python:mymodule.MyKernel"), `sha256` is the hash of their source
+/// and `registered` what they registered. Trials that use them are then keyed by that hash
+/// (run/trial_identity.hpp: a changed Python kernel re-runs its trials) and `rkhs-study list`
+/// shows them like a loaded module's plugins. Replaces an earlier record of the same `file`
+/// (whose plugins the caller has removed or re-registered). Not for use during a run.
+void record_host_plugins(LoadedPlugin plugin);
+
+/// Removes the plugins of the host record `file` (record_host_plugins) from the registries and
+/// forgets the record. Returns false when there is none. Not for use during a run.
+bool forget_host_plugins(const std::filesystem::path& file);
+
 /// The plugin files named by a RKHS_STUDY_PLUGIN_PATH value: entries separated by ':', each a
 /// plugin file or a directory (every *.so directly in it, sorted by name); empty entries are
 /// skipped. Throws PluginError for an entry that does not exist.
