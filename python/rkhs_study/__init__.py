@@ -13,19 +13,26 @@ The command line's study, run and check, as thin bindings over the same C++ libr
 
 from __future__ import annotations
 
+import datetime
 import io
+import math
+import numbers
 import os
+import re
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Optional, Union
 
+import numpy as np
 import pandas as pd
 
 from . import _core
 from ._core import StudyError
 
-__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "check", "read_csv"]
+__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "check", "read_csv",
+           "to_toml"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -39,6 +46,108 @@ def read_csv(source) -> pd.DataFrame:
     """
     return pd.read_csv(source, float_precision="round_trip", keep_default_na=False,
                        na_values=[""])
+
+
+# ---------------------------------------------------------------------------------------------
+# A study given as a Python dict, written as TOML text (Study.from_dict)
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+\Z")
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f",
+            "\r": "\\r"}
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string: quotes, backslashes and control characters escaped."""
+    out = []
+    for c in text:
+        if c in _ESCAPES:
+            out.append(_ESCAPES[c])
+        elif ord(c) < 0x20 or ord(c) == 0x7F:
+            out.append(f"\\u{ord(c):04X}")
+        else:
+            out.append(c)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(key, where: str) -> str:
+    if not isinstance(key, str):
+        raise TypeError(f"{where}: a key must be a string, found {key!r}")
+    return key if _BARE_KEY.match(key) else _toml_string(key)
+
+
+def _is_table(value) -> bool:
+    return isinstance(value, Mapping)
+
+
+def _is_array_of_tables(value) -> bool:
+    return (isinstance(value, (list, tuple)) and len(value) > 0
+            and all(_is_table(v) for v in value))
+
+
+def _toml_value(value, where: str) -> str:
+    """One value as TOML text on one line (tables and arrays inline)."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, numbers.Integral):
+        value = int(value)
+        if not -2**63 <= value < 2**63:
+            raise ValueError(f"{where}: {value} is beyond TOML's 64-bit integers")
+        return str(value)
+    if isinstance(value, numbers.Real):
+        value = float(value)
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)  # the shortest text that reads back as the same double
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, (datetime.datetime, datetime.date, datetime.time)):
+        return value.isoformat()
+    if _is_table(value):
+        items = [f"{_toml_key(k, where)} = {_toml_value(v, f'{where}.{k}')}"
+                 for k, v in value.items()]
+        return "{ " + ", ".join(items) + " }" if items else "{}"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v, f"{where}[{i}]")
+                               for i, v in enumerate(value)) + "]"
+    raise TypeError(f"{where}: {type(value).__name__} {value!r} has no TOML form "
+                    "(strings, numbers, booleans, dates, lists and dicts do)")
+
+
+def _table_lines(table: Mapping, where: str) -> list:
+    return [f"{_toml_key(k, where)} = {_toml_value(v, f'{where}.{k}' if where else str(k))}"
+            for k, v in table.items()]
+
+
+def to_toml(study: Mapping) -> str:
+    """A study dict (the tables of a study file) as TOML text that reads back as the same dict.
+
+    The top level's dicts are tables ([study]), its lists of dicts arrays of tables ([[kernel]]);
+    everything inside them is written inline (n = { from = 10, to = 100 }, degree = [1, 2]).
+    Keys of the top level that are values come first, as TOML requires. Floats are written with
+    repr (read back to the same double), strings as basic strings with TOML's escapes.
+    """
+    if not _is_table(study):
+        raise TypeError(f"a study is a dict of tables, found {type(study).__name__}")
+    values = {k: v for k, v in study.items() if not (_is_table(v) or _is_array_of_tables(v))}
+    lines = _table_lines(values, "")
+    for key, value in study.items():
+        if key in values:
+            continue
+        header = _toml_key(key, str(key))
+        if _is_table(value):
+            if lines:
+                lines.append("")
+            lines.append(f"[{header}]")
+            lines += _table_lines(value, str(key))
+        else:
+            for i, entry in enumerate(value):
+                if lines:
+                    lines.append("")
+                lines.append(f"[[{header}]]")
+                lines += _table_lines(entry, f"{key}[{i}]")
+    return "\n".join(lines) + "\n"
 
 
 @dataclass
@@ -113,6 +222,25 @@ class Study:
     def from_toml(cls, text: str, source_name: str = "<string>") -> "Study":
         """The study in `text`; messages name `source_name` as they would a file."""
         return cls(text=text, source_name=source_name)
+
+    @classmethod
+    def from_dict(cls, study: Mapping, source_name: str = "<dict>") -> "Study":
+        """The study given as a dict of the study file's tables, written as TOML (to_toml).
+
+        Nested dicts are tables and lists of dicts arrays of tables: the dict tomllib reads from
+        a study file gives the same study. Errors are the StudyError messages of from_toml,
+        naming `source_name` and a line and column of the generated text, `toml_text`.
+        """
+        try:
+            text = to_toml(study)
+        except (TypeError, ValueError) as error:
+            raise StudyError(f"{source_name}: {error}") from None
+        return cls(text=text, source_name=source_name)
+
+    @property
+    def toml_text(self) -> Optional[str]:
+        """The TOML text of from_toml and from_dict (None for a file): what messages point at."""
+        return self._text
 
     def definition(self) -> "_core.StudyDefinition":
         """The parsed study (raises StudyError when it is not valid)."""
@@ -195,3 +323,4 @@ def check(paths: Union[PathLike, Iterable[PathLike]], *, threads: Optional[int] 
     return CheckResult(exit_code=result["exit_code"], outcomes=outcomes,
                        studies=result["studies"], report=result["report"],
                        counts=result["counts"])
+

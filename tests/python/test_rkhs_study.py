@@ -197,3 +197,103 @@ def test_run_releases_the_gil(tmp_path):
         thread.join()
     inside = [t for t in ticks if start + 0.02 < t < end - 0.02]
     assert end - start > 0.1 and len(inside) > 10, (end - start, len(inside))
+
+
+# Study.from_dict: a study as a dict of the study file's tables, written as TOML.
+
+def study_dict():
+    import tomllib
+    with open(STUDY, "rb") as f:
+        return tomllib.load(f)
+
+
+def test_from_dict_is_the_same_study_as_the_file(cli_out):
+    study = rkhs_study.Study.from_dict(study_dict())
+    assert repr(study) == "Study('<dict>')"
+    assert_frames_identical(study.trials(), rkhs_study.Study.load(STUDY).trials())
+    results = study.run(threads=2)
+    assert_frames_identical(results.trials, rkhs_study.read_csv(cli_out / "trials.csv"))
+    assert_frames_identical(results.rates, rkhs_study.read_csv(cli_out / "rates.csv"))
+    assert [o["outcome"] for o in results.outcomes] == ["passed"] * 11
+
+
+def test_from_dict_text_reads_back_as_the_dict():
+    import tomllib
+    d = study_dict()
+    text = rkhs_study.Study.from_dict(d).toml_text
+    assert tomllib.loads(text) == d
+    assert "[[kernel]]" in text and "n = { from = 10, to = 100, step = 10 }" in text
+    # a file's Study has no text of its own; from_toml keeps its text
+    assert rkhs_study.Study.load(STUDY).toml_text is None
+    assert rkhs_study.Study.from_toml("x = 1\n").toml_text == "x = 1\n"
+
+
+def test_to_toml_writes_every_value_so_that_it_reads_back():
+    import datetime
+    import math
+    import tomllib
+    import numpy as np
+    d = {
+        "plugins": ["a.so", "b c.so"],
+        "top": 1,
+        "t": {
+            "quote": 'say "hi" \\ there',
+            "controls": "tab\there\nline\r\b\f\x00\x1f\x7f end",
+            "unicode": "Π_n ε ü",
+            "floats": [0.1, 1e-300, 5e-324, 1.7976931348623157e308, -0.0, 1 / 3, 1e16, 2.5],
+            "special": [math.inf, -math.inf],
+            "ints": [0, -1, 2**63 - 1, -2**63],
+            "bools": [True, False],
+            "numpy": [np.float64(0.1), np.int64(7), np.bool_(True)],
+            "mixed": [1, "two", 3.0],
+            "empty": [],
+            "nested": {"a": {"b": [1, 2]}, "c": "d"},
+            "tables": [{"x": 1}, {"y": [2.5]}],
+            "odd key": 1, "": 2, "dotted.key": 3,
+            "when": datetime.date(2024, 1, 2),
+        },
+        "arr": [{"name": "a", "p": [1, 2], "sub": {"q": 1.5}}, {"name": "b"}],
+        "empty_table": {},
+    }
+    text = rkhs_study.to_toml(d)
+    back = tomllib.loads(text)
+    expected = dict(d)
+    expected["t"] = dict(d["t"], numpy=[0.1, 7, True])
+    assert back == expected
+    floats = back["t"]["floats"]
+    assert [repr(x) for x in floats] == [repr(x) for x in d["t"]["floats"]]
+    assert math.copysign(1, floats[4]) == -1
+    assert math.isnan(tomllib.loads(rkhs_study.to_toml({"x": math.nan}))["x"])
+    # the top level's values come before its first table
+    assert text.index("top = 1") < text.index("[t]")
+
+
+def test_to_toml_refuses_what_toml_cannot_hold():
+    with pytest.raises(TypeError, match=r"t\.x: NoneType None has no TOML form"):
+        rkhs_study.to_toml({"t": {"x": None}})
+    with pytest.raises(ValueError, match=r"t\.x: 9223372036854775808 is beyond"):
+        rkhs_study.to_toml({"t": {"x": 2**63}})
+    with pytest.raises(TypeError, match="a study is a dict"):
+        rkhs_study.to_toml([1])
+
+
+def test_from_dict_error_names_the_dict_the_key_and_the_generated_text():
+    d = study_dict()
+    d["study"]["abscissa"] = "m"
+    study = rkhs_study.Study.from_dict(d)
+    with pytest.raises(rkhs_study.StudyError) as error:
+        study.validate()
+    message = str(error.value)
+    found = re.match(r"<dict>:(\d+):(\d+): study\.abscissa: ", message)
+    assert found, message
+    line = study.toml_text.splitlines()[int(found.group(1)) - 1]
+    assert line[int(found.group(2)) - 1:] == '"m"', line
+    with pytest.raises(rkhs_study.StudyError, match=r"^mine:\d+:\d+: kernel\.sigma: "):
+        d = study_dict()
+        d["kernel"][0]["sigma"] = -1.0
+        rkhs_study.Study.from_dict(d, source_name="mine").trials()
+    # a value TOML has no form for is a StudyError too, before any text is parsed
+    d = study_dict()
+    d["study"]["description"] = None
+    with pytest.raises(rkhs_study.StudyError, match=r"^<dict>: study\.description: NoneType"):
+        rkhs_study.Study.from_dict(d)
