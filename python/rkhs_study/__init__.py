@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import datetime
 import io
+import json
 import math
 import numbers
 import os
@@ -177,6 +178,13 @@ class Results:
     outcomes: list = field(default_factory=list)  # the expectations' verdicts (dicts)
     verification: str = ""  # the verdicts as `rkhs-study check` prints them
     warnings: list = field(default_factory=list)  # the study file's (validate's) warnings
+    study: str = ""       # the study's name
+    provenance: dict = field(default_factory=dict)  # summary.json's: version, commit, threads...
+
+    @property
+    def verdicts(self) -> pd.DataFrame:
+        """The expectations' verdicts, one row per outcome (the dicts of `outcomes`)."""
+        return _verdict_frame(self.outcomes)
 
 
 @dataclass
@@ -195,6 +203,11 @@ class CheckResult:
 
     def __bool__(self) -> bool:
         return self.passed
+
+    @property
+    def verdicts(self) -> pd.DataFrame:
+        """The verdicts of every study, one row per outcome (the dicts of `outcomes`)."""
+        return _verdict_frame(self.outcomes)
 
 
 class Study:
@@ -294,7 +307,8 @@ class Study:
                            failed=summary["failed"], seconds=summary["seconds"],
                            outcomes=summary["outcomes"],
                            verification=summary["verification"],
-                           warnings=summary["warnings"])
+                           warnings=summary["warnings"], study=summary["study"],
+                           provenance=_read_provenance(folder))
 
         if out is not None:
             return run_into(os.fspath(out))
@@ -323,4 +337,25 @@ def check(paths: Union[PathLike, Iterable[PathLike]], *, threads: Optional[int] 
     return CheckResult(exit_code=result["exit_code"], outcomes=outcomes,
                        studies=result["studies"], report=result["report"],
                        counts=result["counts"])
+
+
+# ---------------------------------------------------------------------------------------------
+# Helpers of Results, CheckResult and Validation
+
+def _read_provenance(folder: str) -> dict:
+    """summary.json's provenance (version, git_commit, compiler, threads, started, ...)."""
+    with open(os.path.join(folder, "summary.json"), encoding="utf-8") as f:
+        return json.load(f).get("provenance", {})
+
+
+_OUTCOME_FIELDS = ["study", "name", "outcome", "verdict", "metric", "location", "group",
+                   "group_label", "expected", "found", "reason", "advice", "xfail", "summary",
+                   "rate", "ci_low", "ci_high", "accepted_low", "accepted_high",
+                   "effectivity_min", "effectivity_max", "seconds"]
+
+
+def _verdict_frame(outcomes: list) -> pd.DataFrame:
+    if not outcomes:
+        return pd.DataFrame(columns=_OUTCOME_FIELDS)
+    return pd.DataFrame.from_records(outcomes)
 

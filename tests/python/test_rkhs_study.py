@@ -297,3 +297,55 @@ def test_from_dict_error_names_the_dict_the_key_and_the_generated_text():
     d["study"]["description"] = None
     with pytest.raises(rkhs_study.StudyError, match=r"^<dict>: study\.description: NoneType"):
         rkhs_study.Study.from_dict(d)
+
+
+# Results.provenance and Results.verdicts against summary.json
+
+def test_provenance_and_verdicts_are_summary_jsons(tmp_path):
+    import json
+    import math
+    results = rkhs_study.Study.load(STUDY).run(threads=2, out=tmp_path)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert results.study == summary["study"] == "gram_and_power"
+    assert results.provenance == summary["provenance"]
+    assert results.provenance["threads"] == 2
+    assert {"version", "git_commit", "compiler", "build_type", "started"} <= set(
+        results.provenance)
+    verdicts = results.verdicts
+    assert isinstance(verdicts, pd.DataFrame)
+    expected = summary["expectations"]["outcomes"]
+    assert len(verdicts) == len(expected) == len(results.outcomes) == 11
+    assert list(verdicts.columns) == list(results.outcomes[0])
+    for (_, row), outcome in zip(verdicts.iterrows(), expected):
+        for key in ("name", "metric", "location", "group", "group_label", "outcome",
+                    "expected", "found", "reason"):
+            assert row[key] == outcome[key], key
+        assert row["verdict"].lower() == outcome["verdict"]
+        assert row["study"] == summary["study"]
+        for key in ("rate", "ci_low", "ci_high", "accepted_low", "accepted_high",
+                    "effectivity_min", "effectivity_max"):
+            value = outcome[key]  # summary.json: null for NaN, "inf" and "-inf" as text
+            if value is None:
+                assert math.isnan(row[key]), key
+            else:
+                assert row[key] == float(value), key
+
+
+def test_provenance_of_a_temporary_folder_is_kept():
+    results = rkhs_study.Study.load(STUDY).run(threads=1)
+    assert results.out is None
+    assert results.provenance["threads"] == 1
+    assert results.provenance["wall_seconds"] >= 0
+
+
+def test_verdicts_of_a_study_without_expectations_is_an_empty_frame():
+    text = STUDY.read_text().split("[[expect]]")[0]
+    results = rkhs_study.Study.from_toml(text).run(threads=2)
+    assert results.outcomes == []
+    assert results.verdicts.empty
+    assert {"name", "outcome", "rate"} <= set(results.verdicts.columns)
+
+
+def test_check_verdicts_are_its_outcomes():
+    result = rkhs_study.check(STUDY, tier="quick")
+    assert result.verdicts["outcome"].tolist() == [o["outcome"] for o in result.outcomes]
