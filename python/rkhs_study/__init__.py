@@ -13,7 +13,9 @@ The command line's study, run and check, as thin bindings over the same C++ libr
 
 from __future__ import annotations
 
+import base64
 import datetime
+import html
 import io
 import json
 import math
@@ -165,6 +167,22 @@ class Validation:
     expectations: int
     tiers: list
 
+    def _repr_html_(self) -> str:
+        """Jupyter's view: the grid's axes and their product, the warnings."""
+        rows = [(plural, count) for _, plural, count in self.axes]
+        grid = "".join(f"<tr><td>{_e(plural)}</td><td>{count}</td></tr>" for plural, count in rows)
+        grid += f"<tr><th>trials</th><th>{self.trial_count}</th></tr>"
+        parts = [f"<h4>{_e(self.name)}: valid {_e(self.kind)} study</h4>",
+                 f"<p>{_e(self.source)}; {self.expectations} expectation"
+                 f"{'' if self.expectations == 1 else 's'}"
+                 + (f", tiers {_e(', '.join(self.tiers))}" if self.tiers else "") + "</p>",
+                 '<table class="rkhs-grid"><thead><tr><th>axis</th><th>values</th></tr></thead>'
+                 f"<tbody>{grid}</tbody></table>",
+                 f"<p>metrics computed: {_e(', '.join(self.computed_metrics))}</p>"]
+        if self.warnings:
+            parts.append("<ul>" + "".join(f"<li>{_e(w)}</li>" for w in self.warnings) + "</ul>")
+        return "\n".join(parts)
+
 
 @dataclass
 class Results:
@@ -185,6 +203,90 @@ class Results:
     def verdicts(self) -> pd.DataFrame:
         """The expectations' verdicts, one row per outcome (the dicts of `outcomes`)."""
         return _verdict_frame(self.outcomes)
+
+    def plot(self, metric: Optional[str] = None, ax=None):
+        """The convergence plot of `metric` with matplotlib: the metric against n, log-log.
+
+        One line per group of trials (every axis column but n, as rates.csv groups them),
+        labelled with the axis values that tell the groups apart and the fitted rate of
+        `rates` with its 95% confidence interval. metric None: the first error metric (the
+        order of the command's plots). ax: the matplotlib Axes to draw into (None: a new
+        figure of matplotlib.pyplot). Returns the Axes (its figure: `.figure`).
+        """
+        if ax is None:
+            import matplotlib.pyplot as plt
+            _, ax = plt.subplots(figsize=(6.4, 4.4))
+        metric = metric or self._default_metric()
+        if metric not in self.trials.columns:
+            raise ValueError(f"no metric {metric!r} in trials (metrics: "
+                             f"{', '.join(_metrics(self.rates))})")
+        groups = _group_columns(self.rates)
+        labels = _group_labels(self.trials, groups)
+        fits = self.rates[(self.rates["metric"] == metric) & (self.rates["kind"] == "fit")]
+        for key, rows in _by_group(self.trials, groups):
+            fit = _matching(fits, groups, key)
+            label = labels[key]
+            rate = _rate_text(fit.iloc[0]) if len(fit) else "no rate"
+            ax.plot(rows["n"].to_numpy(), rows[metric].to_numpy(), marker="o", markersize=3,
+                    label=f"{label}: {rate}" if label else rate)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("n")
+        ax.set_ylabel(metric)
+        ax.set_title(f"{self.study}: {metric}" if self.study else metric)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize="small")
+        return ax
+
+    def _default_metric(self) -> str:
+        metrics = _metrics(self.rates)
+        if not metrics:
+            raise ValueError("no metric to plot: rates is empty")
+        rank = lambda m: (0 if "error" in m else
+                          2 if m in ("fill_distance", "separation_distance") else 1)
+        return sorted(metrics, key=rank)[0]  # stable: convergence_plot_order (plots.cpp)
+
+    def rates_table(self) -> pd.DataFrame:
+        """The fitted rates, one row per group and metric (rates' rows of kind "fit")."""
+        groups = _group_columns(self.rates)
+        fits = self.rates[self.rates["kind"] == "fit"]
+        labels = _group_labels(fits, groups)
+        table = pd.DataFrame({
+            "group": [labels[k] for k in _keys(fits, groups)],
+            **{c: fits[c] for c in ("metric", "model", "n_from", "n_to", "rate", "ci_low",
+                                     "ci_high", "value") if c in fits.columns}})
+        return table.reset_index(drop=True)
+
+    def _repr_html_(self) -> str:
+        """Jupyter's view: the run's counts, its verdicts, the fitted rates, a plot."""
+        parts = [f"<h4>{_e(self.study or 'study')}: {len(self.trials)} trials, "
+                 f"{self.failed} failed, {self.seconds:.3g} s</h4>"]
+        if self.outcomes:
+            parts.append(f"<p>expectations: {_e(_count_outcomes(self.outcomes))}</p>")
+        if self.out is not None:
+            parts.append(f"<p>output: {_e(os.fspath(self.out))}</p>")
+        if len(self.rates):
+            parts.append(self.rates_table().to_html(index=False, na_rep="",
+                                                    float_format=_number,
+                                                    classes="rkhs-rates"))
+            image = self._png()
+            if image:
+                parts.append(f'<img src="data:image/png;base64,{image}" '
+                             'alt="convergence plot"/>')
+        return "\n".join(parts)
+
+    def _png(self) -> str:
+        """The convergence plot of the first error metric as base64 PNG ("" without matplotlib)."""
+        try:
+            from matplotlib.figure import Figure
+        except ImportError:
+            return ""
+        figure = Figure(figsize=(6.4, 4.4), dpi=100)
+        self.plot(ax=figure.add_subplot())
+        figure.tight_layout()
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format="png")
+        return base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
 @dataclass
@@ -208,6 +310,16 @@ class CheckResult:
     def verdicts(self) -> pd.DataFrame:
         """The verdicts of every study, one row per outcome (the dicts of `outcomes`)."""
         return _verdict_frame(self.outcomes)
+
+    def _repr_html_(self) -> str:
+        """Jupyter's view: passed or not, the verdict counts, a row per outcome."""
+        head = (f"<h4>check {'passed' if self.passed else 'did not pass'} "
+                f"(exit {self.exit_code}): {_e(self.counts)}</h4>")
+        columns = ["study", "name", "outcome", "summary", "location"]
+        frame = self.verdicts
+        table = frame[[c for c in columns if c in frame.columns]].to_html(
+            index=False, na_rep="", classes="rkhs-verdicts")
+        return head + "\n" + table
 
 
 class Study:
@@ -359,3 +471,119 @@ def _verdict_frame(outcomes: list) -> pd.DataFrame:
         return pd.DataFrame(columns=_OUTCOME_FIELDS)
     return pd.DataFrame.from_records(outcomes)
 
+
+def _count_outcomes(outcomes: list) -> str:
+    counts = {}
+    for o in outcomes:
+        counts[o["outcome"]] = counts.get(o["outcome"], 0) + 1
+    return ", ".join(f"{n} {outcome}" for outcome, n in counts.items())
+
+
+def _e(text) -> str:
+    return html.escape(str(text))
+
+
+def _number(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def _metrics(rates: pd.DataFrame) -> list:
+    return list(dict.fromkeys(rates["metric"])) if "metric" in rates.columns else []
+
+
+def _group_columns(rates: pd.DataFrame) -> list:
+    """The axis columns of rates.csv: every column before "metric"."""
+    columns = list(rates.columns)
+    return columns[:columns.index("metric")] if "metric" in columns else []
+
+
+def _key_value(value):
+    return None if isinstance(value, float) and math.isnan(value) else value
+
+
+def _keys(frame: pd.DataFrame, columns: list) -> list:
+    return [tuple(_key_value(v) for v in row)
+            for row in frame[columns].itertuples(index=False, name=None)]
+
+
+def _by_group(trials: pd.DataFrame, columns: list):
+    """(key, rows) per group of trials, in the order of their first trial (NaN as a value)."""
+    keys = _keys(trials, columns)
+    order = list(dict.fromkeys(keys))
+    positions = {}
+    for i, key in enumerate(keys):
+        positions.setdefault(key, []).append(i)
+    for key in order:
+        yield key, trials.iloc[positions[key]]
+
+
+def _matching(frame: pd.DataFrame, columns: list, key: tuple) -> pd.DataFrame:
+    keys = _keys(frame, columns)
+    return frame.iloc[[i for i, k in enumerate(keys) if k == key]]
+
+
+_PLUGIN_AXES = ("kernel", "target", "centres", "projection", "plant", "law", "integrator")
+
+
+def _text(value) -> str:
+    if isinstance(value, float) and value.is_integer():
+        return str(int(value))
+    return str(value)
+
+
+def _group_labels(frame: pd.DataFrame, columns: list) -> dict:
+    """A short label per group: the axis values that tell the groups apart.
+
+    A plugin's name (kernel, target, ...) when it varies; a parameter (its column after its
+    plugin's, the plugin's prefix dropped: target_amplitude is amplitude) as name=value when it
+    varies among the groups of the same plugin name.
+    """
+    keys = list(dict.fromkeys(_keys(frame, columns)))
+    owner = []  # the plugin-name column each column belongs to (-1: its own)
+    current = -1
+    for i, c in enumerate(columns):
+        if c in _PLUGIN_AXES:
+            current = i
+            owner.append(i)
+        else:
+            owner.append(current if c != "laps" else i)
+    shown = []
+    for i, c in enumerate(columns):
+        if owner[i] == i:
+            shown.append(len({k[i] for k in keys}) > 1)
+        else:
+            values = {}
+            for k in keys:
+                values.setdefault(k[owner[i]], set()).add(k[i])
+            shown.append(any(len(v) > 1 for v in values.values()))
+    labels = {}
+    for key in keys:
+        parts = []
+        for i, c in enumerate(columns):
+            if not shown[i] or key[i] is None:
+                continue
+            if c in _PLUGIN_AXES:
+                parts.append(_text(key[i]))
+            else:
+                name = c
+                if owner[i] >= 0 and c.startswith(columns[owner[i]] + "_"):
+                    name = c[len(columns[owner[i]]) + 1:]
+                parts.append(f"{name}={_text(key[i])}")
+        labels[key] = " ".join(parts)
+    return labels
+
+
+def _rate_text(fit) -> str:
+    """The fitted rate of a rates.csv row: "rate -2.01 [-2.05, -1.97]" (the 95% CI)."""
+    model = fit.get("model", "power_law")
+    if model == "constant":
+        return f"constant {_number(fit['value'])}"
+    if not math.isfinite(fit["rate"]):
+        return "no rate"
+    name = "exponential rate" if model == "exponential" else "rate"
+    if fit.get("abscissa", "n") == "h":
+        name += " (against h)"
+    interval = ""
+    if math.isfinite(fit["ci_low"]) and math.isfinite(fit["ci_high"]):
+        interval = f" [{fit['ci_low']:.3g}, {fit['ci_high']:.3g}]"
+    return f"{name} {fit['rate']:.3g}{interval}"

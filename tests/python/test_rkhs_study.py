@@ -349,3 +349,105 @@ def test_verdicts_of_a_study_without_expectations_is_an_empty_frame():
 def test_check_verdicts_are_its_outcomes():
     result = rkhs_study.check(STUDY, tier="quick")
     assert result.verdicts["outcome"].tolist() == [o["outcome"] for o in result.outcomes]
+
+
+# Results.plot with matplotlib (Agg) and the rich display of Jupyter (_repr_html_)
+
+@pytest.fixture(scope="module")
+def results():
+    return rkhs_study.Study.load(STUDY).run(threads=2)
+
+
+@pytest.fixture(scope="module")
+def agg():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    yield plt
+    plt.close("all")
+
+
+def test_plot_draws_one_line_per_group_with_the_trials_values(results, agg, cli_out):
+    import numpy as np
+    trials = rkhs_study.read_csv(cli_out / "trials.csv")
+    ax = results.plot("power_function_sup")
+    assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+    lines = ax.get_lines()
+    kernels = [("gaussian", None), ("bspline", 1), ("bspline", 2)]
+    assert len(lines) == len(kernels) == 3
+    for line, (kernel, degree) in zip(lines, kernels):
+        rows = trials[(trials["kernel"] == kernel)
+                      & (trials["degree"].isna() if degree is None else trials["degree"] == degree)]
+        assert np.array_equal(line.get_xdata(), rows["n"].to_numpy())
+        assert np.array_equal(line.get_ydata(), rows["power_function_sup"].to_numpy())
+    labels = [line.get_label() for line in lines]
+    fits = results.rates.query("metric == 'power_function_sup' and kind == 'fit'")
+    degree1 = fits[fits["degree"] == 1].iloc[0]
+    assert labels[1] == (f"bspline degree=1 r=1: rate {degree1['rate']:.3g} "
+                         f"[{degree1['ci_low']:.3g}, {degree1['ci_high']:.3g}]")
+    assert labels[0].startswith("gaussian: exponential rate ")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == labels
+    agg.close(ax.figure)
+
+
+def test_plot_defaults_to_the_first_error_metric_and_takes_an_axes(results, agg):
+    figure, given = agg.subplots()
+    ax = results.plot(ax=given)
+    assert ax is given and ax.figure is figure
+    assert ax.get_ylabel() == "l2_error"
+    assert len(ax.get_lines()) == 3
+    with pytest.raises(ValueError, match="no metric 'bogus'"):
+        results.plot("bogus", ax=given)
+    agg.close(figure)
+
+
+def test_results_html_has_the_counts_the_rates_and_a_plot(results, agg):
+    page = results._repr_html_()
+    assert page.startswith(f"<h4>gram_and_power: 30 trials, 0 failed, ")
+    assert "expectations: 11 passed" in page
+    fits = results.rates[results.rates["kind"] == "fit"]
+    table = page[page.index("<table"):page.index("</table>")]
+    assert table.count("<tr") == len(fits) + 1  # a header and a row per group and metric
+    assert "<td>bspline degree=2 r=2</td>" in table and "<td>power_function_sup</td>" in table
+    import base64
+    image = re.search(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
+    assert image and base64.b64decode(image.group(1)).startswith(b"\x89PNG\r\n\x1a\n")
+    assert results.rates_table()["group"].tolist()[:1] == ["gaussian"]
+
+
+def test_check_and_validation_html():
+    result = rkhs_study.check(STUDY, tier="quick")
+    page = result._repr_html_()
+    assert page.startswith("<h4>check passed (exit 0): 11 passed, 0 failed, 0 inconclusive")
+    assert page.count("<td>passed</td>") == 11
+    assert page.count("<tr") == 12
+    validation = rkhs_study.Study.load(STUDY).validate()
+    page = validation._repr_html_()
+    assert "<tr><td>kernels</td><td>3</td></tr>" in page
+    assert "<tr><td>values of n</td><td>10</td></tr>" in page
+    assert "<tr><th>trials</th><th>30</th></tr>" in page
+
+
+def test_the_package_imports_and_displays_without_matplotlib(tmp_path):
+    """matplotlib is imported when a plot is drawn, not before; without it no image."""
+    script = (
+        "import sys\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] == 'matplotlib':\n"
+        "            raise ImportError('no matplotlib here')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "import rkhs_study\n"
+        "assert 'matplotlib' not in sys.modules\n"
+        "r = rkhs_study.Study.load(sys.argv[1]).run(threads=2)\n"
+        "page = r._repr_html_()\n"
+        "assert '<table' in page and '<img' not in page, page[:200]\n"
+        "try:\n"
+        "    r.plot()\n"
+        "except ImportError:\n"
+        "    print('ok')\n")
+    package = Path(rkhs_study.__file__).resolve().parents[1]
+    done = subprocess.run([sys.executable, "-c", script, str(STUDY)], capture_output=True,
+                          text=True, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(package)))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ok"
