@@ -9,6 +9,10 @@ The command line's study, run and check, as thin bindings over the same C++ libr
     grid = study.trials()            # the trial grid, nothing run: a pandas DataFrame
     results = study.run(threads=2)   # results.trials, results.rates: trials.csv, rates.csv
     rkhs_study.check(["studies/gram_and_power.toml"]).passed
+
+and around them: Study.from_dict (a study as a dict of its tables, written as TOML by to_toml),
+Results.provenance and .verdicts (summary.json's), Results.plot (matplotlib, imported when
+drawing) and the HTML that Jupyter shows for Results, CheckResult and Validation.
 """
 
 from __future__ import annotations
