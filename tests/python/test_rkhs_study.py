@@ -197,3 +197,257 @@ def test_run_releases_the_gil(tmp_path):
         thread.join()
     inside = [t for t in ticks if start + 0.02 < t < end - 0.02]
     assert end - start > 0.1 and len(inside) > 10, (end - start, len(inside))
+
+
+# Study.from_dict: a study as a dict of the study file's tables, written as TOML.
+
+def study_dict():
+    import tomllib
+    with open(STUDY, "rb") as f:
+        return tomllib.load(f)
+
+
+def test_from_dict_is_the_same_study_as_the_file(cli_out):
+    study = rkhs_study.Study.from_dict(study_dict())
+    assert repr(study) == "Study('<dict>')"
+    assert_frames_identical(study.trials(), rkhs_study.Study.load(STUDY).trials())
+    results = study.run(threads=2)
+    assert_frames_identical(results.trials, rkhs_study.read_csv(cli_out / "trials.csv"))
+    assert_frames_identical(results.rates, rkhs_study.read_csv(cli_out / "rates.csv"))
+    assert [o["outcome"] for o in results.outcomes] == ["passed"] * 11
+
+
+def test_from_dict_text_reads_back_as_the_dict():
+    import tomllib
+    d = study_dict()
+    text = rkhs_study.Study.from_dict(d).toml_text
+    assert tomllib.loads(text) == d
+    assert "[[kernel]]" in text and "n = { from = 10, to = 100, step = 10 }" in text
+    # a file's Study has no text of its own; from_toml keeps its text
+    assert rkhs_study.Study.load(STUDY).toml_text is None
+    assert rkhs_study.Study.from_toml("x = 1\n").toml_text == "x = 1\n"
+
+
+def test_to_toml_writes_every_value_so_that_it_reads_back():
+    import datetime
+    import math
+    import tomllib
+    import numpy as np
+    d = {
+        "plugins": ["a.so", "b c.so"],
+        "top": 1,
+        "t": {
+            "quote": 'say "hi" \\ there',
+            "controls": "tab\there\nline\r\b\f\x00\x1f\x7f end",
+            "unicode": "Π_n ε ü",
+            "floats": [0.1, 1e-300, 5e-324, 1.7976931348623157e308, -0.0, 1 / 3, 1e16, 2.5],
+            "special": [math.inf, -math.inf],
+            "ints": [0, -1, 2**63 - 1, -2**63],
+            "bools": [True, False],
+            "numpy": [np.float64(0.1), np.int64(7), np.bool_(True)],
+            "mixed": [1, "two", 3.0],
+            "empty": [],
+            "nested": {"a": {"b": [1, 2]}, "c": "d"},
+            "tables": [{"x": 1}, {"y": [2.5]}],
+            "odd key": 1, "": 2, "dotted.key": 3,
+            "when": datetime.date(2024, 1, 2),
+        },
+        "arr": [{"name": "a", "p": [1, 2], "sub": {"q": 1.5}}, {"name": "b"}],
+        "empty_table": {},
+    }
+    text = rkhs_study.to_toml(d)
+    back = tomllib.loads(text)
+    expected = dict(d)
+    expected["t"] = dict(d["t"], numpy=[0.1, 7, True])
+    assert back == expected
+    floats = back["t"]["floats"]
+    assert [repr(x) for x in floats] == [repr(x) for x in d["t"]["floats"]]
+    assert math.copysign(1, floats[4]) == -1
+    assert math.isnan(tomllib.loads(rkhs_study.to_toml({"x": math.nan}))["x"])
+    # the top level's values come before its first table
+    assert text.index("top = 1") < text.index("[t]")
+
+
+def test_to_toml_refuses_what_toml_cannot_hold():
+    with pytest.raises(TypeError, match=r"t\.x: NoneType None has no TOML form"):
+        rkhs_study.to_toml({"t": {"x": None}})
+    with pytest.raises(ValueError, match=r"t\.x: 9223372036854775808 is beyond"):
+        rkhs_study.to_toml({"t": {"x": 2**63}})
+    with pytest.raises(TypeError, match="a study is a dict"):
+        rkhs_study.to_toml([1])
+
+
+def test_from_dict_error_names_the_dict_the_key_and_the_generated_text():
+    d = study_dict()
+    d["study"]["abscissa"] = "m"
+    study = rkhs_study.Study.from_dict(d)
+    with pytest.raises(rkhs_study.StudyError) as error:
+        study.validate()
+    message = str(error.value)
+    found = re.match(r"<dict>:(\d+):(\d+): study\.abscissa: ", message)
+    assert found, message
+    line = study.toml_text.splitlines()[int(found.group(1)) - 1]
+    assert line[int(found.group(2)) - 1:] == '"m"', line
+    with pytest.raises(rkhs_study.StudyError, match=r"^mine:\d+:\d+: kernel\.sigma: "):
+        d = study_dict()
+        d["kernel"][0]["sigma"] = -1.0
+        rkhs_study.Study.from_dict(d, source_name="mine").trials()
+    # a value TOML has no form for is a StudyError too, before any text is parsed
+    d = study_dict()
+    d["study"]["description"] = None
+    with pytest.raises(rkhs_study.StudyError, match=r"^<dict>: study\.description: NoneType"):
+        rkhs_study.Study.from_dict(d)
+
+
+# Results.provenance and Results.verdicts against summary.json
+
+def test_provenance_and_verdicts_are_summary_jsons(tmp_path):
+    import json
+    import math
+    results = rkhs_study.Study.load(STUDY).run(threads=2, out=tmp_path)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert results.study == summary["study"] == "gram_and_power"
+    assert results.provenance == summary["provenance"]
+    assert results.provenance["threads"] == 2
+    assert {"version", "git_commit", "compiler", "build_type", "started"} <= set(
+        results.provenance)
+    verdicts = results.verdicts
+    assert isinstance(verdicts, pd.DataFrame)
+    expected = summary["expectations"]["outcomes"]
+    assert len(verdicts) == len(expected) == len(results.outcomes) == 11
+    assert list(verdicts.columns) == list(results.outcomes[0])
+    for (_, row), outcome in zip(verdicts.iterrows(), expected):
+        for key in ("name", "metric", "location", "group", "group_label", "outcome",
+                    "expected", "found", "reason"):
+            assert row[key] == outcome[key], key
+        assert row["verdict"].lower() == outcome["verdict"]
+        assert row["study"] == summary["study"]
+        for key in ("rate", "ci_low", "ci_high", "accepted_low", "accepted_high",
+                    "effectivity_min", "effectivity_max"):
+            value = outcome[key]  # summary.json: null for NaN, "inf" and "-inf" as text
+            if value is None:
+                assert math.isnan(row[key]), key
+            else:
+                assert row[key] == float(value), key
+
+
+def test_provenance_of_a_temporary_folder_is_kept():
+    results = rkhs_study.Study.load(STUDY).run(threads=1)
+    assert results.out is None
+    assert results.provenance["threads"] == 1
+    assert results.provenance["wall_seconds"] >= 0
+
+
+def test_verdicts_of_a_study_without_expectations_is_an_empty_frame():
+    text = STUDY.read_text().split("[[expect]]")[0]
+    results = rkhs_study.Study.from_toml(text).run(threads=2)
+    assert results.outcomes == []
+    assert results.verdicts.empty
+    assert {"name", "outcome", "rate"} <= set(results.verdicts.columns)
+
+
+def test_check_verdicts_are_its_outcomes():
+    result = rkhs_study.check(STUDY, tier="quick")
+    assert result.verdicts["outcome"].tolist() == [o["outcome"] for o in result.outcomes]
+
+
+# Results.plot with matplotlib (Agg) and the rich display of Jupyter (_repr_html_)
+
+@pytest.fixture(scope="module")
+def results():
+    return rkhs_study.Study.load(STUDY).run(threads=2)
+
+
+@pytest.fixture(scope="module")
+def agg():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    yield plt
+    plt.close("all")
+
+
+def test_plot_draws_one_line_per_group_with_the_trials_values(results, agg, cli_out):
+    import numpy as np
+    trials = rkhs_study.read_csv(cli_out / "trials.csv")
+    ax = results.plot("power_function_sup")
+    assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+    lines = ax.get_lines()
+    kernels = [("gaussian", None), ("bspline", 1), ("bspline", 2)]
+    assert len(lines) == len(kernels) == 3
+    for line, (kernel, degree) in zip(lines, kernels):
+        rows = trials[(trials["kernel"] == kernel)
+                      & (trials["degree"].isna() if degree is None else trials["degree"] == degree)]
+        assert np.array_equal(line.get_xdata(), rows["n"].to_numpy())
+        assert np.array_equal(line.get_ydata(), rows["power_function_sup"].to_numpy())
+    labels = [line.get_label() for line in lines]
+    fits = results.rates.query("metric == 'power_function_sup' and kind == 'fit'")
+    degree1 = fits[fits["degree"] == 1].iloc[0]
+    assert labels[1] == (f"bspline degree=1 r=1: rate {degree1['rate']:.3g} "
+                         f"[{degree1['ci_low']:.3g}, {degree1['ci_high']:.3g}]")
+    assert labels[0].startswith("gaussian: exponential rate ")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == labels
+    agg.close(ax.figure)
+
+
+def test_plot_defaults_to_the_first_error_metric_and_takes_an_axes(results, agg):
+    figure, given = agg.subplots()
+    ax = results.plot(ax=given)
+    assert ax is given and ax.figure is figure
+    assert ax.get_ylabel() == "l2_error"
+    assert len(ax.get_lines()) == 3
+    with pytest.raises(ValueError, match="no metric 'bogus'"):
+        results.plot("bogus", ax=given)
+    agg.close(figure)
+
+
+def test_results_html_has_the_counts_the_rates_and_a_plot(results, agg):
+    page = results._repr_html_()
+    assert page.startswith(f"<h4>gram_and_power: 30 trials, 0 failed, ")
+    assert "expectations: 11 passed" in page
+    fits = results.rates[results.rates["kind"] == "fit"]
+    table = page[page.index("<table"):page.index("</table>")]
+    assert table.count("<tr") == len(fits) + 1  # a header and a row per group and metric
+    assert "<td>bspline degree=2 r=2</td>" in table and "<td>power_function_sup</td>" in table
+    import base64
+    image = re.search(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
+    assert image and base64.b64decode(image.group(1)).startswith(b"\x89PNG\r\n\x1a\n")
+    assert results.rates_table()["group"].tolist()[:1] == ["gaussian"]
+
+
+def test_check_and_validation_html():
+    result = rkhs_study.check(STUDY, tier="quick")
+    page = result._repr_html_()
+    assert page.startswith("<h4>check passed (exit 0): 11 passed, 0 failed, 0 inconclusive")
+    assert page.count("<td>passed</td>") == 11
+    assert page.count("<tr") == 12
+    validation = rkhs_study.Study.load(STUDY).validate()
+    page = validation._repr_html_()
+    assert "<tr><td>kernels</td><td>3</td></tr>" in page
+    assert "<tr><td>values of n</td><td>10</td></tr>" in page
+    assert "<tr><th>trials</th><th>30</th></tr>" in page
+
+
+def test_the_package_imports_and_displays_without_matplotlib(tmp_path):
+    """matplotlib is imported when a plot is drawn, not before; without it no image."""
+    script = (
+        "import sys\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] == 'matplotlib':\n"
+        "            raise ImportError('no matplotlib here')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "import rkhs_study\n"
+        "assert 'matplotlib' not in sys.modules\n"
+        "r = rkhs_study.Study.load(sys.argv[1]).run(threads=2)\n"
+        "page = r._repr_html_()\n"
+        "assert '<table' in page and '<img' not in page, page[:200]\n"
+        "try:\n"
+        "    r.plot()\n"
+        "except ImportError:\n"
+        "    print('ok')\n")
+    package = Path(rkhs_study.__file__).resolve().parents[1]
+    done = subprocess.run([sys.executable, "-c", script, str(STUDY)], capture_output=True,
+                          text=True, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(package)))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ok"
