@@ -293,3 +293,55 @@ def test_a_store_reuses_a_python_kernels_trials_until_its_source_changes(tmp_pat
     assert (changed.ran, changed.reused) == (2, 0)
     assert not np.array_equal(first.trials["l2_error"], changed.trials["l2_error"])
     rkhs_study.unregister(StoredGaussianB)
+
+
+def test_python_gaussian_in_an_adaptive_study_gives_the_builtin_gaussians_metrics():
+    """The adaptive engine evaluates the kernel sections along the path (KernelBasis: one k call
+    per right-hand side). An explicit integrator needs no Jacobian, so no derivative of the
+    sections: the Python kernel's difference quotients would differ from the built-in
+    Gaussian's closed form in the last digits."""
+    text = f"""
+[study]
+name = "python_adaptive"
+kind = "adaptive"
+evaluation_points = 512
+metrics = ["l2_error", "sup_error", "gap_to_projection", "final_state_error",
+           "max_state_error", "steps", "rhs_evaluations"]
+
+[domain]
+radius = 4.0
+
+[grid]
+n = [8, 16]
+
+[[kernel]]
+name = "gaussian"
+sigma = 1.5
+
+[[kernel]]
+name = "py_gaussian"
+sigma = 1.5
+
+[[target]]
+name = "sine"
+
+[[plant]]
+name = "quarter_car"
+
+[[law]]
+name = "gradient"
+gamma = 2e4
+
+[[integrator]]
+name = "dopri5"
+rtol = 1e-6
+atol = 1e-8
+
+[adaptive]
+speed = 1.0
+laps = 1
+"""
+    trials = rkhs_study.Study.from_toml(text).run(threads=2).trials
+    builtin = trials[trials["kernel"] == "gaussian"]
+    python = trials[trials["kernel"] == "py_gaussian"]
+    assert_same_metrics(builtin, python)
