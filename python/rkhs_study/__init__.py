@@ -23,9 +23,10 @@ from typing import Iterable, Optional, Union
 import pandas as pd
 
 from . import _core
-from ._core import StudyError
+from ._core import RunInterrupted, StudyError
 
-__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "check", "read_csv"]
+__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "RunInterrupted",
+           "check", "read_csv"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -152,6 +153,10 @@ class Study:
         temporary folder, removed once the tables are read). store: the result store (SQLite)
         to reuse and commit trials to (None: no store, as --no-store); fresh: run every trial
         again even when the store holds it.
+
+        Ctrl-C stops the run as it stops the command (trials in flight are cancelled, finished
+        ones are in the store) and raises RunInterrupted, a KeyboardInterrupt whose finished,
+        stored, stopped and not_started count the trials; the same call again reuses them.
         """
         d = self.definition()
         if threads is not None and threads < 1:
@@ -184,7 +189,8 @@ def check(paths: Union[PathLike, Iterable[PathLike]], *, threads: Optional[int] 
     """Runs each study and judges its [[expect]] tables, as `rkhs-study check` does.
 
     `passed` is the command's exit status 0: every verdict a pass (with strict, inconclusive
-    verdicts and XPASS fail; with allow_inconclusive, inconclusive ones do not).
+    verdicts and XPASS fail; with allow_inconclusive, inconclusive ones do not). Ctrl-C
+    raises RunInterrupted, as Study.run does.
     """
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]

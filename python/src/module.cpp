@@ -8,12 +8,19 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <atomic>
+#include <chrono>
+#include <exception>
 #include <filesystem>
+#include <future>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <tuple>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "rkhs/pipeline/executor.hpp"
@@ -118,14 +125,94 @@ struct RunSummary {
   std::vector<rkhs::ExpectationOutcome> outcomes;
   std::string verification;  // format_verification
   int exit_code = 0;         // check_exit_code of the outcomes
+  // The run was stopped (Ctrl-C): what finished (and was stored) and what did not; nothing
+  // else above is set then.
+  std::optional<rkhs::StoredRun> interrupted;
 };
+
+// rkhs_study.RunInterrupted, a KeyboardInterrupt (set at import).
+PyObject* run_interrupted_type = nullptr;
+
+// The Python error that Ctrl-C raised while `study` ran (a KeyboardInterrupt, with the default
+// SIGINT handler) replaced by a RunInterrupted that says what finished: the store keeps it, and
+// the same call again reuses it. Another error a signal handler raised is raised as it is.
+[[noreturn]] void raise_interrupted(py::error_already_set signal, const StudyDefinition& study,
+                                    const rkhs::StoredRun& run, bool stored) {
+  if (!signal.matches(PyExc_KeyboardInterrupt)) throw std::move(signal);
+  const std::size_t stopped = run.stopped, not_started = run.skipped - run.stopped;
+  const std::string message =
+      study.name + ": interrupted: " + std::to_string(run.ran) + " trials finished" +
+      (stored ? " and stored" : "") + ", " + std::to_string(stopped) +
+      " stopped while running and " + std::to_string(not_started) + " not started" +
+      (stored ? " (not stored); the same call again reuses the stored trials"
+              : "; nothing was stored (no store)");
+  py::object error = py::reinterpret_borrow<py::object>(run_interrupted_type)(message);
+  error.attr("study") = study.name;
+  error.attr("finished") = run.ran;
+  error.attr("stored") = stored ? run.ran : std::size_t{0};
+  error.attr("reused") = run.reused;
+  error.attr("stopped") = stopped;
+  error.attr("not_started") = not_started;
+  PyErr_SetObject(run_interrupted_type, error.ptr());
+  throw py::error_already_set();
+}
+
+// After run_interruptibly: raises what a signal handler raised while the run went on (Ctrl-C:
+// a RunInterrupted saying what finished, also when the run ended before it saw the stop).
+void raise_if_interrupted(std::optional<py::error_already_set> signal, const StudyDefinition& study,
+                          const RunSummary& summary, bool stored) {
+  if (!signal) return;
+  rkhs::StoredRun finished;
+  finished.ran = summary.ran;
+  finished.reused = summary.reused;
+  raise_interrupted(std::move(*signal), study,
+                    summary.interrupted ? *summary.interrupted : finished, stored);
+}
+
+// Runs `work` (a study run, without Python) on a thread of its own while the calling thread,
+// without the GIL, waits for it in steps of 100 ms and between them takes the GIL to run
+// Python's signal handlers (PyErr_CheckSignals). When a handler raises (Ctrl-C: a
+// KeyboardInterrupt) `stop` is set, which stops the run as SIGINT stops `rkhs-study run`
+// (trials in flight are cancelled, finished ones are in the store), and the error is returned
+// beside the result once the work has ended. An exception `work` throws is rethrown here, on
+// the calling thread, for pybind11 to translate (a StudyError stays a StudyError). Called
+// with the GIL.
+template <class Work>
+std::pair<std::invoke_result_t<Work&>, std::optional<py::error_already_set>> run_interruptibly(
+    Work& work, std::atomic<bool>& stop) {
+  using Result = std::invoke_result_t<Work&>;
+  std::promise<Result> promise;
+  auto future = promise.get_future();
+  std::optional<py::error_already_set> signal;
+  {
+    py::gil_scoped_release release;
+    std::thread worker([&] {
+      try {
+        promise.set_value(work());
+      } catch (...) {
+        promise.set_exception(std::current_exception());
+      }
+    });
+    while (future.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+      if (signal) continue;  // stopping: wait for the worker
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        signal.emplace();  // takes the raised error
+        stop = true;
+      }
+    }
+    worker.join();
+  }
+  return {future.get(), std::move(signal)};
+}
 
 // Runs every trial of `study` through the store, as `rkhs-study run --out DIR --no-plots` does:
 // writes trials.csv, rates.csv, summary.json (with the verdicts), rates.md, rates.tex (and the
 // adaptive files) and report.html into `out_dir`. No journal, no plots, no signal handlers
 // (the Python process owns those). Called without the GIL.
 RunSummary run_study_into(const StudyDefinition& study, const std::string& out_dir, int threads,
-                          const rkhs::pipeline::StoreOptions& store) {
+                          const rkhs::pipeline::StoreOptions& store,
+                          const std::atomic<bool>& stop) {
   namespace pipeline = rkhs::pipeline;
   pipeline::LocalExecutor executor;
   const auto trials = study.trials();
@@ -133,11 +220,15 @@ RunSummary run_study_into(const StudyDefinition& study, const std::string& out_d
   rkhs::prepare_output_directory(out_dir);
   rkhs::RunOptions options;
   options.threads = threads;
+  options.stop_requested = [&stop] { return stop.load(); };
   const auto outcome =
       pipeline::run_study(executor, study, trials, options, store, std::move(opened));
-  if (outcome.interrupted) throw std::runtime_error(study.name + ": the run was interrupted");
-  const auto& run = *outcome.completed;
   RunSummary summary;
+  if (outcome.interrupted) {
+    summary.interrupted = *outcome.interrupted;
+    return summary;
+  }
+  const auto& run = *outcome.completed;
   summary.outcomes = rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
   auto record = run.record();
   record.verdicts = &summary.outcomes;
@@ -177,6 +268,14 @@ PYBIND11_MODULE(_core, m) {
 
   // "file:line:column: key: what was found; what is allowed", the text `rkhs-study` prints.
   py::register_exception<rkhs::StudyError>(m, "StudyError", PyExc_ValueError);
+  // Ctrl-C during run or check: a KeyboardInterrupt that says what finished (raise_interrupted).
+  run_interrupted_type = PyErr_NewExceptionWithDoc(
+      "rkhs_study._core.RunInterrupted",
+      "A run stopped by Ctrl-C (a KeyboardInterrupt): study, finished, stored, reused, stopped "
+      "and not_started count its trials; the stored ones are reused by the same call again",
+      PyExc_KeyboardInterrupt, nullptr);
+  if (!run_interrupted_type) throw py::error_already_set();
+  m.add_object("RunInterrupted", py::reinterpret_borrow<py::object>(run_interrupted_type));
 
   prepare_registries();
 
@@ -221,11 +320,10 @@ PYBIND11_MODULE(_core, m) {
       [](const StudyDefinition& study, const std::string& out_dir, int threads,
          std::optional<std::string> store, bool fresh) {
         const auto options = store_options(store, fresh);
-        RunSummary summary;
-        {
-          py::gil_scoped_release release;
-          summary = run_study_into(study, out_dir, threads, options);
-        }
+        std::atomic<bool> stop{false};
+        auto work = [&] { return run_study_into(study, out_dir, threads, options, stop); };
+        auto [summary, signal] = run_interruptibly(work, stop);
+        raise_if_interrupted(std::move(signal), study, summary, !options.disabled);
         return summary_dict(study, summary);
       },
       py::arg("study"), py::arg("out_dir"), py::arg("threads") = 0, py::arg("store") = py::none(),
@@ -247,17 +345,20 @@ PYBIND11_MODULE(_core, m) {
         for (const auto& file : files) {
           auto study = rkhs::load_study(file);
           if (!tier.empty()) study = rkhs::restrict_to_tier(std::move(study), tier);
-          RunSummary summary;
-          {
-            py::gil_scoped_release release;
+          std::atomic<bool> stop{false};
+          auto work = [&] {
+            RunSummary summary;
             namespace pipeline = rkhs::pipeline;
             pipeline::LocalExecutor executor;
             const auto trials = study.trials();
             rkhs::RunOptions run_options;
             run_options.threads = threads;
+            run_options.stop_requested = [&stop] { return stop.load(); };
             auto outcome = pipeline::run_study(executor, study, trials, run_options, options);
-            if (outcome.interrupted)
-              throw std::runtime_error(study.name + ": the run was interrupted");
+            if (outcome.interrupted) {
+              summary.interrupted = *outcome.interrupted;
+              return summary;
+            }
             const auto& run = *outcome.completed;
             summary.outcomes =
                 rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
@@ -268,7 +369,10 @@ PYBIND11_MODULE(_core, m) {
             summary.seconds = run.seconds;
             summary.started = run.started;
             summary.verification = rkhs::format_verification(summary.outcomes, policy);
-          }
+            return summary;
+          };
+          auto [summary, signal] = run_interruptibly(work, stop);
+          raise_if_interrupted(std::move(signal), study, summary, !options.disabled);
           total += rkhs::count_verdicts(summary.outcomes);
           report += summary.verification;
           studies.append(summary_dict(study, summary));

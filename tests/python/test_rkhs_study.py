@@ -197,3 +197,90 @@ def test_run_releases_the_gil(tmp_path):
         thread.join()
     inside = [t for t in ticks if start + 0.02 < t < end - 0.02]
     assert end - start > 0.1 and len(inside) > 10, (end - start, len(inside))
+
+
+# A study of 243 trials (n from 200 to 600) that runs for about a minute on 2 cores, each trial
+# well under a second: long enough to be interrupted, short enough that a stop is quick.
+SLOW_STUDY = STUDY.read_text().replace("n = { from = 10, to = 100, step = 10 }",
+                                       "n = { from = 200, to = 600, step = 5 }", 1)
+assert SLOW_STUDY != STUDY.read_text()
+
+# Runs SLOW_STUDY (argv[1]) with the store argv[2]; prints what the KeyboardInterrupt says.
+INTERRUPTED_RUN = """
+import signal, sys
+# Python leaves SIGINT alone when it starts ignored (a background job of a shell): take it.
+signal.signal(signal.SIGINT, signal.default_int_handler)
+import rkhs_study
+try:
+    rkhs_study.Study.from_toml(sys.argv[1], "slow.toml").run(threads=2, store=sys.argv[2])
+except KeyboardInterrupt as e:
+    print(type(e).__name__, isinstance(e, rkhs_study.RunInterrupted), e.finished, e.stored,
+          e.reused, e.stopped, e.not_started, flush=True)
+    print(e, file=sys.stderr)
+    sys.exit(130)
+print("completed", flush=True)
+"""
+
+
+def stored_trials(store: Path) -> int:
+    import sqlite3
+    if not store.exists():
+        return 0
+    try:
+        with sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=1) as db:
+            return db.execute("SELECT count(*) FROM trials").fetchone()[0]
+    except sqlite3.Error:  # not created yet, or busy
+        return 0
+
+
+def interrupt_once_stored(store: Path, at_least: int):
+    """Starts INTERRUPTED_RUN, sends SIGINT once the store holds `at_least` trials and returns
+    (its output fields, seconds from the signal to its end, stderr)."""
+    import signal
+    import time
+
+    environment = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    process = subprocess.Popen([sys.executable, "-c", INTERRUPTED_RUN, SLOW_STUDY, str(store)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=environment)
+    try:
+        deadline = time.monotonic() + 120  # generous: a loaded machine
+        while stored_trials(store) < at_least:
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "no trial stored in 120 s"
+            time.sleep(0.05)
+        signalled = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=30)
+        ended = time.monotonic() - signalled
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 130, (process.returncode, out, err)
+    return out.split(), ended, err
+
+
+def test_ctrl_c_stops_a_run_and_keeps_the_finished_trials(tmp_path):
+    store = tmp_path / "store.sqlite"
+    fields, seconds, err = interrupt_once_stored(store, 2)
+    assert seconds < 2, (seconds, fields, err)
+    name, is_run_interrupted, finished, stored, reused, stopped, not_started = fields
+    assert name == "RunInterrupted" and is_run_interrupted == "True"
+    finished, stored, reused = int(finished), int(stored), int(reused)
+    assert finished >= 2 and stored == finished and reused == 0
+    assert finished + int(stopped) + int(not_started) == 243
+    assert stored_trials(store) == stored
+    assert "interrupted" in err and "reuses the stored trials" in err
+    # The same run again reuses every stored trial (and is interrupted in turn).
+    fields, seconds, err = interrupt_once_stored(store, stored + 1)
+    assert seconds < 2, (seconds, fields, err)
+    assert int(fields[4]) == stored, fields
+
+
+def test_an_error_of_the_run_is_raised_with_its_message(tmp_path):
+    """The run goes on a thread of its own; what it throws is raised in the caller."""
+    (tmp_path / "file").write_text("")
+    with pytest.raises(RuntimeError, match=re.escape(f"cannot write the output folder "
+                                                     f"{tmp_path / 'file' / 'out'}")):
+        rkhs_study.Study.load(STUDY).run(out=tmp_path / "file" / "out")
