@@ -185,18 +185,22 @@ class Study:
 
 def check(paths: Union[PathLike, Iterable[PathLike]], *, threads: Optional[int] = None,
           store: Optional[PathLike] = None, fresh: bool = False, tier: Optional[str] = None,
-          strict: bool = False, allow_inconclusive: bool = False) -> CheckResult:
+          strict: bool = False, allow_inconclusive: bool = False, k: Optional[str] = None,
+          junit: Optional[PathLike] = None) -> CheckResult:
     """Runs each study and judges its [[expect]] tables, as `rkhs-study check` does.
 
     `passed` is the command's exit status 0: every verdict a pass (with strict, inconclusive
-    verdicts and XPASS fail; with allow_inconclusive, inconclusive ones do not). Ctrl-C
-    raises RunInterrupted, as Study.run does.
+    verdicts and XPASS fail; with allow_inconclusive, inconclusive ones do not). k: judge only
+    the test cases whose names match the expression, as `check -k` (a study with none selected
+    is not run; none selected at all: exit_code 5). junit: write the JUnit XML report there, as
+    `check --junit`. Ctrl-C raises RunInterrupted, as Study.run does.
     """
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     files = [os.fspath(p) for p in paths]
     result = _core.check(files, threads or 0, None if store is None else os.fspath(store),
-                         fresh, tier or "", strict, allow_inconclusive)
+                         fresh, tier or "", strict, allow_inconclusive, k or "",
+                         "" if junit is None else os.fspath(junit))
     outcomes = [o for s in result["studies"] for o in s["outcomes"]]
     return CheckResult(exit_code=result["exit_code"], outcomes=outcomes,
                        studies=result["studies"], report=result["report"],

@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <exception>
 #include <filesystem>
 #include <future>
@@ -32,6 +33,9 @@
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/tiers.hpp"
 #include "rkhs/study/trial_grid.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
+#include "rkhs/verify/junit.hpp"
+#include "rkhs/verify/keyword_expression.hpp"
 #include "rkhs/verify/verification.hpp"
 
 namespace py = pybind11;
@@ -120,6 +124,7 @@ py::dict outcome_dict(const StudyDefinition& study, const rkhs::ExpectationOutco
 // study (which they point into) is alive.
 struct RunSummary {
   std::size_t trials = 0, failed = 0, reused = 0, ran = 0;
+  std::size_t deselected = 0;  // test cases `check -k` left out
   double seconds = 0;
   std::string started;
   std::vector<rkhs::ExpectationOutcome> outcomes;
@@ -251,6 +256,7 @@ py::dict summary_dict(const StudyDefinition& study, const RunSummary& summary) {
   d["failed"] = summary.failed;
   d["reused"] = summary.reused;
   d["ran"] = summary.ran;
+  d["deselected"] = summary.deselected;
   d["seconds"] = summary.seconds;
   d["started"] = summary.started;
   d["verification"] = summary.verification;
@@ -334,51 +340,87 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "check",
       [](const std::vector<std::string>& files, int threads, std::optional<std::string> store,
-         bool fresh, const std::string& tier, bool strict, bool allow_inconclusive) {
+         bool fresh, const std::string& tier, bool strict, bool allow_inconclusive,
+         const std::string& keyword_expression, const std::string& junit_file) {
         rkhs::CheckPolicy policy;
         policy.strict = strict;
         policy.allow_inconclusive = allow_inconclusive && !strict;
         const auto options = store_options(store, fresh);
-        py::list studies;
-        rkhs::VerdictCounts total;
-        std::string report;
+        // As the command: the expression and every study read, and the cases split by -k,
+        // before any trial runs.
+        std::optional<rkhs::KeywordExpression> selection;
+        if (!keyword_expression.empty())
+          selection = rkhs::KeywordExpression::parse(keyword_expression);
+        struct Checked {
+          StudyDefinition study;
+          rkhs::CaseSelection cases;
+          RunSummary summary;
+        };
+        std::deque<Checked> checked;  // a deque: outcomes point into each study, never moved
         for (const auto& file : files) {
           auto study = rkhs::load_study(file);
           if (!tier.empty()) study = rkhs::restrict_to_tier(std::move(study), tier);
-          std::atomic<bool> stop{false};
-          auto work = [&] {
-            RunSummary summary;
-            namespace pipeline = rkhs::pipeline;
-            pipeline::LocalExecutor executor;
-            const auto trials = study.trials();
-            rkhs::RunOptions run_options;
-            run_options.threads = threads;
-            run_options.stop_requested = [&stop] { return stop.load(); };
-            auto outcome = pipeline::run_study(executor, study, trials, run_options, options);
-            if (outcome.interrupted) {
-              summary.interrupted = *outcome.interrupted;
+          checked.push_back({std::move(study), {}, {}});
+          auto& c = checked.back();
+          c.cases =
+              rkhs::select_cases(c.study, c.study.trials(), selection ? &*selection : nullptr);
+        }
+        py::list studies;
+        rkhs::VerdictCounts total;
+        std::string report;
+        for (auto& c : checked) {
+          const auto& study = c.study;
+          if (!selection || !c.cases.selected.empty()) {  // else not run: -k selects none
+            std::atomic<bool> stop{false};
+            auto work = [&] {
+              RunSummary summary;
+              namespace pipeline = rkhs::pipeline;
+              pipeline::LocalExecutor executor;
+              const auto trials = study.trials();
+              rkhs::RunOptions run_options;
+              run_options.threads = threads;
+              run_options.stop_requested = [&stop] { return stop.load(); };
+              auto outcome = pipeline::run_study(executor, study, trials, run_options, options);
+              if (outcome.interrupted) {
+                summary.interrupted = *outcome.interrupted;
+                return summary;
+              }
+              const auto& run = *outcome.completed;
+              summary.outcomes =
+                  rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
+              rkhs::keep_selected(summary.outcomes, c.cases);
+              summary.trials = trials.size();
+              summary.failed = run.failed;
+              summary.reused = run.stored.reused;
+              summary.ran = run.stored.ran;
+              summary.seconds = run.seconds;
+              summary.started = run.started;
+              summary.verification =
+                  rkhs::format_verification(summary.outcomes, policy, c.cases.deselected);
               return summary;
-            }
-            const auto& run = *outcome.completed;
-            summary.outcomes =
-                rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
-            summary.trials = trials.size();
-            summary.failed = run.failed;
-            summary.reused = run.stored.reused;
-            summary.ran = run.stored.ran;
-            summary.seconds = run.seconds;
-            summary.started = run.started;
-            summary.verification = rkhs::format_verification(summary.outcomes, policy);
-            return summary;
-          };
-          auto [summary, signal] = run_interruptibly(work, stop);
-          raise_if_interrupted(std::move(signal), study, summary, !options.disabled);
-          total += rkhs::count_verdicts(summary.outcomes);
-          report += summary.verification;
-          studies.append(summary_dict(study, summary));
+            };
+            auto [summary, signal] = run_interruptibly(work, stop);
+            raise_if_interrupted(std::move(signal), study, summary, !options.disabled);
+            c.summary = std::move(summary);
+          }
+          c.summary.deselected = c.cases.deselected;
+          auto counts = rkhs::count_verdicts(c.summary.outcomes);
+          counts.deselected = c.cases.deselected;
+          total += counts;
+          report += c.summary.verification;
+          studies.append(summary_dict(study, c.summary));
+        }
+        if (!junit_file.empty()) {
+          rkhs::JUnitReport junit{{}, policy, keyword_expression};
+          for (const auto& c : checked)
+            junit.suites.push_back({&c.study, &c.summary.outcomes, c.summary.seconds, tier,
+                                    c.summary.started, c.cases.deselected});
+          rkhs::write_file_atomically(junit_file, rkhs::junit_xml(junit));
         }
         py::dict d;
-        d["exit_code"] = rkhs::check_exit_code(total, policy);
+        // -k that selects nothing is pytest's "no tests collected" (5), as the command's.
+        d["exit_code"] = selection && total.selected() == 0 ? rkhs::check_none_selected
+                                                            : rkhs::check_exit_code(total, policy);
         d["studies"] = studies;
         d["counts"] = rkhs::format_counts(total, policy);
         d["report"] = report;
@@ -386,7 +428,8 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("files"), py::arg("threads") = 0, py::arg("store") = py::none(),
       py::arg("fresh") = false, py::arg("tier") = "", py::arg("strict") = false,
-      py::arg("allow_inconclusive") = false,
+      py::arg("allow_inconclusive") = false, py::arg("k") = "", py::arg("junit") = "",
       "Runs each study and judges its [[expect]] tables as `rkhs-study check` does; exit_code "
-      "is the command's (0 all pass, 1 a failure, 3 inconclusive, 5 nothing judged)");
+      "is the command's (0 all pass, 1 a failure, 3 inconclusive, 5 nothing judged); k: -k EXPR, "
+      "junit: --junit FILE");
 }

@@ -284,3 +284,38 @@ def test_an_error_of_the_run_is_raised_with_its_message(tmp_path):
     with pytest.raises(RuntimeError, match=re.escape(f"cannot write the output folder "
                                                      f"{tmp_path / 'file' / 'out'}")):
         rkhs_study.Study.load(STUDY).run(out=tmp_path / "file" / "out")
+
+
+def test_check_k_selects_test_cases_as_the_command(tmp_path):
+    result = rkhs_study.check(STUDY, k="sup_error and not gaussian")
+    assert result.passed
+    assert [o["name"] for o in result.outcomes] == [
+        "sup_error [kernel=bspline degree=1 r=1]", "sup_error [kernel=bspline degree=2 r=2]"]
+    assert result.studies[0]["deselected"] == 9
+    assert result.counts.startswith("2 passed, 0 failed, 0 inconclusive, 9 deselected")
+    # -k that selects nothing: the study is not run, exit code 5 as the command's
+    none = rkhs_study.check(STUDY, k="no_such_case")
+    assert none.exit_code == 5 and not none.passed and none.outcomes == []
+    assert none.studies[0]["ran"] == 0
+    assert cli("check", STUDY, "-k", "no_such_case", "--no-store", "-q",
+               check=False).returncode == 5
+    with pytest.raises(ValueError, match="-k 'power and'"):
+        rkhs_study.check(STUDY, k="power and")
+
+
+def test_check_junit_writes_the_commands_report(tmp_path):
+    import xml.etree.ElementTree as ElementTree
+
+    result = rkhs_study.check(STUDY, k="power_function_sup", junit=tmp_path / "py.xml")
+    root = ElementTree.parse(tmp_path / "py.xml").getroot()
+    cases = root.findall("./testsuite/testcase")
+    assert len(cases) == len(result.outcomes) == 3
+    assert {c.get("name") for c in cases} == {o["name"] for o in result.outcomes}
+    assert root.find("./testsuite").get("name") == "gram_and_power"
+    cli("check", STUDY, "-k", "power_function_sup", "--no-store", "-q", "--junit",
+        tmp_path / "cli.xml")
+
+    def without_times(file):
+        return re.sub(r' (time|timestamp)="[^"]*"', "", file.read_text())
+
+    assert without_times(tmp_path / "py.xml") == without_times(tmp_path / "cli.xml")
