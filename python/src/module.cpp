@@ -1,8 +1,8 @@
 // rkhs_study._core: the library as the command line uses it, for the Python package
 // (python/rkhs_study/__init__.py, docs/python.md). Thin bindings: a study is read by
-// load_study / parse_study, run through the study pipeline (rkhs/pipeline/study_pipeline.hpp)
-// and written by the output writers (rkhs/report/output.hpp), and its expectations are judged
-// by verify_expectations, as `rkhs-study run` and `rkhs-study check` do. The tables come back
+// load_study / parse_study, run and judged by run_and_judge (rkhs/pipeline/study_pipeline.hpp)
+// and written by the output writers (rkhs/report/output.hpp), as `rkhs-study run` and
+// `rkhs-study check` do. The tables come back
 // as the CSV text the command writes; the Python side turns them into pandas DataFrames.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -211,7 +211,8 @@ std::pair<std::invoke_result_t<Work&>, std::optional<py::error_already_set>> run
   return {future.get(), std::move(signal)};
 }
 
-// Runs every trial of `study` through the store, as `rkhs-study run --out DIR --no-plots` does:
+// Runs every trial of `study` through the store and judges its expectations (run_and_judge, as
+// `rkhs-study run` and `check` do), as `rkhs-study run --out DIR --no-plots` does:
 // writes trials.csv, rates.csv, summary.json (with the verdicts), rates.md, rates.tex (and the
 // adaptive files) and report.html into `out_dir`. No journal, no plots, no signal handlers
 // (the Python process owns those). Called without the GIL.
@@ -226,15 +227,14 @@ RunSummary run_study_into(const StudyDefinition& study, const std::string& out_d
   rkhs::RunOptions options;
   options.threads = threads;
   options.stop_requested = [&stop] { return stop.load(); };
-  const auto outcome =
-      pipeline::run_study(executor, study, trials, options, store, std::move(opened));
+  auto judged = pipeline::run_and_judge(executor, study, trials, options, store, std::move(opened));
   RunSummary summary;
-  if (outcome.interrupted) {
-    summary.interrupted = *outcome.interrupted;
+  if (judged.outcome.interrupted) {
+    summary.interrupted = *judged.outcome.interrupted;
     return summary;
   }
-  const auto& run = *outcome.completed;
-  summary.outcomes = rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
+  const auto& run = *judged.outcome.completed;
+  summary.outcomes = std::move(judged.verdicts);
   auto record = run.record();
   record.verdicts = &summary.outcomes;
   rkhs::write_run_folder(record, out_dir, false);
@@ -380,15 +380,15 @@ PYBIND11_MODULE(_core, m) {
               rkhs::RunOptions run_options;
               run_options.threads = threads;
               run_options.stop_requested = [&stop] { return stop.load(); };
-              auto outcome = pipeline::run_study(executor, study, trials, run_options, options);
-              if (outcome.interrupted) {
-                summary.interrupted = *outcome.interrupted;
+              auto opened = pipeline::open_store(executor, study, trials, options);
+              auto judged = pipeline::run_and_judge(executor, study, trials, run_options, options,
+                                                    std::move(opened), &c.cases);
+              if (judged.outcome.interrupted) {
+                summary.interrupted = *judged.outcome.interrupted;
                 return summary;
               }
-              const auto& run = *outcome.completed;
-              summary.outcomes =
-                  rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
-              rkhs::keep_selected(summary.outcomes, c.cases);
+              const auto& run = *judged.outcome.completed;
+              summary.outcomes = std::move(judged.verdicts);
               summary.trials = trials.size();
               summary.failed = run.failed;
               summary.reused = run.stored.reused;

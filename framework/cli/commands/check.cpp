@@ -109,10 +109,10 @@ class Check {
       // so that the ranks of an MPI job leave together.
       std::optional<int> stop;
       std::exception_ptr error;
-      const auto outcome = run_one(checked);
+      auto judged = run_one(checked);
       if (root) {
         try {
-          stop = report(checked, outcome);
+          stop = report(checked, judged);
         } catch (...) {
           error = std::current_exception();
         }
@@ -156,7 +156,7 @@ class Check {
     }
   }
 
-  pipeline::PipelineOutcome run_one(const CheckedStudy& checked) {
+  pipeline::JudgedRun run_one(const CheckedStudy& checked) {
     executor_.agree_on(checked.study, checked.trials);
     // The store first: one that is refused leaves the output folder as it was.
     auto opened = pipeline::open_store(executor_, checked.study, checked.trials, arguments_.store);
@@ -183,23 +183,23 @@ class Check {
     RunOptions options;
     options.threads = threads;
     stop_on_signals(options);
-    return pipeline::run_study(executor_, checked.study, checked.trials, options, arguments_.store,
-                               std::move(opened));
+    return pipeline::run_and_judge(executor_, checked.study, checked.trials, options,
+                                   arguments_.store, std::move(opened), &checked.cases);
   }
 
   bool quiet() const { return arguments_.quiet || !executor_.is_root(); }
 
   // The study's verdicts, outputs and report on the root; the exit code when the check must
   // stop (an interrupted run), nothing otherwise.
-  std::optional<int> report(CheckedStudy& checked, const pipeline::PipelineOutcome& outcome) {
+  std::optional<int> report(CheckedStudy& checked, pipeline::JudgedRun& judged) {
+    const auto& outcome = judged.outcome;
     print_store_problems(outcome);
     if (!quiet()) print_run_sources(outcome, executor_);
     if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments_.store);
 
     const auto& run = *outcome.completed;
     const auto& study = checked.study;
-    checked.outcomes = verify_expectations(study, checked.trials, run.stored.results, run.rates);
-    keep_selected(checked.outcomes, checked.cases);
+    checked.outcomes = std::move(judged.verdicts);
     checked.seconds = run.seconds;
     checked.started = run.started;
     if (!arguments_.out_dir.empty()) write_outputs_of(checked, run);
