@@ -36,15 +36,15 @@ import numpy as np
 import pandas as pd
 
 from . import _core
-from ._core import StudyError
+from ._core import RunInterrupted, StudyError
 from .plugins import (CentrePlacement, Domain, Kernel, Parameter, PluginVerification, Target,
                       kernel_matrix, register_centres, register_kernel, register_target,
                       unregister, verify_plugin)
 
-__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "check", "read_csv",
-           "to_toml", "Parameter", "Domain", "Kernel", "Target", "CentrePlacement",
-           "register_kernel", "register_target", "register_centres", "unregister",
-           "verify_plugin", "PluginVerification", "kernel_matrix"]
+__all__ = ["Study", "Validation", "Results", "CheckResult", "StudyError", "RunInterrupted",
+           "check", "read_csv", "to_toml", "Parameter", "Domain", "Kernel", "Target",
+           "CentrePlacement", "register_kernel", "register_target", "register_centres",
+           "unregister", "verify_plugin", "PluginVerification", "kernel_matrix"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -416,6 +416,10 @@ class Study:
         temporary folder, removed once the tables are read). store: the result store (SQLite)
         to reuse and commit trials to (None: no store, as --no-store); fresh: run every trial
         again even when the store holds it.
+
+        Ctrl-C stops the run as it stops the command (trials in flight are cancelled, finished
+        ones are in the store) and raises RunInterrupted, a KeyboardInterrupt whose finished,
+        stored, stopped and not_started count the trials; the same call again reuses them.
         """
         d = self.definition()
         if threads is not None and threads < 1:
@@ -446,17 +450,22 @@ class Study:
 
 def check(paths: Union[PathLike, Iterable[PathLike]], *, threads: Optional[int] = None,
           store: Optional[PathLike] = None, fresh: bool = False, tier: Optional[str] = None,
-          strict: bool = False, allow_inconclusive: bool = False) -> CheckResult:
+          strict: bool = False, allow_inconclusive: bool = False, k: Optional[str] = None,
+          junit: Optional[PathLike] = None) -> CheckResult:
     """Runs each study and judges its [[expect]] tables, as `rkhs-study check` does.
 
     `passed` is the command's exit status 0: every verdict a pass (with strict, inconclusive
-    verdicts and XPASS fail; with allow_inconclusive, inconclusive ones do not).
+    verdicts and XPASS fail; with allow_inconclusive, inconclusive ones do not). k: judge only
+    the test cases whose names match the expression, as `check -k` (a study with none selected
+    is not run; none selected at all: exit_code 5). junit: write the JUnit XML report there, as
+    `check --junit`. Ctrl-C raises RunInterrupted, as Study.run does.
     """
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     files = [os.fspath(p) for p in paths]
     result = _core.check(files, threads or 0, None if store is None else os.fspath(store),
-                         fresh, tier or "", strict, allow_inconclusive)
+                         fresh, tier or "", strict, allow_inconclusive, k or "",
+                         "" if junit is None else os.fspath(junit))
     outcomes = [o for s in result["studies"] for o in s["outcomes"]]
     return CheckResult(exit_code=result["exit_code"], outcomes=outcomes,
                        studies=result["studies"], report=result["report"],

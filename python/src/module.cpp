@@ -1,19 +1,27 @@
 // rkhs_study._core: the library as the command line uses it, for the Python package
 // (python/rkhs_study/__init__.py, docs/python.md). Thin bindings: a study is read by
-// load_study / parse_study, run through the study pipeline (rkhs/pipeline/study_pipeline.hpp)
-// and written by the output writers (rkhs/report/output.hpp), and its expectations are judged
-// by verify_expectations, as `rkhs-study run` and `rkhs-study check` do. The tables come back
+// load_study / parse_study, run and judged by run_and_judge (rkhs/pipeline/study_pipeline.hpp)
+// and written by the output writers (rkhs/report/output.hpp), as `rkhs-study run` and
+// `rkhs-study check` do. The tables come back
 // as the CSV text the command writes; the Python side turns them into pandas DataFrames.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <exception>
 #include <filesystem>
+#include <future>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <tuple>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "rkhs/pipeline/executor.hpp"
@@ -25,6 +33,9 @@
 #include "rkhs/study/study.hpp"
 #include "rkhs/study/tiers.hpp"
 #include "rkhs/study/trial_grid.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
+#include "rkhs/verify/junit.hpp"
+#include "rkhs/verify/keyword_expression.hpp"
 #include "rkhs/verify/verification.hpp"
 
 namespace py = pybind11;
@@ -118,19 +129,101 @@ py::dict outcome_dict(const StudyDefinition& study, const rkhs::ExpectationOutco
 // study (which they point into) is alive.
 struct RunSummary {
   std::size_t trials = 0, failed = 0, reused = 0, ran = 0;
+  std::size_t deselected = 0;  // test cases `check -k` left out
   double seconds = 0;
   std::string started;
   std::vector<rkhs::ExpectationOutcome> outcomes;
   std::string verification;  // format_verification
   int exit_code = 0;         // check_exit_code of the outcomes
+  // The run was stopped (Ctrl-C): what finished (and was stored) and what did not; nothing
+  // else above is set then.
+  std::optional<rkhs::StoredRun> interrupted;
 };
 
-// Runs every trial of `study` through the store, as `rkhs-study run --out DIR --no-plots` does:
+// rkhs_study.RunInterrupted, a KeyboardInterrupt (set at import).
+PyObject* run_interrupted_type = nullptr;
+
+// The Python error that Ctrl-C raised while `study` ran (a KeyboardInterrupt, with the default
+// SIGINT handler) replaced by a RunInterrupted that says what finished: the store keeps it, and
+// the same call again reuses it. Another error a signal handler raised is raised as it is.
+[[noreturn]] void raise_interrupted(py::error_already_set signal, const StudyDefinition& study,
+                                    const rkhs::StoredRun& run, bool stored) {
+  if (!signal.matches(PyExc_KeyboardInterrupt)) throw std::move(signal);
+  const std::size_t stopped = run.stopped, not_started = run.skipped - run.stopped;
+  const std::string message =
+      study.name + ": interrupted: " + std::to_string(run.ran) + " trials finished" +
+      (stored ? " and stored" : "") + ", " + std::to_string(stopped) +
+      " stopped while running and " + std::to_string(not_started) + " not started" +
+      (stored ? " (not stored); the same call again reuses the stored trials"
+              : "; nothing was stored (no store)");
+  py::object error = py::reinterpret_borrow<py::object>(run_interrupted_type)(message);
+  error.attr("study") = study.name;
+  error.attr("finished") = run.ran;
+  error.attr("stored") = stored ? run.ran : std::size_t{0};
+  error.attr("reused") = run.reused;
+  error.attr("stopped") = stopped;
+  error.attr("not_started") = not_started;
+  PyErr_SetObject(run_interrupted_type, error.ptr());
+  throw py::error_already_set();
+}
+
+// After run_interruptibly: raises what a signal handler raised while the run went on (Ctrl-C:
+// a RunInterrupted saying what finished, also when the run ended before it saw the stop).
+void raise_if_interrupted(std::optional<py::error_already_set> signal, const StudyDefinition& study,
+                          const RunSummary& summary, bool stored) {
+  if (!signal) return;
+  rkhs::StoredRun finished;
+  finished.ran = summary.ran;
+  finished.reused = summary.reused;
+  raise_interrupted(std::move(*signal), study,
+                    summary.interrupted ? *summary.interrupted : finished, stored);
+}
+
+// Runs `work` (a study run, without Python) on a thread of its own while the calling thread,
+// without the GIL, waits for it in steps of 100 ms and between them takes the GIL to run
+// Python's signal handlers (PyErr_CheckSignals). When a handler raises (Ctrl-C: a
+// KeyboardInterrupt) `stop` is set, which stops the run as SIGINT stops `rkhs-study run`
+// (trials in flight are cancelled, finished ones are in the store), and the error is returned
+// beside the result once the work has ended. An exception `work` throws is rethrown here, on
+// the calling thread, for pybind11 to translate (a StudyError stays a StudyError). Called
+// with the GIL.
+template <class Work>
+std::pair<std::invoke_result_t<Work&>, std::optional<py::error_already_set>> run_interruptibly(
+    Work& work, std::atomic<bool>& stop) {
+  using Result = std::invoke_result_t<Work&>;
+  std::promise<Result> promise;
+  auto future = promise.get_future();
+  std::optional<py::error_already_set> signal;
+  {
+    py::gil_scoped_release release;
+    std::thread worker([&] {
+      try {
+        promise.set_value(work());
+      } catch (...) {
+        promise.set_exception(std::current_exception());
+      }
+    });
+    while (future.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+      if (signal) continue;  // stopping: wait for the worker
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        signal.emplace();  // takes the raised error
+        stop = true;
+      }
+    }
+    worker.join();
+  }
+  return {future.get(), std::move(signal)};
+}
+
+// Runs every trial of `study` through the store and judges its expectations (run_and_judge, as
+// `rkhs-study run` and `check` do), as `rkhs-study run --out DIR --no-plots` does:
 // writes trials.csv, rates.csv, summary.json (with the verdicts), rates.md, rates.tex (and the
 // adaptive files) and report.html into `out_dir`. No journal, no plots, no signal handlers
 // (the Python process owns those). Called without the GIL.
 RunSummary run_study_into(const StudyDefinition& study, const std::string& out_dir, int threads,
-                          const rkhs::pipeline::StoreOptions& store) {
+                          const rkhs::pipeline::StoreOptions& store,
+                          const std::atomic<bool>& stop) {
   namespace pipeline = rkhs::pipeline;
   pipeline::LocalExecutor executor;
   const auto trials = study.trials();
@@ -138,12 +231,15 @@ RunSummary run_study_into(const StudyDefinition& study, const std::string& out_d
   rkhs::prepare_output_directory(out_dir);
   rkhs::RunOptions options;
   options.threads = threads;
-  const auto outcome =
-      pipeline::run_study(executor, study, trials, options, store, std::move(opened));
-  if (outcome.interrupted) throw std::runtime_error(study.name + ": the run was interrupted");
-  const auto& run = *outcome.completed;
+  options.stop_requested = [&stop] { return stop.load(); };
+  auto judged = pipeline::run_and_judge(executor, study, trials, options, store, std::move(opened));
   RunSummary summary;
-  summary.outcomes = rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
+  if (judged.outcome.interrupted) {
+    summary.interrupted = *judged.outcome.interrupted;
+    return summary;
+  }
+  const auto& run = *judged.outcome.completed;
+  summary.outcomes = std::move(judged.verdicts);
   auto record = run.record();
   record.verdicts = &summary.outcomes;
   rkhs::write_run_folder(record, out_dir, false);
@@ -165,6 +261,7 @@ py::dict summary_dict(const StudyDefinition& study, const RunSummary& summary) {
   d["failed"] = summary.failed;
   d["reused"] = summary.reused;
   d["ran"] = summary.ran;
+  d["deselected"] = summary.deselected;
   d["seconds"] = summary.seconds;
   d["started"] = summary.started;
   d["verification"] = summary.verification;
@@ -182,6 +279,14 @@ PYBIND11_MODULE(_core, m) {
 
   // "file:line:column: key: what was found; what is allowed", the text `rkhs-study` prints.
   py::register_exception<rkhs::StudyError>(m, "StudyError", PyExc_ValueError);
+  // Ctrl-C during run or check: a KeyboardInterrupt that says what finished (raise_interrupted).
+  run_interrupted_type = PyErr_NewExceptionWithDoc(
+      "rkhs_study._core.RunInterrupted",
+      "A run stopped by Ctrl-C (a KeyboardInterrupt): study, finished, stored, reused, stopped "
+      "and not_started count its trials; the stored ones are reused by the same call again",
+      PyExc_KeyboardInterrupt, nullptr);
+  if (!run_interrupted_type) throw py::error_already_set();
+  m.add_object("RunInterrupted", py::reinterpret_borrow<py::object>(run_interrupted_type));
 
   prepare_registries();
   rkhs::python::bind_plugins(m);
@@ -227,11 +332,10 @@ PYBIND11_MODULE(_core, m) {
       [](const StudyDefinition& study, const std::string& out_dir, int threads,
          std::optional<std::string> store, bool fresh) {
         const auto options = store_options(store, fresh);
-        RunSummary summary;
-        {
-          py::gil_scoped_release release;
-          summary = run_study_into(study, out_dir, threads, options);
-        }
+        std::atomic<bool> stop{false};
+        auto work = [&] { return run_study_into(study, out_dir, threads, options, stop); };
+        auto [summary, signal] = run_interruptibly(work, stop);
+        raise_if_interrupted(std::move(signal), study, summary, !options.disabled);
         return summary_dict(study, summary);
       },
       py::arg("study"), py::arg("out_dir"), py::arg("threads") = 0, py::arg("store") = py::none(),
@@ -242,45 +346,87 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "check",
       [](const std::vector<std::string>& files, int threads, std::optional<std::string> store,
-         bool fresh, const std::string& tier, bool strict, bool allow_inconclusive) {
+         bool fresh, const std::string& tier, bool strict, bool allow_inconclusive,
+         const std::string& keyword_expression, const std::string& junit_file) {
         rkhs::CheckPolicy policy;
         policy.strict = strict;
         policy.allow_inconclusive = allow_inconclusive && !strict;
         const auto options = store_options(store, fresh);
-        py::list studies;
-        rkhs::VerdictCounts total;
-        std::string report;
+        // As the command: the expression and every study read, and the cases split by -k,
+        // before any trial runs.
+        std::optional<rkhs::KeywordExpression> selection;
+        if (!keyword_expression.empty())
+          selection = rkhs::KeywordExpression::parse(keyword_expression);
+        struct Checked {
+          StudyDefinition study;
+          rkhs::CaseSelection cases;
+          RunSummary summary;
+        };
+        std::deque<Checked> checked;  // a deque: outcomes point into each study, never moved
         for (const auto& file : files) {
           auto study = rkhs::load_study(file);
           if (!tier.empty()) study = rkhs::restrict_to_tier(std::move(study), tier);
-          RunSummary summary;
-          {
-            py::gil_scoped_release release;
-            namespace pipeline = rkhs::pipeline;
-            pipeline::LocalExecutor executor;
-            const auto trials = study.trials();
-            rkhs::RunOptions run_options;
-            run_options.threads = threads;
-            auto outcome = pipeline::run_study(executor, study, trials, run_options, options);
-            if (outcome.interrupted)
-              throw std::runtime_error(study.name + ": the run was interrupted");
-            const auto& run = *outcome.completed;
-            summary.outcomes =
-                rkhs::verify_expectations(study, trials, run.stored.results, run.rates);
-            summary.trials = trials.size();
-            summary.failed = run.failed;
-            summary.reused = run.stored.reused;
-            summary.ran = run.stored.ran;
-            summary.seconds = run.seconds;
-            summary.started = run.started;
-            summary.verification = rkhs::format_verification(summary.outcomes, policy);
+          checked.push_back({std::move(study), {}, {}});
+          auto& c = checked.back();
+          c.cases =
+              rkhs::select_cases(c.study, c.study.trials(), selection ? &*selection : nullptr);
+        }
+        py::list studies;
+        rkhs::VerdictCounts total;
+        std::string report;
+        for (auto& c : checked) {
+          const auto& study = c.study;
+          if (!selection || !c.cases.selected.empty()) {  // else not run: -k selects none
+            std::atomic<bool> stop{false};
+            auto work = [&] {
+              RunSummary summary;
+              namespace pipeline = rkhs::pipeline;
+              pipeline::LocalExecutor executor;
+              const auto trials = study.trials();
+              rkhs::RunOptions run_options;
+              run_options.threads = threads;
+              run_options.stop_requested = [&stop] { return stop.load(); };
+              auto opened = pipeline::open_store(executor, study, trials, options);
+              auto judged = pipeline::run_and_judge(executor, study, trials, run_options, options,
+                                                    std::move(opened), &c.cases);
+              if (judged.outcome.interrupted) {
+                summary.interrupted = *judged.outcome.interrupted;
+                return summary;
+              }
+              const auto& run = *judged.outcome.completed;
+              summary.outcomes = std::move(judged.verdicts);
+              summary.trials = trials.size();
+              summary.failed = run.failed;
+              summary.reused = run.stored.reused;
+              summary.ran = run.stored.ran;
+              summary.seconds = run.seconds;
+              summary.started = run.started;
+              summary.verification =
+                  rkhs::format_verification(summary.outcomes, policy, c.cases.deselected);
+              return summary;
+            };
+            auto [summary, signal] = run_interruptibly(work, stop);
+            raise_if_interrupted(std::move(signal), study, summary, !options.disabled);
+            c.summary = std::move(summary);
           }
-          total += rkhs::count_verdicts(summary.outcomes);
-          report += summary.verification;
-          studies.append(summary_dict(study, summary));
+          c.summary.deselected = c.cases.deselected;
+          auto counts = rkhs::count_verdicts(c.summary.outcomes);
+          counts.deselected = c.cases.deselected;
+          total += counts;
+          report += c.summary.verification;
+          studies.append(summary_dict(study, c.summary));
+        }
+        if (!junit_file.empty()) {
+          rkhs::JUnitReport junit{{}, policy, keyword_expression};
+          for (const auto& c : checked)
+            junit.suites.push_back({&c.study, &c.summary.outcomes, c.summary.seconds, tier,
+                                    c.summary.started, c.cases.deselected});
+          rkhs::write_file_atomically(junit_file, rkhs::junit_xml(junit));
         }
         py::dict d;
-        d["exit_code"] = rkhs::check_exit_code(total, policy);
+        // -k that selects nothing is pytest's "no tests collected" (5), as the command's.
+        d["exit_code"] = selection && total.selected() == 0 ? rkhs::check_none_selected
+                                                            : rkhs::check_exit_code(total, policy);
         d["studies"] = studies;
         d["counts"] = rkhs::format_counts(total, policy);
         d["report"] = report;
@@ -288,7 +434,8 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("files"), py::arg("threads") = 0, py::arg("store") = py::none(),
       py::arg("fresh") = false, py::arg("tier") = "", py::arg("strict") = false,
-      py::arg("allow_inconclusive") = false,
+      py::arg("allow_inconclusive") = false, py::arg("k") = "", py::arg("junit") = "",
       "Runs each study and judges its [[expect]] tables as `rkhs-study check` does; exit_code "
-      "is the command's (0 all pass, 1 a failure, 3 inconclusive, 5 nothing judged)");
+      "is the command's (0 all pass, 1 a failure, 3 inconclusive, 5 nothing judged); k: -k EXPR, "
+      "junit: --junit FILE");
 }

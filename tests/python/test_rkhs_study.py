@@ -451,3 +451,125 @@ def test_the_package_imports_and_displays_without_matplotlib(tmp_path):
                           text=True, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(package)))
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "ok"
+
+
+# A study of 243 trials (n from 200 to 600) that runs for about a minute on 2 cores, each trial
+# well under a second: long enough to be interrupted, short enough that a stop is quick.
+SLOW_STUDY = STUDY.read_text().replace("n = { from = 10, to = 100, step = 10 }",
+                                       "n = { from = 200, to = 600, step = 5 }", 1)
+assert SLOW_STUDY != STUDY.read_text()
+
+# Runs SLOW_STUDY (argv[1]) with the store argv[2]; prints what the KeyboardInterrupt says.
+INTERRUPTED_RUN = """
+import signal, sys
+# Python leaves SIGINT alone when it starts ignored (a background job of a shell): take it.
+signal.signal(signal.SIGINT, signal.default_int_handler)
+import rkhs_study
+try:
+    rkhs_study.Study.from_toml(sys.argv[1], "slow.toml").run(threads=2, store=sys.argv[2])
+except KeyboardInterrupt as e:
+    print(type(e).__name__, isinstance(e, rkhs_study.RunInterrupted), e.finished, e.stored,
+          e.reused, e.stopped, e.not_started, flush=True)
+    print(e, file=sys.stderr)
+    sys.exit(130)
+print("completed", flush=True)
+"""
+
+
+def stored_trials(store: Path) -> int:
+    import sqlite3
+    if not store.exists():
+        return 0
+    try:
+        with sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=1) as db:
+            return db.execute("SELECT count(*) FROM trials").fetchone()[0]
+    except sqlite3.Error:  # not created yet, or busy
+        return 0
+
+
+def interrupt_once_stored(store: Path, at_least: int):
+    """Starts INTERRUPTED_RUN, sends SIGINT once the store holds `at_least` trials and returns
+    (its output fields, seconds from the signal to its end, stderr)."""
+    import signal
+    import time
+
+    environment = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    process = subprocess.Popen([sys.executable, "-c", INTERRUPTED_RUN, SLOW_STUDY, str(store)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=environment)
+    try:
+        deadline = time.monotonic() + 120  # generous: a loaded machine
+        while stored_trials(store) < at_least:
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "no trial stored in 120 s"
+            time.sleep(0.05)
+        signalled = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=30)
+        ended = time.monotonic() - signalled
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 130, (process.returncode, out, err)
+    return out.split(), ended, err
+
+
+def test_ctrl_c_stops_a_run_and_keeps_the_finished_trials(tmp_path):
+    store = tmp_path / "store.sqlite"
+    fields, seconds, err = interrupt_once_stored(store, 2)
+    assert seconds < 2, (seconds, fields, err)
+    name, is_run_interrupted, finished, stored, reused, stopped, not_started = fields
+    assert name == "RunInterrupted" and is_run_interrupted == "True"
+    finished, stored, reused = int(finished), int(stored), int(reused)
+    assert finished >= 2 and stored == finished and reused == 0
+    assert finished + int(stopped) + int(not_started) == 243
+    assert stored_trials(store) == stored
+    assert "interrupted" in err and "reuses the stored trials" in err
+    # The same run again reuses every stored trial (and is interrupted in turn).
+    fields, seconds, err = interrupt_once_stored(store, stored + 1)
+    assert seconds < 2, (seconds, fields, err)
+    assert int(fields[4]) == stored, fields
+
+
+def test_an_error_of_the_run_is_raised_with_its_message(tmp_path):
+    """The run goes on a thread of its own; what it throws is raised in the caller."""
+    (tmp_path / "file").write_text("")
+    with pytest.raises(RuntimeError, match=re.escape(f"cannot write the output folder "
+                                                     f"{tmp_path / 'file' / 'out'}")):
+        rkhs_study.Study.load(STUDY).run(out=tmp_path / "file" / "out")
+
+
+def test_check_k_selects_test_cases_as_the_command(tmp_path):
+    result = rkhs_study.check(STUDY, k="sup_error and not gaussian")
+    assert result.passed
+    assert [o["name"] for o in result.outcomes] == [
+        "sup_error [kernel=bspline degree=1 r=1]", "sup_error [kernel=bspline degree=2 r=2]"]
+    assert result.studies[0]["deselected"] == 9
+    assert result.counts.startswith("2 passed, 0 failed, 0 inconclusive, 9 deselected")
+    # -k that selects nothing: the study is not run, exit code 5 as the command's
+    none = rkhs_study.check(STUDY, k="no_such_case")
+    assert none.exit_code == 5 and not none.passed and none.outcomes == []
+    assert none.studies[0]["ran"] == 0
+    assert cli("check", STUDY, "-k", "no_such_case", "--no-store", "-q",
+               check=False).returncode == 5
+    with pytest.raises(ValueError, match="-k 'power and'"):
+        rkhs_study.check(STUDY, k="power and")
+
+
+def test_check_junit_writes_the_commands_report(tmp_path):
+    import xml.etree.ElementTree as ElementTree
+
+    result = rkhs_study.check(STUDY, k="power_function_sup", junit=tmp_path / "py.xml")
+    root = ElementTree.parse(tmp_path / "py.xml").getroot()
+    cases = root.findall("./testsuite/testcase")
+    assert len(cases) == len(result.outcomes) == 3
+    assert {c.get("name") for c in cases} == {o["name"] for o in result.outcomes}
+    assert root.find("./testsuite").get("name") == "gram_and_power"
+    cli("check", STUDY, "-k", "power_function_sup", "--no-store", "-q", "--junit",
+        tmp_path / "cli.xml")
+
+    def without_times(file):
+        return re.sub(r' (time|timestamp)="[^"]*"', "", file.read_text())
+
+    assert without_times(tmp_path / "py.xml") == without_times(tmp_path / "cli.xml")

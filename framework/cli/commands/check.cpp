@@ -18,7 +18,6 @@
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <set>
 #include <stdexcept>
 
 #include "commands/commands.hpp"
@@ -41,8 +40,7 @@ namespace {
 struct CheckedStudy {
   StudyDefinition study;
   std::vector<TrialSpec> trials;
-  std::set<std::pair<std::size_t, std::string>> selected;  ///< (expectation number, group)
-  std::size_t deselected = 0;
+  CaseSelection cases;                       ///< the test cases -k selects
   std::vector<ExpectationOutcome> outcomes;  ///< the selected cases' (root)
   double seconds = 0;
   std::string started;
@@ -103,7 +101,7 @@ class Check {
     const bool root = executor_.is_root();
     if (root && !arguments_.junit_file.empty()) prepare_junit_file(arguments_.junit_file);
     for (auto& checked : studies_) {
-      if (selection_ && checked.selected.empty()) {
+      if (selection_ && checked.cases.selected.empty()) {
         if (root) report_not_run(checked);
         continue;
       }
@@ -111,10 +109,10 @@ class Check {
       // so that the ranks of an MPI job leave together.
       std::optional<int> stop;
       std::exception_ptr error;
-      const auto outcome = run_one(checked);
+      auto judged = run_one(checked);
       if (root) {
         try {
-          stop = report(checked, outcome);
+          stop = report(checked, judged);
         } catch (...) {
           error = std::current_exception();
         }
@@ -147,22 +145,18 @@ class Check {
         if (!arguments_.tier.empty()) loaded = restrict_to_tier(std::move(loaded), arguments_.tier);
         return loaded;
       });
-      studies_.push_back(CheckedStudy{std::move(study), {}, {}, 0, {}, 0, {}});
+      studies_.push_back(CheckedStudy{std::move(study), {}, {}, {}, 0, {}});
     }
     executor_.on_every_process([&] { require_distinct_names(studies_); });
     for (auto& checked : studies_) {
       if (executor_.is_root()) print_warnings(checked.study);
       checked.trials = checked.study.trials();
-      for (const auto& c : expectation_cases(checked.study, checked.trials)) {
-        if (!selection_ || selection_->matches(c.keywords))
-          checked.selected.emplace(c.expectation->number, c.group);
-        else
-          ++checked.deselected;
-      }
+      checked.cases =
+          select_cases(checked.study, checked.trials, selection_ ? &*selection_ : nullptr);
     }
   }
 
-  pipeline::PipelineOutcome run_one(const CheckedStudy& checked) {
+  pipeline::JudgedRun run_one(const CheckedStudy& checked) {
     executor_.agree_on(checked.study, checked.trials);
     // The store first: one that is refused leaves the output folder as it was.
     auto opened = pipeline::open_store(executor_, checked.study, checked.trials, arguments_.store);
@@ -189,25 +183,23 @@ class Check {
     RunOptions options;
     options.threads = threads;
     stop_on_signals(options);
-    return pipeline::run_study(executor_, checked.study, checked.trials, options, arguments_.store,
-                               std::move(opened));
+    return pipeline::run_and_judge(executor_, checked.study, checked.trials, options,
+                                   arguments_.store, std::move(opened), &checked.cases);
   }
 
   bool quiet() const { return arguments_.quiet || !executor_.is_root(); }
 
   // The study's verdicts, outputs and report on the root; the exit code when the check must
   // stop (an interrupted run), nothing otherwise.
-  std::optional<int> report(CheckedStudy& checked, const pipeline::PipelineOutcome& outcome) {
+  std::optional<int> report(CheckedStudy& checked, pipeline::JudgedRun& judged) {
+    const auto& outcome = judged.outcome;
     print_store_problems(outcome);
     if (!quiet()) print_run_sources(outcome, executor_);
     if (outcome.interrupted) return report_interruption(*outcome.interrupted, arguments_.store);
 
     const auto& run = *outcome.completed;
     const auto& study = checked.study;
-    checked.outcomes = verify_expectations(study, checked.trials, run.stored.results, run.rates);
-    std::erase_if(checked.outcomes, [&](const ExpectationOutcome& o) {
-      return !checked.selected.contains({o.expectation->number, o.group});
-    });
+    checked.outcomes = std::move(judged.verdicts);
     checked.seconds = run.seconds;
     checked.started = run.started;
     if (!arguments_.out_dir.empty()) write_outputs_of(checked, run);
@@ -223,7 +215,7 @@ class Check {
       std::cout << fmt::format(
           "note: {} trial{} failed; their reasons are in trials.csv (--out DIR)\n", run.failed,
           run.failed > 1 ? "s" : "");
-    std::cout << format_verification(checked.outcomes, policy_, checked.deselected);
+    std::cout << format_verification(checked.outcomes, policy_, checked.cases.deselected);
     return std::nullopt;
   }
 
@@ -239,7 +231,7 @@ class Check {
     auto record = run.record();
     record.tier = arguments_.tier;
     record.verdicts = &checked.outcomes;
-    record.deselected = checked.deselected;
+    record.deselected = checked.cases.deselected;
     std::size_t plots = 0;
     write_run_folder(record, directory, arguments_.plots, [&] {
       plots = arguments_.plots ? render_plots(record, directory, quiet()) : 0;
@@ -251,7 +243,7 @@ class Check {
   }
 
   void report_not_run(const CheckedStudy& checked) const {
-    const std::size_t cases = checked.deselected;
+    const std::size_t cases = checked.cases.deselected;
     std::cout << fmt::format("{}{}: not run: {}\n", checked.study.name, tier_text_,
                              cases ? fmt::format("-k selects none of its {} ({} deselected)",
                                                  counted(cases, "test case", "test cases"), cases)
@@ -264,7 +256,7 @@ class Check {
     double seconds = 0;
     for (const auto& checked : studies_) {
       auto counts = count_verdicts(checked.outcomes);
-      counts.deselected = checked.deselected;
+      counts.deselected = checked.cases.deselected;
       total += counts;
       seconds += checked.seconds;
     }
@@ -272,7 +264,7 @@ class Check {
       JUnitReport junit{{}, policy_, arguments_.keyword_expression};
       for (const auto& checked : studies_)
         junit.suites.push_back({&checked.study, &checked.outcomes, checked.seconds, arguments_.tier,
-                                checked.started, checked.deselected});
+                                checked.started, checked.cases.deselected});
       write_file_atomically(arguments_.junit_file, junit_xml(junit));
     }
     if (studies_.size() > 1)

@@ -147,8 +147,9 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
           fmt::format("  trial failed: {}: {}", printable(trial.key), printable(result.reason)));
     progress->trial_finished(trial.index, result.ok);
   };
-  const auto outcome =
-      pipeline::run_study(executor, study, trials, options, arguments.store, std::move(opened));
+  const auto judged =
+      pipeline::run_and_judge(executor, study, trials, options, arguments.store, std::move(opened));
+  const auto& outcome = judged.outcome;
   if (!root) return stop_was_requested() ? exit_interrupted : exit_ok;
   if (!quiet) print_run_sources(outcome, executor);
   if (progress) progress->stop();
@@ -159,8 +160,8 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
                                journal && journal->complete() ? journal->file().string() : "");
 
   const auto& run = *outcome.completed;
-  // The expectations' verdicts, judged once here, go into summary.json and report.html.
-  const auto verdicts = verify_expectations(study, trials, run.stored.results, run.rates);
+  // The expectations' verdicts, judged once with the run, go into summary.json and report.html.
+  const auto& verdicts = judged.verdicts;
   auto record = run.record();
   record.verdicts = &verdicts;
   std::size_t plot_count = 0;

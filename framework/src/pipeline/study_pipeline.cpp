@@ -105,6 +105,20 @@ PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
   return outcome;
 }
 
+JudgedRun run_and_judge(Executor& executor, const StudyDefinition& study,
+                        const std::vector<TrialSpec>& trials, RunOptions options,
+                        const StoreOptions& store, OpenedStore opened,
+                        const CaseSelection* selection) {
+  // CompletedRun holds references: built in place, never assigned.
+  JudgedRun judged{run_study(executor, study, trials, std::move(options), store, std::move(opened)),
+                   {}};
+  if (const auto& run = judged.outcome.completed) {
+    judged.verdicts = verify_expectations(study, trials, run->stored.results, run->rates);
+    if (selection) keep_selected(judged.verdicts, *selection);
+  }
+  return judged;
+}
+
 std::string utc_now() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};

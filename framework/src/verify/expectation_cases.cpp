@@ -154,4 +154,22 @@ std::vector<ExpectationCase> expectation_cases(const StudyDefinition& study,
   return cases;
 }
 
+CaseSelection select_cases(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
+                           const KeywordExpression* expression) {
+  CaseSelection selection;
+  for (const auto& c : expectation_cases(study, trials)) {
+    if (!expression || expression->matches(c.keywords))
+      selection.selected.emplace(c.expectation->number, c.group);
+    else
+      ++selection.deselected;
+  }
+  return selection;
+}
+
+void keep_selected(std::vector<ExpectationOutcome>& outcomes, const CaseSelection& selection) {
+  std::erase_if(outcomes, [&](const ExpectationOutcome& o) {
+    return !selection.selected.contains({o.expectation->number, o.group});
+  });
+}
+
 }  // namespace rkhs

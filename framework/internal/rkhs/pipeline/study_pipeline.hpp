@@ -14,7 +14,9 @@
 #include "rkhs/pipeline/executor.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/run/result_store.hpp"
+#include "rkhs/verify/expectation_cases.hpp"
 #include "rkhs/verify/study_rates.hpp"
+#include "rkhs/verify/verification.hpp"
 
 namespace rkhs::pipeline {
 
@@ -90,6 +92,23 @@ PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
 PipelineOutcome run_study(Executor& executor, const StudyDefinition& study,
                           const std::vector<TrialSpec>& trials, RunOptions options,
                           const StoreOptions& store, Rates rates = Rates::fitted);
+
+/// A run and its expectations' verdicts: what `run`, `check` and the Python module
+/// (python/src/module.cpp) judge once the store is open.
+struct JudgedRun {
+  PipelineOutcome outcome;
+  /// verify_expectations of the completed run, of the cases `selection` keeps; empty when the
+  /// run was interrupted and off the root. They point into the study: keep it alive.
+  std::vector<ExpectationOutcome> verdicts;
+};
+
+/// run_study with the store `opened` (open_store), then, when every trial has a result, the
+/// study's expectations judged on the results and rates (verify_expectations), keeping those
+/// of the cases in `selection` (`check -k`; null: every case).
+JudgedRun run_and_judge(Executor& executor, const StudyDefinition& study,
+                        const std::vector<TrialSpec>& trials, RunOptions options,
+                        const StoreOptions& store, OpenedStore opened,
+                        const CaseSelection* selection = nullptr);
 
 /// The current UTC time, ISO 8601 ("2026-12-02T01:30:00Z").
 std::string utc_now();

@@ -4,12 +4,17 @@
 // console), and the keywords `-k` matches (keyword_expression.hpp). Both are
 // known before any trial runs, so `-k` can leave a study out without running it.
 
+#include <cstddef>
 #include <map>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rkhs/study/expectation.hpp"
 #include "rkhs/study/study.hpp"
+#include "rkhs/verify/keyword_expression.hpp"
+#include "rkhs/verify/verification.hpp"
 
 namespace rkhs {
 
@@ -32,6 +37,20 @@ struct ExpectationCase {
 /// expectations in file order, each on the groups it selects in the order of `trials`.
 std::vector<ExpectationCase> expectation_cases(const StudyDefinition& study,
                                                const std::vector<TrialSpec>& trials);
+
+/// The test cases of one study that `check -k` judges, known before any trial runs.
+struct CaseSelection {
+  std::set<std::pair<std::size_t, std::string>> selected;  ///< (expectation number, group)
+  std::size_t deselected = 0;                              ///< cases the expression left out
+};
+
+/// The cases of expectation_cases(study, trials) that `expression` selects (null: every case).
+CaseSelection select_cases(const StudyDefinition& study, const std::vector<TrialSpec>& trials,
+                           const KeywordExpression* expression);
+
+/// Removes from `outcomes` (verify_expectations of the study) those of cases `selection` left
+/// out.
+void keep_selected(std::vector<ExpectationOutcome>& outcomes, const CaseSelection& selection);
 
 /// Each group key of `trials` with its label: "column=value" for each axis column whose value
 /// differs between the groups (kernel always), in column order: "kernel=bspline degree=1 r=1".
