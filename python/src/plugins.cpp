@@ -68,6 +68,25 @@ SharedObject share(py::object object) {
   });
 }
 
+// "ValueError: message (at file.py:12 in k)": the exception and the innermost frame of its
+// traceback, one line for a trial's reason. Called with the GIL held.
+std::string exception_text(py::error_already_set& e) {
+  std::string text = py::str(e.type().attr("__name__")).cast<std::string>();
+  if (const auto message = py::str(e.value()).cast<std::string>(); !message.empty())
+    text += ": " + message;
+  py::object frame = py::none();
+  for (py::object tb = py::reinterpret_borrow<py::object>(e.trace()); !tb.is_none();
+       tb = tb.attr("tb_next"))
+    frame = tb;
+  if (!frame.is_none()) {
+    const py::object code = frame.attr("tb_frame").attr("f_code");
+    text += " (at " + py::str(code.attr("co_filename")).cast<std::string>() + ":" +
+            py::str(frame.attr("tb_lineno")).cast<std::string>() + " in " +
+            py::str(code.attr("co_name")).cast<std::string>() + ")";
+  }
+  return text;
+}
+
 // Calls `call` with the GIL held; a Python exception becomes std::runtime_error naming `what`.
 template <class Call>
 auto with_python(const std::string& what, Call&& call) {
@@ -75,7 +94,7 @@ auto with_python(const std::string& what, Call&& call) {
   try {
     return call();
   } catch (py::error_already_set& e) {
-    throw std::runtime_error(what + " raised " + std::string(e.what()));
+    throw std::runtime_error(what + " raised " + exception_text(e));
   } catch (const py::cast_error& e) {
     throw std::runtime_error(what + " returned a value of the wrong type: " + e.what());
   }
