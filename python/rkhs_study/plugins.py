@@ -121,8 +121,8 @@ class Domain:
         """(m, n) the distances |x_i - y_j|."""
         return np.sqrt(self.squared_distances(X, Y))
 
-    def radial(self, profile, X: np.ndarray, Y: np.ndarray,
-               tolerance: float = 1e-16) -> np.ndarray:
+    def radial(self, profile, X: np.ndarray, Y: np.ndarray, tolerance: float = 1e-16,
+               max_images: int = 1000) -> np.ndarray:
         """(m, n) k(x_i, y_j) of the radial kernel k(x, y) = profile(|x - y|).
 
         On a box, profile of the distance. On a periodic domain the kernel periodised by
@@ -134,7 +134,8 @@ class Domain:
         positive at 0, non-increasing and log-concave (the Gaussian, Matern profiles of
         half-integer nu, Wendland's functions); a profile with a heavier tail (the inverse
         multiquadric's 1/r) has no convergent image sum. In d = 1 the terms are added in the
-        built-in kernels' order, smallest first.
+        built-in kernels' order, smallest first. In d > 1, ValueError when the lattice holds
+        more than `max_images` images (each costs a pass over the (m, n) block).
         """
         if not self.periodic:
             return profile(self.distances(X, Y))
@@ -147,6 +148,12 @@ class Domain:
             for m in range(counts[0], 0, -1):
                 total += profile(np.abs(d + m * L)) + profile(np.abs(d - m * L))
             return total + profile(np.abs(d))
+        lattice = math.prod(2 * M + 1 for M in counts)
+        if lattice > max_images:
+            shape = " x ".join(str(2 * M + 1) for M in counts)
+            raise ValueError(f"the image sum needs {lattice} lattice images ({shape}, more "
+                             f"than max_images = {max_images}): the profile decays too "
+                             "slowly for these periods; use a box (periodic = false)")
         offsets = sorted(itertools.product(*[range(-M, M + 1) for M in counts]),
                          key=lambda m: -sum(abs(x) for x in m))
         total = np.zeros(D.shape[:2])
