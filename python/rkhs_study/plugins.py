@@ -203,11 +203,28 @@ class Kernel(_Plugin):
     """
 
     positive_definite: bool = True
+    #: The dimensions d of the boxes it is defined on, and of the periodic domains (a closed
+    #: track is d = 1, a torus d > 1): elsewhere constructing it raises ValueError, which
+    #: verify_plugin reports as a domain the kernel is not defined on (a profile that decays
+    #: too slowly for a lattice of images leaves the tori of d > 1 out, as the built-in
+    #: matern does).
+    dimensions: tuple = (1, 2, 3)
+    periodic_dimensions: tuple = (1, 2, 3)
     sobolev_order: Optional[float] = None
     analytic: bool = False
     support_radius: float = 0.0
     stationary: bool = True
     periodic: Optional[bool] = None  # None: periodic exactly when the domain is
+
+    def __init__(self, domain: Optional[Domain] = None, **parameters):
+        if domain is not None:
+            allowed = self.periodic_dimensions if domain.periodic else self.dimensions
+            if domain.dimension not in allowed:
+                where = ("a closed track" if domain.dimension == 1 else "a torus") \
+                    if domain.periodic else ("an interval" if domain.dimension == 1 else "a box")
+                raise ValueError(f"kernel '{self.name}' is not defined on {where} of d = "
+                                 f"{domain.dimension} (it declares d in {tuple(allowed)})")
+        super().__init__(domain, **parameters)
 
     def k(self, X: np.ndarray, Y: np.ndarray) -> np.ndarray:
         raise NotImplementedError(f"{type(self).__name__}.k(X, Y)")
