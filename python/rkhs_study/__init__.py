@@ -8,11 +8,14 @@ The command line's study, run and check, as thin bindings over the same C++ libr
     study.validate()                 # raises rkhs_study.StudyError "file:line:column: ..."
     grid = study.trials()            # the trial grid, nothing run: a pandas DataFrame
     results = study.run(threads=2)   # results.trials, results.rates: trials.csv, rates.csv
+    results.report("results/x")      # the command's whole output folder, plots included
     rkhs_study.check(["studies/gram_and_power.toml"]).passed
 
 and around them: Study.from_dict (a study as a dict of its tables, written as TOML by to_toml),
 Results.provenance and .verdicts (summary.json's), Results.plot (matplotlib, imported when
-drawing) and the HTML that Jupyter shows for Results, CheckResult and Validation.
+drawing), the command's gnuplot plots (Study.run(out=..., plots=True), Results.report), its
+progress display (Study.run(progress=True)) and the HTML that Jupyter shows for Results,
+CheckResult and Validation.
 """
 
 from __future__ import annotations
@@ -26,7 +29,9 @@ import math
 import numbers
 import os
 import re
+import sys
 import tempfile
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -209,6 +214,26 @@ class Results:
     reused: int = 0       # trials read back from the result store
     study: str = ""       # the study's name
     provenance: dict = field(default_factory=dict)  # summary.json's: version, commit, threads...
+    plots: list = field(default_factory=list)  # the plots rendered into out/plots (file stems)
+    # The run itself (_core.FinishedRun), kept for report(): the record the run wrote from.
+    _finished: object = field(default=None, repr=False, compare=False)
+
+    def report(self, out: PathLike, plots: bool = True) -> Path:
+        """Writes the run's whole output folder into `out`, as `rkhs-study run --out OUT` does.
+
+        trials.csv, rates.csv, summary.json, rates.md, rates.tex, report.html (and the adaptive
+        files), and with `plots` the gnuplot plots in out/plots (SVG, PNG, PDF and their
+        scripts), written by the command's own writers from the record of this run (kept in
+        memory), so the tables are byte for byte those the run wrote; nothing is run again.
+        Works for a run into a temporary folder (out=None) as well. Returns `out` as a Path.
+        A plot gnuplot could not render is a RuntimeWarning naming it, as the command warns.
+        """
+        if self._finished is None:
+            raise ValueError("report() needs the Results of Study.run: this one holds no run")
+        folder = Path(out)
+        written = _core.report(self._finished, os.fspath(folder), bool(plots))
+        _warn_plot_failures(written)
+        return folder
 
     @property
     def verdicts(self) -> pd.DataFrame:
@@ -408,14 +433,27 @@ class Study:
         return read_csv(io.StringIO(self.definition().grid_csv()))
 
     def run(self, threads: Optional[int] = None, out: Optional[PathLike] = None,
-            store: Optional[PathLike] = None, fresh: bool = False) -> Results:
-        """Runs every trial, as `rkhs-study run --out OUT --no-plots` does.
+            store: Optional[PathLike] = None, fresh: bool = False,
+            plots: Optional[bool] = None, progress: bool = False) -> Results:
+        """Runs every trial, as `rkhs-study run --out OUT` does.
 
         threads: worker threads (None: all cores). out: the output folder that receives
-        trials.csv, rates.csv, summary.json, rates.md, rates.tex and report.html (None: a
-        temporary folder, removed once the tables are read). store: the result store (SQLite)
-        to reuse and commit trials to (None: no store, as --no-store); fresh: run every trial
-        again even when the store holds it.
+        trials.csv, rates.csv, summary.json, rates.md, rates.tex, report.html and the plots
+        (None: a temporary folder, removed once the tables are read). store: the result store
+        (SQLite) to reuse and commit trials to (None: no store, as --no-store); fresh: run every
+        trial again even when the store holds it.
+
+        plots: render the command's gnuplot plots into out/plots (SVG, PNG, PDF), embedded in
+        report.html. None (the default): as the command, plots whenever there is an `out` (the
+        command always has one); False is --no-plots. plots=True without `out` is an error
+        (they would be removed with the temporary folder): use results.report(folder) instead.
+        A plot gnuplot could not render is a RuntimeWarning, as the command warns.
+
+        progress: show the command's progress display on sys.stderr while the trials run:
+        trials done of those to run, failures, elapsed time, ETA and the trials in flight. On a
+        terminal or in Jupyter one line redrawn in place ("\\r"), elsewhere a line every few
+        seconds; each failed trial on a line of its own. Nothing when the store holds every
+        trial.
 
         Ctrl-C stops the run as it stops the command (trials in flight are cancelled, finished
         ones are in the store) and raises RunInterrupted, a KeyboardInterrupt whose finished,
@@ -424,10 +462,19 @@ class Study:
         d = self.definition()
         if threads is not None and threads < 1:
             raise ValueError(f"threads must be at least 1, found {threads}")
+        if plots is None:
+            plots = out is not None
+        elif plots and out is None:
+            raise ValueError("plots=True needs an output folder (out=...): without one the plots "
+                             "would be removed with the temporary folder; "
+                             "results.report(folder) writes them later")
         store_file = None if store is None else os.fspath(store)
+        progress_mode = (2 if _progress_redraws() else 1) if progress else 0
 
         def run_into(folder: str) -> Results:
-            summary = _core.run(d, folder, threads or 0, store_file, fresh)
+            summary = _core.run(d, folder, threads or 0, store_file, fresh, bool(plots),
+                                progress_mode)
+            _warn_plot_failures(summary["plots"])
             return Results(out=None if out is None else Path(folder),
                            trials=read_csv(os.path.join(folder, "trials.csv")),
                            rates=read_csv(os.path.join(folder, "rates.csv")),
@@ -436,7 +483,9 @@ class Study:
                            verification=summary["verification"],
                            warnings=summary["warnings"], ran=summary["ran"],
                            reused=summary["reused"], study=summary["study"],
-                           provenance=_read_provenance(folder))
+                           provenance=_read_provenance(folder),
+                           plots=list(summary["plots"]["rendered"]),
+                           _finished=summary["finished"])
 
         if out is not None:
             return run_into(os.fspath(out))
@@ -474,6 +523,23 @@ def check(paths: Union[PathLike, Iterable[PathLike]], *, threads: Optional[int] 
 
 # ---------------------------------------------------------------------------------------------
 # Helpers of Results, CheckResult and Validation
+
+def _progress_redraws() -> bool:
+    """Whether the progress line is redrawn in place ("\\r"): on a terminal and in Jupyter
+    (whose output area honours a carriage return); elsewhere (a log, a pipe) lines are written."""
+    if "ipykernel" in sys.modules:
+        return True
+    try:
+        return sys.stderr is not None and sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+def _warn_plot_failures(plots: dict) -> None:
+    """The command's "warning: plot not rendered: ..." as RuntimeWarnings."""
+    for failure in plots["failures"]:
+        warnings.warn(f"plot not rendered: {failure}", RuntimeWarning, stacklevel=3)
+
 
 def _read_provenance(folder: str) -> dict:
     """summary.json's provenance (version, git_commit, compiler, threads, started, ...)."""

@@ -17,9 +17,9 @@
 #include "commands/commands.hpp"
 #include "commands/common.hpp"
 #include "commands/options.hpp"
-#include "progress.hpp"
 #include "rkhs/core/printable.hpp"
 #include "rkhs/pipeline/journal.hpp"
+#include "rkhs/pipeline/progress.hpp"
 #include "rkhs/report/output.hpp"
 #include "rkhs/report/run_folder.hpp"
 
@@ -128,7 +128,7 @@ int command_run(const RunCommand& arguments, pipeline::Executor& executor) {
                              counted(trials.size(), "trial", "trials"),
                              counted(thread_count, "thread", "threads"), executor.where(), out_dir)
               << "  " << computed_metrics_text(study) << "\n";
-  std::optional<Progress> progress;
+  std::optional<pipeline::Progress> progress;
   if (!quiet) progress.emplace(std::cerr, isatty(STDERR_FILENO) != 0);
   RunOptions options;
   options.threads = thread_count;

@@ -1,11 +1,11 @@
-#include "progress.hpp"
+#include "rkhs/pipeline/progress.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <vector>
 
-namespace rkhs::cli {
+namespace rkhs::pipeline {
 
 namespace {
 // Durations as a person reads them: 4.2 s, 3 min 05 s, 1 h 02 min.
@@ -121,4 +121,4 @@ void Progress::display_loop() {
   if (terminal_ && drawn_width_) out_ << "\n" << std::flush;
 }
 
-}  // namespace rkhs::cli
+}  // namespace rkhs::pipeline

@@ -1,7 +1,8 @@
 #pragma once
-// The progress display of `rkhs-study run`: trials done and failed, elapsed time, an estimate
-// of the time left, and the trials in flight with how long each has run, so that a single long
-// trial shows it is alive.
+// The progress display of `rkhs-study run` and of the Python module's Study.run(progress=True)
+// (python/src/module.cpp, which hands it a stream whose text the calling Python thread writes to
+// sys.stderr): trials done and failed, elapsed time, an estimate of the time left, and the
+// trials in flight with how long each has run, so that a single long trial shows it is alive.
 //
 // On a terminal the line is redrawn in place about twice a second; elsewhere (a log, CI) a line
 // is written when a trial finishes, at most every few seconds, and every 10 s while trials run.
@@ -16,7 +17,7 @@
 #include <string>
 #include <thread>
 
-namespace rkhs::cli {
+namespace rkhs::pipeline {
 
 class Progress {
  public:
@@ -53,4 +54,4 @@ class Progress {
   bool stopping_ = false, started_ = false;
 };
 
-}  // namespace rkhs::cli
+}  // namespace rkhs::pipeline
