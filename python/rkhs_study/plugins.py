@@ -266,7 +266,7 @@ class Target(_Plugin):
 
 class CentrePlacement(_Plugin):
     """Where the n centres of a trial sit: subclass it and define place(n, domain, seed) ->
-    (n, d) array of points inside the domain (in d = 1 sorted increasingly). `seed` is the
+    (n, d) array of points inside the domain (in d = 1 an (n,) array will do; it is sorted). `seed` is the
     trial's seed, derived from its key: a random placement draws from
     np.random.default_rng(seed), so results are the same on every run and thread count.
     A placement of two arguments, place(n, domain), is called without the seed."""
@@ -368,6 +368,8 @@ class _Placing:
         points = np.asarray(self.placement.place(*args), dtype=float)
         if points.ndim == 1 and omega.dimension == 1:
             points = points[:, None]
+        if omega.dimension == 1 and points.ndim == 2 and points.shape[1] == 1:
+            points = np.sort(points, axis=0)  # the engine's contract: increasing in d = 1
         return points
 
 
