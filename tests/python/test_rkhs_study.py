@@ -573,3 +573,27 @@ def test_check_junit_writes_the_commands_report(tmp_path):
         return re.sub(r' (time|timestamp)="[^"]*"', "", file.read_text())
 
     assert without_times(tmp_path / "py.xml") == without_times(tmp_path / "cli.xml")
+
+
+def test_check_of_a_failing_study_fails_as_the_command(tmp_path):
+    """A declared rate the study cannot meet (the degree-1 B-spline's power function falls like
+    n^-1/2, not n^-3): check() does not pass, with the command's exit code 1."""
+    text = STUDY.read_text() + '''
+[[expect]]
+metric = "power_function_sup"
+kernel = "bspline"
+degree = 1
+rate = -3.0
+'''
+    study_file = tmp_path / "failing.toml"
+    study_file.write_text(text)
+    result = rkhs_study.check([study_file], threads=2, tier=None)
+    assert not result.passed and not result
+    assert result.exit_code == 1
+    failed = [o for o in result.outcomes if o["outcome"] == "failed"]
+    assert len(failed) == 1 and failed[0]["metric"] == "power_function_sup"
+    assert failed[0]["location"].startswith(f"{study_file}:")
+    assert "1 failed" in result.counts
+    command = subprocess.run([EXECUTABLE, "check", str(study_file), "--no-store", "--quiet"],
+                             capture_output=True, text=True, cwd=tmp_path)
+    assert command.returncode == result.exit_code == 1
