@@ -547,10 +547,12 @@ def _read_provenance(folder: str) -> dict:
         return json.load(f).get("provenance", {})
 
 
-_OUTCOME_FIELDS = ["study", "name", "outcome", "verdict", "metric", "location", "group",
-                   "group_label", "expected", "found", "reason", "advice", "xfail", "summary",
-                   "rate", "ci_low", "ci_high", "accepted_low", "accepted_high",
-                   "effectivity_min", "effectivity_max", "seconds"]
+# The keys of the module's outcome dicts, in their order (rkhs::outcome_fields, summary.json's
+# order): the columns of an empty verdict frame.
+_OUTCOME_FIELDS = ["study", "name", "metric", "location", "group", "group_label", "verdict",
+                   "outcome", "xfail", "summary", "rate", "ci_low", "ci_high", "accepted_low",
+                   "accepted_high", "effectivity_min", "effectivity_max", "expected", "found",
+                   "reason", "advice", "seconds"]
 
 
 def _verdict_frame(outcomes: list) -> pd.DataFrame:

@@ -105,31 +105,46 @@ rkhs::pipeline::StoreOptions store_options(const std::optional<std::string>& sto
   return options;
 }
 
-// One judged expectation as a dict (the fields of summary.json's "expectations").
+// One judged expectation as a dict: its study's name, then the fields of the outcome table
+// (rkhs::outcome_fields) that appear in Python, in summary.json's order.
 py::dict outcome_dict(const StudyDefinition& study, const rkhs::ExpectationOutcome& outcome) {
+  using rkhs::OutcomeFieldType;
   py::dict d;
   d["study"] = study.name;
-  d["name"] = outcome.name;
-  d["outcome"] = std::string(rkhs::case_outcome_id(rkhs::case_outcome(outcome)));
-  d["verdict"] = std::string(rkhs::verdict_name(outcome.verdict));
-  d["metric"] = outcome.expectation->metric;
-  d["location"] = outcome.expectation->location;
-  d["group"] = outcome.group;
-  d["group_label"] = outcome.group_label;
-  d["expected"] = outcome.expected;
-  d["found"] = outcome.found;
-  d["reason"] = outcome.reason;
-  d["advice"] = outcome.advice;
-  d["xfail"] = outcome.expectation->xfail;
-  d["summary"] = rkhs::verdict_numbers(outcome);
-  d["rate"] = outcome.rate;
-  d["ci_low"] = outcome.ci_low;
-  d["ci_high"] = outcome.ci_high;
-  d["accepted_low"] = outcome.accepted_low;
-  d["accepted_high"] = outcome.accepted_high;
-  d["effectivity_min"] = outcome.effectivity_min;
-  d["effectivity_max"] = outcome.effectivity_max;
-  d["seconds"] = outcome.seconds;
+  for (const auto& field : rkhs::outcome_fields) {
+    if (!field.in(rkhs::OutcomeField::in_python)) continue;
+    const py::str key(field.key.data(), field.key.size());
+    switch (field.type) {
+      case OutcomeFieldType::text:
+      case OutcomeFieldType::optional_text:  // "" when absent
+        d[key] = field.text(outcome);
+        break;
+      case OutcomeFieldType::number:
+      case OutcomeFieldType::seconds:
+        d[key] = outcome.*field.number;
+        break;
+      case OutcomeFieldType::verdict:
+        d[key] = std::string(rkhs::verdict_name(outcome.verdict));
+        break;
+      case OutcomeFieldType::kind:
+        d[key] = std::string(rkhs::expectation_kind_name(outcome.expectation->kind));
+        break;
+      case OutcomeFieldType::window: {
+        py::dict window;
+        window["from"] = outcome.window_from;
+        window["to"] = outcome.window_to;
+        window["points"] = outcome.window_points;
+        d[key] = window;
+        break;
+      }
+      case OutcomeFieldType::outcome:
+        d[key] = std::string(rkhs::case_outcome_id(rkhs::case_outcome(outcome)));
+        break;
+      case OutcomeFieldType::summary:
+        d[key] = rkhs::verdict_numbers(outcome);
+        break;
+    }
+  }
   return d;
 }
 

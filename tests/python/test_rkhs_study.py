@@ -316,6 +316,12 @@ def test_provenance_and_verdicts_are_summary_jsons(tmp_path):
     expected = summary["expectations"]["outcomes"]
     assert len(verdicts) == len(expected) == len(results.outcomes) == 11
     assert list(verdicts.columns) == list(results.outcomes[0])
+    # The columns of an empty frame are those of the outcome dicts, in their order: "study",
+    # then summary.json's keys (the outcome table's, rkhs::outcome_fields, with "summary").
+    assert rkhs_study._OUTCOME_FIELDS == list(results.outcomes[0])
+    python_only, summary_only = {"study", "summary"}, {"expectation_name", "kind", "window"}
+    assert [k for k in results.outcomes[0] if k not in python_only] == [
+        k for k in expected[0] if k not in summary_only]
     for (_, row), outcome in zip(verdicts.iterrows(), expected):
         for key in ("name", "metric", "location", "group", "group_label", "outcome",
                     "expected", "found", "reason"):

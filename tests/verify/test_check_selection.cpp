@@ -487,3 +487,92 @@ TEST_CASE("summary.json: the tier is read back for `report`", "[verification][ch
   CHECK(summary_json(record).find("\"expectations\"") == std::string::npos);
   std::filesystem::remove(file);
 }
+
+TEST_CASE("summary.json: the outcome table's fields in its order, read back the same by `report`",
+          "[verification][check]") {
+  const Textbook textbook(R"([[expect]]
+metric = "power_function_sup"
+name = "named"
+theory = true
+[[expect]]
+metric = "power_function_sup"
+degree = 1
+rate = -2.0
+xfail = "wrong & known"
+)");
+  const auto outcomes = textbook.verify();
+  REQUIRE(outcomes.size() == 4);
+  RunRecord record{textbook.study, textbook.trials, textbook.results, textbook.rates, 1, 0.0, ""};
+  record.verdicts = &outcomes;
+  const auto json = summary_json(record);
+  // Each outcome's keys: the table's summary.json fields, in its order, nothing between them.
+  std::vector<std::string> keys;
+  for (const auto& field : outcome_fields)
+    if (field.in(OutcomeField::in_summary_json)) keys.push_back('"' + std::string(field.key) + '"');
+  auto at = json.find("\"outcomes\": [");
+  REQUIRE(at != std::string::npos);
+  for (std::size_t k = 0; k < outcomes.size(); ++k) {
+    at = json.find("\n      {", at);
+    REQUIRE(at != std::string::npos);
+    const auto line = json.substr(at + 8, json.find('\n', at + 1) - at - 8);
+    // Between keys: a value, then ", " (a JSON string holds no unescaped '"'; the window's
+    // object is skipped whole).
+    std::size_t from = 0;
+    for (const auto& key : keys) {
+      INFO(line << "\n" << key);
+      REQUIRE(line.compare(from, key.size(), key) == 0);
+      from = line.find(", \"", key == "\"window\"" ? line.find('}', from) : from) + 2;
+    }
+    CHECK(from == 1);  // no key after the last (npos + 2)
+    ++at;
+  }
+  const auto dir = std::filesystem::temp_directory_path() / "rkhs_outcome_fields";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "summary.json") << json;
+  const auto folder = read_results_folder(dir);
+  std::filesystem::remove_all(dir);
+  REQUIRE(folder.verdicts.size() == outcomes.size());
+  for (std::size_t k = 0; k < outcomes.size(); ++k) {
+    const auto &a = outcomes[k], &b = folder.verdicts[k];
+    for (const auto& field : outcome_fields) {
+      INFO(k << ": " << field.key);
+      switch (field.type) {
+        case OutcomeFieldType::text:
+        case OutcomeFieldType::optional_text:
+          CHECK(field.text(b) == field.text(a));
+          break;
+        case OutcomeFieldType::number:
+          CHECK((a.*field.number == b.*field.number ||
+                 (std::isnan(a.*field.number) && std::isnan(b.*field.number))));
+          break;
+        case OutcomeFieldType::seconds:
+          CHECK(b.*field.number == Approx(a.*field.number).margin(1e-4));
+          break;
+        case OutcomeFieldType::verdict:
+          CHECK(b.verdict == a.verdict);
+          break;
+        case OutcomeFieldType::kind:
+          CHECK(b.expectation->kind == a.expectation->kind);
+          break;
+        case OutcomeFieldType::window:
+          CHECK(b.window_from == a.window_from);
+          CHECK(b.window_to == a.window_to);
+          CHECK(b.window_points == a.window_points);
+          break;
+        case OutcomeFieldType::outcome:
+          CHECK(case_outcome(b) == case_outcome(a));
+          break;
+        case OutcomeFieldType::summary:
+          CHECK(verdict_numbers(b) == verdict_numbers(a));
+          break;
+      }
+    }
+  }
+  CHECK(outcomes[0].expectation->name == "named");
+  CHECK(outcomes[3].expectation->xfail == "wrong & known");
+  // The verdicts read back write the same "expectations" again.
+  const auto expectations = [](const std::string& text) {
+    return text.substr(text.find("  \"expectations\": {"));
+  };
+  CHECK(expectations(summary_json(folder.record())) == expectations(json));
+}

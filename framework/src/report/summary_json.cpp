@@ -42,6 +42,36 @@ std::string json_plugin(const PluginChoice& choice) {
                      json_parameters(choice.parameters));
 }
 
+// The value of one field of an outcome (outcome_fields) as summary.json writes it.
+std::string outcome_field_json(const OutcomeField& field, const ExpectationOutcome& o) {
+  const auto n_or_null = [](std::size_t n) { return n ? std::to_string(n) : std::string("null"); };
+  switch (field.type) {
+    case OutcomeFieldType::text:
+      return json_string(field.text(o));
+    case OutcomeFieldType::optional_text:
+      return field.text(o).empty() ? std::string("null") : json_string(field.text(o));
+    case OutcomeFieldType::number:
+      return json_number(o.*field.number);
+    case OutcomeFieldType::seconds:
+      return json_number(std::round(o.*field.number * 1e4) / 1e4);
+    case OutcomeFieldType::verdict: {
+      std::string verdict(verdict_name(o.verdict));
+      for (auto& c : verdict) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return json_string(verdict);
+    }
+    case OutcomeFieldType::kind:
+      return json_string(expectation_kind_name(o.expectation->kind));
+    case OutcomeFieldType::window:
+      return fmt::format("{{\"from\": {}, \"to\": {}, \"points\": {}}}", n_or_null(o.window_from),
+                         n_or_null(o.window_to), o.window_points);
+    case OutcomeFieldType::outcome:
+      return json_string(case_outcome_id(case_outcome(o)));
+    case OutcomeFieldType::summary:
+      return json_string(verdict_numbers(o));
+  }
+  return "null";
+}
+
 // "expectations": the verdicts of RunRecord::verdicts, one object per test case.
 std::string expectations_json(const RunRecord& run) {
   auto counts = count_verdicts(*run.verdicts);
@@ -52,32 +82,14 @@ std::string expectations_json(const RunRecord& run) {
       "    \"outcomes\": [\n",
       counts.passed, counts.failed, counts.inconclusive, counts.xfailed, counts.xpassed,
       counts.deselected);
-  const auto optional_text = [](const std::string& text) {
-    return text.empty() ? std::string("null") : json_string(text);
-  };
-  const auto n_or_null = [](std::size_t n) { return n ? std::to_string(n) : std::string("null"); };
   for (std::size_t k = 0; k < run.verdicts->size(); ++k) {
     const auto& o = (*run.verdicts)[k];
-    const auto& e = *o.expectation;
-    std::string verdict(verdict_name(o.verdict));
-    for (auto& c : verdict) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    out += fmt::format(
-        "      {{\"name\": {}, \"expectation_name\": {}, \"metric\": {}, \"kind\": {}, "
-        "\"location\": {}, \"group\": {}, \"group_label\": {}, \"verdict\": {}, "
-        "\"outcome\": {}, \"xfail\": {}, \"rate\": {}, \"ci_low\": {}, \"ci_high\": {}, "
-        "\"accepted_low\": {}, \"accepted_high\": {}, \"effectivity_min\": {}, "
-        "\"effectivity_max\": {}, \"window\": {{\"from\": {}, \"to\": {}, \"points\": {}}}, "
-        "\"expected\": {}, \"found\": {}, \"reason\": {}, \"advice\": {}, \"seconds\": {}}}{}\n",
-        json_string(o.name), optional_text(e.name), json_string(e.metric),
-        json_string(expectation_kind_name(e.kind)), json_string(e.location), json_string(o.group),
-        json_string(o.group_label), json_string(verdict),
-        json_string(case_outcome_id(case_outcome(o))), optional_text(e.xfail), json_number(o.rate),
-        json_number(o.ci_low), json_number(o.ci_high), json_number(o.accepted_low),
-        json_number(o.accepted_high), json_number(o.effectivity_min),
-        json_number(o.effectivity_max), n_or_null(o.window_from), n_or_null(o.window_to),
-        o.window_points, json_string(o.expected), json_string(o.found), json_string(o.reason),
-        o.advice.empty() ? std::string("null") : json_string(o.advice),
-        json_number(std::round(o.seconds * 1e4) / 1e4), k + 1 < run.verdicts->size() ? "," : "");
+    std::vector<std::string> items;
+    for (const auto& field : outcome_fields)
+      if (field.in(OutcomeField::in_summary_json))
+        items.push_back(json_string(field.key) + ": " + outcome_field_json(field, o));
+    out += fmt::format("      {{{}}}{}\n", fmt::join(items, ", "),
+                       k + 1 < run.verdicts->size() ? "," : "");
   }
   return out + "    ]\n  }\n";
 }

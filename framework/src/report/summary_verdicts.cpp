@@ -23,6 +23,72 @@ std::string kind_names() {
   return names;
 }
 
+// Reads a field an expectation holds (OutcomeField::of_expectation) into `e`.
+void read_expectation_field(const Reader& reader, const Json& entry, const std::string& path,
+                            const OutcomeField& field, Expectation& e) {
+  const std::string key(field.key);
+  if (field.type == OutcomeFieldType::kind) {
+    const auto kind = reader.text(entry, path, key.c_str());
+    for (auto candidate : expectation_kinds)
+      if (expectation_kind_name(candidate) == kind) {
+        e.kind = candidate;
+        return;
+      }
+    reader.fail(Reader::join(path, key.c_str()),
+                fmt::format("\"{}\" is not an expectation kind; {}", kind, kind_names()));
+  }
+  e.*field.expectation_text = field.type == OutcomeFieldType::optional_text
+                                  ? reader.optional_text(entry, path, key.c_str())
+                                  : reader.text(entry, path, key.c_str());
+}
+
+// Reads a field of the outcome itself into `o` (nothing for those derived from others).
+void read_outcome_field(const Reader& reader, const Json& entry, const std::string& path,
+                        const OutcomeField& field, ExpectationOutcome& o) {
+  const std::string key(field.key);
+  switch (field.type) {
+    case OutcomeFieldType::text:
+      o.*field.outcome_text = reader.text(entry, path, key.c_str());
+      return;
+    case OutcomeFieldType::optional_text:
+      o.*field.outcome_text = reader.optional_text(entry, path, key.c_str());
+      return;
+    case OutcomeFieldType::number:
+    case OutcomeFieldType::seconds:
+      o.*field.number = reader.number(entry, path, key.c_str());
+      return;
+    case OutcomeFieldType::verdict: {
+      const auto verdict = reader.text(entry, path, key.c_str());
+      if (verdict == "pass")
+        o.verdict = Verdict::pass;
+      else if (verdict == "fail")
+        o.verdict = Verdict::fail;
+      else if (verdict == "inconclusive")
+        o.verdict = Verdict::inconclusive;
+      else
+        reader.fail(Reader::join(path, key.c_str()),
+                    fmt::format("\"{}\"; pass, fail or inconclusive", verdict));
+      return;
+    }
+    case OutcomeFieldType::window: {
+      const auto& window = reader.member(entry, path, key.c_str());
+      const auto window_path = Reader::join(path, key.c_str());
+      o.window_points = reader.count(window, window_path, "points");
+      const auto n_or_zero = [&](const char* end) -> std::size_t {
+        const auto& value = reader.member(window, window_path, end);
+        return value.is_null() ? 0 : reader.count(value, Reader::join(window_path, end));
+      };
+      o.window_from = n_or_zero("from");
+      o.window_to = n_or_zero("to");
+      return;
+    }
+    case OutcomeFieldType::kind:     // of the expectation: read_expectation_field
+    case OutcomeFieldType::outcome:  // derived from the verdict and the xfail marker
+    case OutcomeFieldType::summary:  // derived from the numbers
+      return;
+  }
+}
+
 }  // namespace
 
 void read_summary_verdicts(const Reader& reader, const Json& json, ResultsFolder& folder) {
@@ -47,19 +113,9 @@ void read_summary_verdicts(const Reader& reader, const Json& json, ResultsFolder
     Expectation e;
     e.number = locations.size();
     e.location = location;
-    e.name = reader.optional_text(outcomes[k], path, "expectation_name");
-    e.metric = reader.text(outcomes[k], path, "metric");
-    e.xfail = reader.optional_text(outcomes[k], path, "xfail");
-    const auto kind = reader.text(outcomes[k], path, "kind");
-    bool known = false;
-    for (auto candidate : expectation_kinds)
-      if (expectation_kind_name(candidate) == kind) {
-        e.kind = candidate;
-        known = true;
-      }
-    if (!known)
-      reader.fail(Reader::join(path, "kind"),
-                  fmt::format("\"{}\" is not an expectation kind; {}", kind, kind_names()));
+    for (const auto& field : outcome_fields)
+      if (field.in(OutcomeField::in_summary_json) && field.of_expectation())
+        read_expectation_field(reader, outcomes[k], path, field, e);
     study.expectations.push_back(std::move(e));
   }
   for (std::size_t k = 0; k < outcomes.size(); ++k) {
@@ -69,40 +125,9 @@ void read_summary_verdicts(const Reader& reader, const Json& json, ResultsFolder
     const auto location = reader.text(entry, path, "location");
     o.expectation = &study.expectations[static_cast<std::size_t>(
         std::find(locations.begin(), locations.end(), location) - locations.begin())];
-    o.name = reader.text(entry, path, "name");
-    o.group = reader.text(entry, path, "group");
-    o.group_label = reader.text(entry, path, "group_label");
-    const auto verdict = reader.text(entry, path, "verdict");
-    if (verdict == "pass")
-      o.verdict = Verdict::pass;
-    else if (verdict == "fail")
-      o.verdict = Verdict::fail;
-    else if (verdict == "inconclusive")
-      o.verdict = Verdict::inconclusive;
-    else
-      reader.fail(Reader::join(path, "verdict"),
-                  fmt::format("\"{}\"; pass, fail or inconclusive", verdict));
-    o.rate = reader.number(entry, path, "rate");
-    o.ci_low = reader.number(entry, path, "ci_low");
-    o.ci_high = reader.number(entry, path, "ci_high");
-    o.accepted_low = reader.number(entry, path, "accepted_low");
-    o.accepted_high = reader.number(entry, path, "accepted_high");
-    o.effectivity_min = reader.number(entry, path, "effectivity_min");
-    o.effectivity_max = reader.number(entry, path, "effectivity_max");
-    const auto& window = reader.member(entry, path, "window");
-    const auto window_path = Reader::join(path, "window");
-    o.window_points = reader.count(window, window_path, "points");
-    const auto n_or_zero = [&](const char* key) -> std::size_t {
-      const auto& value = reader.member(window, window_path, key);
-      return value.is_null() ? 0 : reader.count(value, Reader::join(window_path, key));
-    };
-    o.window_from = n_or_zero("from");
-    o.window_to = n_or_zero("to");
-    o.expected = reader.text(entry, path, "expected");
-    o.found = reader.text(entry, path, "found");
-    o.reason = reader.text(entry, path, "reason");
-    o.advice = reader.optional_text(entry, path, "advice");
-    o.seconds = reader.number(entry, path, "seconds");
+    for (const auto& field : outcome_fields)
+      if (field.in(OutcomeField::in_summary_json) && !field.of_expectation())
+        read_outcome_field(reader, entry, path, field, o);
     if (const auto s = series_of.find({o.group, o.expectation->metric}); s != series_of.end())
       o.series = s->second;
     folder.verdicts.push_back(std::move(o));

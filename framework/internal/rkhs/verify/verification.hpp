@@ -61,6 +61,91 @@ struct ExpectationOutcome {
   std::size_t window_from = 0, window_to = 0;  ///< n range of the window (0 when none)
 };
 
+// The fields of a judged expectation (an ExpectationOutcome with its Expectation) as one table,
+// in the order summary.json writes them. The summary.json writer (summary_json.cpp), its reader
+// (summary_verdicts.cpp, `rkhs-study report`) and the Python module's outcome dicts
+// (python/src/module.cpp) all iterate it: adding a field is one row here.
+
+/// What a field holds, and so how each writer and reader converts it.
+enum class OutcomeFieldType {
+  text,           ///< a string (`outcome_text` or `expectation_text`)
+  optional_text,  ///< a string; null in summary.json when empty ("" in Python)
+  number,         ///< a double (`number`): summary.json's json_number (null for NaN, "inf")
+  seconds,        ///< a double (`number`) summary.json rounds to 0.1 ms
+  verdict,        ///< ExpectationOutcome::verdict: "pass", ... in summary.json, verdict_name in
+                  ///< Python
+  kind,           ///< Expectation::kind, as expectation_kind_name names it
+  window,         ///< {"from": n or null, "to": n or null, "points": count}: window_from,
+                  ///< window_to (0 for null) and window_points
+  outcome,        ///< case_outcome_id(case_outcome(o)): derived from the verdict, not read back
+  summary,        ///< verdict_numbers(o): derived, not read back
+};
+
+/// One field: its key, its type, where it appears and the member that holds it (of the outcome,
+/// or of its expectation: one expectation's fields are shared by the outcomes of its groups).
+/// The derived types (verdict, kind, window, outcome, summary) name no member.
+struct OutcomeField {
+  /// Where a field appears: bits of `places`.
+  static constexpr unsigned in_summary_json = 1u;  ///< summary.json (and read back from it)
+  static constexpr unsigned in_python = 2u;        ///< the Python module's outcome dicts
+
+  std::string_view key;
+  OutcomeFieldType type;
+  unsigned places = in_summary_json | in_python;
+  std::string ExpectationOutcome::*outcome_text = nullptr;
+  std::string Expectation::*expectation_text = nullptr;
+  double ExpectationOutcome::*number = nullptr;
+
+  bool in(unsigned place) const { return (places & place) != 0; }
+  /// Held by the expectation (read once per expectation when summary.json is read back).
+  bool of_expectation() const {
+    return expectation_text != nullptr || type == OutcomeFieldType::kind;
+  }
+  /// The text of a text or optional_text field.
+  const std::string& text(const ExpectationOutcome& o) const {
+    return outcome_text ? o.*outcome_text : o.expectation->*expectation_text;
+  }
+};
+
+namespace outcome_field_detail {
+using enum OutcomeFieldType;
+using O = ExpectationOutcome;
+using E = Expectation;
+inline constexpr unsigned summary_json_only = OutcomeField::in_summary_json;
+inline constexpr unsigned python_only = OutcomeField::in_python;
+// clang-format off
+inline constexpr OutcomeField fields[] = {
+    {.key = "name",             .type = text,          .outcome_text = &O::name},
+    {.key = "expectation_name", .type = optional_text, .places = summary_json_only, .expectation_text = &E::name},
+    {.key = "metric",           .type = text,          .expectation_text = &E::metric},
+    {.key = "kind",             .type = kind,          .places = summary_json_only},
+    {.key = "location",         .type = text,          .expectation_text = &E::location},
+    {.key = "group",            .type = text,          .outcome_text = &O::group},
+    {.key = "group_label",      .type = text,          .outcome_text = &O::group_label},
+    {.key = "verdict",          .type = verdict},
+    {.key = "outcome",          .type = outcome},
+    {.key = "xfail",            .type = optional_text, .expectation_text = &E::xfail},
+    {.key = "summary",          .type = summary,       .places = python_only},
+    {.key = "rate",             .type = number,        .number = &O::rate},
+    {.key = "ci_low",           .type = number,        .number = &O::ci_low},
+    {.key = "ci_high",          .type = number,        .number = &O::ci_high},
+    {.key = "accepted_low",     .type = number,        .number = &O::accepted_low},
+    {.key = "accepted_high",    .type = number,        .number = &O::accepted_high},
+    {.key = "effectivity_min",  .type = number,        .number = &O::effectivity_min},
+    {.key = "effectivity_max",  .type = number,        .number = &O::effectivity_max},
+    {.key = "window",           .type = window,        .places = summary_json_only},
+    {.key = "expected",         .type = text,          .outcome_text = &O::expected},
+    {.key = "found",            .type = text,          .outcome_text = &O::found},
+    {.key = "reason",           .type = text,          .outcome_text = &O::reason},
+    {.key = "advice",           .type = optional_text, .outcome_text = &O::advice},
+    {.key = "seconds",          .type = seconds,       .number = &O::seconds},
+};
+// clang-format on
+}  // namespace outcome_field_detail
+
+/// Every field, in summary.json's order (which the Python dicts keep, after their "study").
+inline constexpr const auto& outcome_fields = outcome_field_detail::fields;
+
 /// Judges every expectation of `study` on every group it selects, in file order. `rates` is
 /// compute_rates(study, trials, results). Never throws for study results (bad values give
 /// inconclusive or failing verdicts with their reason); std::bad_alloc aside.
