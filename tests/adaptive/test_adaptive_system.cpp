@@ -84,6 +84,7 @@ TEST_CASE("the adaptive metric table: rows in enum order, each named once", "[ad
   for (const auto& row : MetricTable<AdaptiveMetric>::rows) {
     INFO(row.name);
     if (row.flag.ends_with("_at_floor")) CHECK(row.floor != FloorRule::exact);
-    CHECK(row.needs == 0);  // an adaptive trial computes every metric
+    // An adaptive trial computes every metric; Theorem 1's need the initial data dependence.
+    CHECK((row.needs & ~unsigned{adaptive_work_initial_data}) == 0);
   }
 }

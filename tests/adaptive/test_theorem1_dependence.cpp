@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "rkhs/adaptive/metrics.hpp"
 #include "study_support.hpp"
 
 using namespace rkhs;
@@ -15,8 +16,8 @@ namespace {
 // Box features of one level (degree 0, J = 0, n0 = 4 cells; r weighs levels j > 0 only): at every s
 // exactly one feature is nonzero, so |w(s)|^2 = k(s, s) is the same everywhere. The rkhs_embedding
 // law works in those features (W = I).
-test::StudyOutcome run_boxes(double a, double b, double gamma, const std::string& adaptive) {
-  return test::run_study_text(R"([study]
+std::string boxes_study(double a, double b, double gamma, const std::string& adaptive) {
+  return R"([study]
 name = "theorem1"
 kind = "adaptive"
 evaluation_points = 1024
@@ -45,8 +46,11 @@ name = "radau5"
 rtol = 1e-10
 atol = 1e-12
 [adaptive]
-)" + adaptive,
-                              "theorem1.toml");
+)" + adaptive;
+}
+
+test::StudyOutcome run_boxes(double a, double b, double gamma, const std::string& adaptive) {
+  return test::run_study_text(boxes_study(a, b, gamma, adaptive), "theorem1.toml");
 }
 
 // ||[[-a, b c], [-c b P / gamma, 0]]||_2 with P = 1 / (2 a) (A^T P + P A = -1): the larger
@@ -106,4 +110,28 @@ TEST_CASE("Theorem 1's measured dependence needs time stepping", "[adaptive][the
   CHECK(std::isnan(trial.metric(0, "initial_data_lipschitz")));
   CHECK(std::isnan(trial.metric(0, "lipschitz_exponent")));
   CHECK(trial.metric(0, "lipschitz_constant") > 0);
+}
+
+TEST_CASE("Theorem 1's metrics turn the initial data dependence on, the others do not",
+          "[adaptive][theorem1]") {
+  // The setting follows the metric table: the rows that need adaptive_work_initial_data.
+  auto study =
+      parse_study(boxes_study(1.0, 8.0, 0.5, "speed = 1.0\nfinal_time = 2.0\n"), "theorem1.toml");
+  const auto trial = study.trials().front();
+  std::vector<std::string> needing, others;
+  for (const auto& row : MetricTable<AdaptiveMetric>::rows) {
+    INFO(row.name);
+    const bool needs = (row.needs & adaptive_work_initial_data) != 0;
+    (needs ? needing : others).emplace_back(row.name);
+    study.metrics = {std::string(row.name)};
+    CHECK(trial_adaptive_settings(study, trial).initial_data_dependence == needs);
+    study.metrics = {"l2_error", std::string(row.name)};
+    CHECK(trial_adaptive_settings(study, trial).initial_data_dependence == needs);
+  }
+  CHECK(needing == std::vector<std::string>{"embedding_constant", "lipschitz_constant",
+                                            "initial_data_lipschitz", "lipschitz_exponent"});
+  study.metrics = others;
+  CHECK_FALSE(trial_adaptive_settings(study, trial).initial_data_dependence);
+  study.metrics = metric_table_names<AdaptiveMetric>();
+  CHECK(trial_adaptive_settings(study, trial).initial_data_dependence);
 }

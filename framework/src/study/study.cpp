@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "rkhs/adaptive/adaptive.hpp"
+#include "rkhs/adaptive/metrics.hpp"
 #include "rkhs/core/random.hpp"
 
 namespace rkhs {
@@ -266,10 +267,12 @@ AdaptiveSettings trial_adaptive_settings(const StudyDefinition& study, const Tri
   const auto& own = trial.adaptive_axes();
   AdaptiveSettings settings = adaptive.settings;
   if (!adaptive.reference.name.empty()) settings.engine = AdaptiveEngine::time_stepping;
-  for (const auto& metric : study.metrics)
-    if (metric == "embedding_constant" || metric == "lipschitz_constant" ||
-        metric == "initial_data_lipschitz" || metric == "lipschitz_exponent")
-      settings.initial_data_dependence = true;
+  // The optional work the study's metrics need (MetricInfo::needs of the adaptive table).
+  MetricSelection asked;
+  for (const auto& row : MetricTable<AdaptiveMetric>::rows)
+    asked.push_back(std::ranges::find(study.metrics, row.name) != study.metrics.end());
+  const unsigned work = work_needed<AdaptiveMetric>(asked);
+  settings.initial_data_dependence = (work & adaptive_work_initial_data) != 0;
   for (const auto& [name, value] : own.integrator.parameters.values()) {
     if (name != "rtol" && name != "atol") continue;
     (name == "rtol" ? settings.integrator_rtol : settings.integrator_atol) =

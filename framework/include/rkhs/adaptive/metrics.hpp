@@ -66,6 +66,15 @@ enum class AdaptiveMetric : std::size_t {
   lipschitz_exponent,
 };
 
+/// The optional parts of an adaptive trial's work, as bits of MetricInfo::needs: a trial does
+/// one when the study asks for a metric that needs it (trial_adaptive_settings); every other
+/// metric is computed by every trial.
+enum AdaptiveWork : unsigned {
+  /// Theorem 1's dependence on the initial data: its constants and a second trajectory from
+  /// perturbed initial data (AdaptiveSettings::initial_data_dependence).
+  adaptive_work_initial_data = 1u << 0,
+};
+
 template <>
 struct MetricTable<AdaptiveMetric> {
   using M = AdaptiveMetric;
@@ -223,28 +232,29 @@ struct MetricTable<AdaptiveMetric> {
       // Theorem 1 (existence, uniqueness, Lipschitz dependence on the initial data;
       // docs/theorems.md): its hypotheses, the embedding constant C and the Lipschitz constant
       // L of the error system, and what they bound, the measured dependence on the initial data.
-      // Computed when a study asks for one of the four (road plants; NaN otherwise).
+      // Computed when a study asks for one of the four (needs adaptive_work_initial_data; road
+      // plants; NaN otherwise).
       { {"embedding_constant", "embedding constant of H in C", F::round_off, "sqrt([k])",
        "C = max_m sqrt(k(s_m, s_m)) on the grid, the smallest C with ||f||_C <= C ||f||_H: "
        "Theorem 1 needs it finite; NaN unless asked for",
-       true, ""}, M::embedding_constant},
+       true, "", true, adaptive_work_initial_data}, M::embedding_constant},
       { {"lipschitz_constant", "Lipschitz constant of the error system", F::round_off, "1/s",
        "L = max_m ||[[A, -B w_m], [w_m B^T P / Gamma, 0]]||_2, w_m = sqrt(phi(s_m)^T W^+ "
        "phi(s_m)) (W = G for the rkhs law, I for the gradient law and in feature coordinates): "
        "the norm of the error system's generator in |e|^2 + c^T W c; NaN unless asked for",
-       true, ""}, M::lipschitz_constant},
+       true, "", true, adaptive_work_initial_data}, M::lipschitz_constant},
       { {"initial_data_lipschitz", "measured Lipschitz constant of the initial data", F::integration,
        "1",
        "max over the samples of ||X1(t) - X2(t)|| / ||X1(0) - X2(0)||, X = (x - xhat, alpha) in "
        "the norm of lipschitz_constant, the second trajectory started from x0, xhat0, alpha0 "
        "perturbed: Theorem 1's Lipschitz map from the initial data into C([0, T]); NaN unless "
        "asked for, and with the lap map",
-       true, ""}, M::initial_data_lipschitz},
+       true, "", true, adaptive_work_initial_data}, M::initial_data_lipschitz},
       { {"lipschitz_exponent", "measured growth exponent", F::integration, "1/s",
        "max(0, max over the samples t > 0 of ln(||X1(t) - X2(t)|| / ||X1(0) - X2(0)||) / t): "
        "the smallest L' >= 0 with distance <= e^{L' t} at every sample, at most "
        "lipschitz_constant (Gronwall); NaN unless asked for, and with the lap map",
-       true, ""}, M::lipschitz_exponent},
+       true, "", true, adaptive_work_initial_data}, M::lipschitz_exponent},
   });
 };
 static_assert(table_in_enum_order<AdaptiveMetric>());

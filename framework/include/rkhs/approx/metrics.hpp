@@ -101,8 +101,8 @@ struct MetricInfo {
   /// still use (making them excluded changes adaptive studies' fitted rates).
   bool flag_excludes_from_fits = true;
   /// What a trial must compute to give this metric and decide its flag, as bits of the kind's
-  /// work enum (ApproximationWork for approximation trials); 0 for a kind whose trials compute
-  /// every metric (adaptive trials).
+  /// work enum: ApproximationWork for approximation trials, AdaptiveWork for adaptive trials
+  /// (which compute every other metric); 0 when it needs nothing beyond what every trial does.
   unsigned needs = 0;
   /// Taken on the evaluation grid s_m (a sup or an L2 norm over the domain): a study whose
   /// grid is no finer than its centres is refused when it asks for one (docs/metrics.md).
