@@ -840,7 +840,7 @@ metrics = ["sup_error"]
              Catch::StartsWith("s.toml:1:8: plot: expected a table"));
 }
 
-TEST_CASE("[linear_algebra] solver: dense by default, sparse, auto; anything else is an error",
+TEST_CASE("[linear_algebra] solver is dense by default, sparse or auto, and nothing else",
           "[study]") {
   CHECK(parse_study(minimal, "s.toml").solver.algebra == rkhs::GramAlgebra::dense);
   CHECK(parse_study(std::string(minimal) + "[linear_algebra]\nsolver = \"sparse\"\n", "s.toml")
