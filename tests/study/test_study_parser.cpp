@@ -140,9 +140,10 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
   }
   SECTION("unknown top-level key") {
     const auto e = error_of(std::string(minimal) + "[kernels]\nx = 1\n");
-    CHECK(e == "s.toml:10:2: kernels: unknown key (known: study, domain, grid, kernel, target, "
-               "centres, projection, solver, limits, rates, adaptive, plant, law, integrator, "
-               "plugins, expect, plot; did you mean 'kernel'?)");
+    CHECK(e ==
+          "s.toml:10:2: kernels: unknown key (known: study, domain, grid, kernel, target, "
+          "centres, projection, solver, linear_algebra, limits, rates, adaptive, plant, "
+          "law, integrator, plugins, expect, plot; did you mean 'kernel'?)");
   }
   SECTION("invalid TOML") {
     const auto e = error_of("[study\nname = 1\n");
@@ -837,4 +838,18 @@ metrics = ["sup_error"]
                                "of 36000 pixels a side, at most 20000"));
   CHECK_THAT(error_of("plot = 3\n" + std::string(minimal)),
              Catch::StartsWith("s.toml:1:8: plot: expected a table"));
+}
+
+TEST_CASE("[linear_algebra] solver is dense by default, sparse or auto, and nothing else",
+          "[study]") {
+  CHECK(parse_study(minimal, "s.toml").solver.algebra == rkhs::GramAlgebra::dense);
+  CHECK(parse_study(std::string(minimal) + "[linear_algebra]\nsolver = \"sparse\"\n", "s.toml")
+            .solver.algebra == rkhs::GramAlgebra::sparse);
+  CHECK(parse_study(std::string(minimal) + "[linear_algebra]\nsolver = \"auto\"\n", "s.toml")
+            .solver.algebra == rkhs::GramAlgebra::automatic);
+  CHECK(error_of(std::string(minimal) + "[linear_algebra]\nsolver = \"cholmod\"\n") ==
+        "s.toml:11:10: linear_algebra.solver: found \"cholmod\", expected \"dense\", "
+        "\"sparse\" or \"auto\"");
+  CHECK_THAT(error_of(std::string(minimal) + "[linear_algebra]\nsolve = \"dense\"\n"),
+             Catch::StartsWith("s.toml:11:1: linear_algebra.solve: unknown key"));
 }

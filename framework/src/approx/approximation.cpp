@@ -7,6 +7,7 @@
 #include <optional>
 #include <queue>
 
+#include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
 
@@ -347,6 +348,12 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                                                const SolverOptions& solver_options,
                                                const MetricSelection& selection) {
   const unsigned work = work_needed<ApproximationMetric>(selection);
+  // A compactly supported kernel on the sparse path (sparse_gram.hpp), unless its
+  // factorisation cannot decide singularity: then the dense path below decides.
+  if (choose_sparse(kernel, kernel.domain().point_count(centres), solver_options, work))
+    if (auto sparse = measure_sparse_approximation(kernel, target, centres, evaluation_points,
+                                                   solver_options, selection))
+      return std::move(*sparse);
   const Eigen::MatrixXd gram = kernel.gram(centres);
   check_cancelled();
   const GramSolver solver(gram, solver_options,

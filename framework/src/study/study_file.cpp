@@ -426,6 +426,21 @@ void read_solver_and_rates(const Reporter& report, const toml::table& root,
         get_number(report, *solver, "regularisation", "solver.", 0, -1e-300);
   }
 
+  if (const auto* algebra = optional_table(report, root, "linear_algebra")) {
+    check_keys(report, *algebra, "linear_algebra.", {"solver"});
+    const auto solver =
+        get_string(report, *algebra, "solver", "linear_algebra.", std::string("dense"));
+    if (solver == "dense")
+      study.solver.algebra = GramAlgebra::dense;
+    else if (solver == "sparse")
+      study.solver.algebra = GramAlgebra::sparse;
+    else if (solver == "auto")
+      study.solver.algebra = GramAlgebra::automatic;
+    else
+      report.fail(algebra->get("solver")->source(), "linear_algebra.solver",
+                  fmt::format("found \"{}\", expected \"dense\", \"sparse\" or \"auto\"", solver));
+  }
+
   if (const auto* rates = optional_table(report, root, "rates")) {
     auto keys = fit_window_keys;
     keys.push_back("constant_within");
@@ -510,10 +525,10 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   } catch (const toml::parse_error& error) {
     report.fail(error.source(), "", fmt::format("invalid TOML: {}", error.description()));
   }
-  check_keys(
-      report, root, "",
-      {"study", "domain", "grid", "kernel", "target", "centres", "projection", "solver", "limits",
-       "rates", "adaptive", "plant", "law", "integrator", "plugins", "expect", "plot"});
+  check_keys(report, root, "",
+             {"study", "domain", "grid", "kernel", "target", "centres", "projection", "solver",
+              "linear_algebra", "limits", "rates", "adaptive", "plant", "law", "integrator",
+              "plugins", "expect", "plot"});
   load_study_plugins(report, root);
 
   StudyDefinition study;

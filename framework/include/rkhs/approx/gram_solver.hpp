@@ -32,11 +32,21 @@ namespace rkhs {
 
 enum class SingularPolicy { pseudo_inverse, regularised, fail };
 
+/// The linear algebra of an approximation trial: a study's `[linear_algebra] solver`
+/// (docs/study-files.md).
+enum class GramAlgebra {
+  dense,      ///< the dense Gram matrix and GramSolver: every metric
+  sparse,     ///< CHOLMOD's sparse Cholesky factorisation, for a compactly supported kernel
+              ///< (rkhs/approx/sparse_gram.hpp says which metrics it computes)
+  automatic,  ///< sparse where sparse_gram.hpp's choose_sparse says so, dense elsewhere
+};
+
 struct SolverOptions {
   SingularPolicy singular = SingularPolicy::pseudo_inverse;
   /// mu for SingularPolicy::regularised, relative to lambda_max; 0 picks n eps (the
   /// singularity threshold itself).
   double regularisation = 0.0;
+  GramAlgebra algebra = GramAlgebra::dense;
 };
 
 class SingularGramError : public std::runtime_error {

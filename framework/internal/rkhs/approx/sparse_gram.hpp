@@ -1,0 +1,71 @@
+#pragma once
+// The sparse path of an approximation trial, for a kernel of compact support
+// (KernelProperties::support_radius > 0): the Gram and cross matrices assembled sparse from a
+// uniform cell grid, the Gram matrix factorised once by CHOLMOD's supernodal Cholesky
+// factorisation (SuiteSparse, through Eigen's CholmodSupport) with its fill-reducing ordering.
+//
+// What it computes, per metric (docs/study-files.md, "[linear_algebra]"):
+//   fill_distance, separation_distance     as the dense path
+//   power_function_sup, _floor             P(s)^2 = k(s, s) - |L^-1 P k_X(s)|^2 and the floor's
+//                                          |G^-1 k_X(s)|^2 = |L^-T L^-1 P k_X(s)|^2, by blocks of
+//                                          evaluation points
+//   l2_error, sup_error, error_floor       alpha = G^-1 f(X) and the sparse cross matrix
+//   interpolant_native_norm                sqrt(alpha^T G alpha)
+//   projection_norm_H_to_C                 the power function
+// The round-off floors use lambda_max of G from Lanczos on the sparse matrix and lambda_min from
+// Lanczos on G^-1 through the factor, the same estimates as GramSolver's
+// GramSpectrumMode::estimate. Not computed yet: gram_condition_number, gram_min_eigenvalue,
+// gram_max_eigenvalue (an exact symmetric eigenvalue solve) and projection_operator_norm (the
+// dense interpolation operator). A study that forces the sparse path and asks for one of them
+// has its trials fail with that reason (choose_sparse); `auto` takes the dense path for them.
+//
+// Deterministic: the assembly runs in a fixed order on the calling thread; the blocks of
+// evaluation points are independent (run_parts); CHOLMOD's own OpenMP loops only copy into
+// disjoint columns, and the BLAS it calls (Debian's libblas.so.3 alternative) is asked for one
+// thread when it is OpenBLAS (openblas_set_num_threads(1)).
+
+#include <Eigen/SparseCore>
+#include <optional>
+#include <span>
+
+#include "rkhs/approx/approximation.hpp"
+
+namespace rkhs {
+
+/// The n x n Gram matrix G_ij = k(c_i, c_j) of a kernel with support_radius > 0, both
+/// triangles stored (column-major, compressed), without its zeros but for the diagonal. Each
+/// entry of the upper triangle is computed once (AnyKernel::cross_into on the centres of two
+/// neighbouring cells) and mirrored, so G is exactly symmetric. std::invalid_argument for a kernel
+/// of global support.
+Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres);
+
+/// The (centres) x (points) matrix whose column m is k_X(s_m) = (k(s_m, c_i))_i, without its
+/// zeros, by cells like sparse_gram.
+Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
+                                                 std::span<const double> points,
+                                                 std::span<const double> centres);
+
+/// The nonzeros of the Gram matrix of n centres spread over the domain, predicted before
+/// anything is built: n + n (n - 1) min(1, omega_d rho^d / |Omega|) (omega_d rho^d the volume of
+/// the kernel's support); n^2 for global support.
+double predicted_gram_nonzeros(const KernelProperties& properties, const Domain& domain,
+                               std::size_t n);
+
+/// Whether measure_approximation takes the sparse path for `kernel` at n centres, computing
+/// `work` (ApproximationWork bits): never for GramAlgebra::dense; always for `sparse`, which
+/// throws std::invalid_argument naming the reason when the kernel has global support or `work`
+/// needs a metric the sparse path does not compute; for `automatic` when the kernel has compact
+/// support, `work` needs no such metric and predicted_gram_nonzeros is at most a quarter of n^2.
+bool choose_sparse(const AnyKernel& kernel, std::size_t n, const SolverOptions& options,
+                   unsigned work);
+
+/// measure_approximation on the sparse path (the metrics `selection` names, empty: all).
+/// Empty when the factorisation cannot decide: G is not positive definite to working precision
+/// for CHOLMOD, or the Lanczos estimate of lambda_min is within a factor 100 of the singularity
+/// threshold n eps lambda_max; the dense path then measures (GramSolver's exact decision and
+/// its singular policy).
+std::optional<ApproximationMeasurement> measure_sparse_approximation(
+    const AnyKernel& kernel, const TargetFunction& target, std::span<const double> centres,
+    std::size_t evaluation_points, const SolverOptions& solver, const MetricSelection& selection);
+
+}  // namespace rkhs

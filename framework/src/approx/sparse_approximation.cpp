@@ -1,0 +1,465 @@
+// The sparse path of approximation trials (rkhs/approx/sparse_gram.hpp).
+
+#include <dlfcn.h>
+#include <fmt/format.h>
+
+#include <Eigen/CholmodSupport>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <numbers>
+#include <stdexcept>
+#include <vector>
+
+#include "rkhs/approx/lanczos.hpp"
+#include "rkhs/approx/sparse_gram.hpp"
+#include "rkhs/core/cancellation.hpp"
+#include "rkhs/core/concurrency.hpp"
+
+namespace rkhs {
+
+namespace {
+constexpr double eps = std::numeric_limits<double>::epsilon();
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+// A uniform grid of cells of side at least the support radius on every axis, so that two points
+// closer than the radius lie in the same or in neighbouring cells (across the seam on a
+// periodic axis). The points of each cell are kept in increasing index order.
+struct CellGrid {
+  int dimension = 1;
+  bool periodic = false;
+  std::array<std::int64_t, Domain::max_dimension> count{1, 1, 1};
+  std::array<double, Domain::max_dimension> side{1, 1, 1};
+  std::vector<std::size_t> start;   // cell c holds order[start[c] .. start[c + 1])
+  std::vector<std::size_t> order;   // point indices, by cell
+  std::vector<double> coordinates;  // the points' coordinates in `order`
+
+  std::size_t cells() const {
+    std::size_t total = 1;
+    for (int a = 0; a < dimension; ++a) total *= static_cast<std::size_t>(count[a]);
+    return total;
+  }
+};
+
+// The cell geometry for `radius` on `domain`: floor(extent / radius) cells per axis (at least
+// one), fewer when there would be more cells than 4 `points` + 64 (the cells stay at least
+// `radius` wide).
+CellGrid cell_geometry(const Domain& domain, double radius, std::size_t points) {
+  CellGrid grid;
+  grid.dimension = domain.dimension;
+  grid.periodic = domain.periodic;
+  const double budget = 4.0 * static_cast<double>(points) + 64.0;
+  for (int a = 0; a < grid.dimension; ++a) {
+    const double per_axis = std::floor(domain.extent(a) / radius);
+    grid.count[a] = static_cast<std::int64_t>(
+        std::clamp(per_axis, 1.0, std::pow(budget, 1.0 / grid.dimension)));
+    grid.side[a] = domain.extent(a) / static_cast<double>(grid.count[a]);
+  }
+  return grid;
+}
+
+std::int64_t axis_cell(const CellGrid& grid, const Domain& domain, double x, int axis) {
+  if (grid.periodic) x = domain.wrap(x, axis);
+  const auto cell = static_cast<std::int64_t>(std::floor(x / grid.side[axis]));
+  return std::clamp<std::int64_t>(cell, 0, grid.count[axis] - 1);
+}
+
+// Buckets `points` into `grid` (whose geometry is set), stably.
+void bucket(CellGrid& grid, const Domain& domain, std::span<const double> points) {
+  const auto d = static_cast<std::size_t>(grid.dimension);
+  const std::size_t n = points.size() / d, cells = grid.cells();
+  std::vector<std::size_t> cell_of(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t c = 0;
+    for (int a = grid.dimension - 1; a >= 0; --a)
+      c = c * static_cast<std::size_t>(grid.count[a]) +
+          static_cast<std::size_t>(axis_cell(grid, domain, points[i * d + a], a));
+    cell_of[i] = c;
+  }
+  grid.start.assign(cells + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++grid.start[cell_of[i] + 1];
+  for (std::size_t c = 0; c < cells; ++c) grid.start[c + 1] += grid.start[c];
+  grid.order.resize(n);
+  std::vector<std::size_t> next(grid.start.begin(), grid.start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) grid.order[next[cell_of[i]]++] = i;
+  grid.coordinates.resize(n * d);
+  for (std::size_t k = 0; k < n; ++k)
+    std::copy_n(points.begin() + static_cast<std::ptrdiff_t>(grid.order[k] * d), d,
+                grid.coordinates.begin() + static_cast<std::ptrdiff_t>(k * d));
+}
+
+// The cells next to cell `c` (itself included), each once, increasing.
+void neighbours(const CellGrid& grid, std::size_t c, std::vector<std::size_t>& out) {
+  std::array<std::int64_t, Domain::max_dimension> at{};
+  std::size_t rest = c;
+  for (int a = 0; a < grid.dimension; ++a) {
+    at[a] = static_cast<std::int64_t>(rest % static_cast<std::size_t>(grid.count[a]));
+    rest /= static_cast<std::size_t>(grid.count[a]);
+  }
+  out.clear();
+  int offsets = 1;
+  for (int a = 0; a < grid.dimension; ++a) offsets *= 3;
+  for (int o = 0; o < offsets; ++o) {
+    int code = o;
+    std::size_t index = 0, stride = 1;
+    bool inside = true;
+    for (int a = 0; a < grid.dimension; ++a) {
+      std::int64_t x = at[a] + code % 3 - 1;
+      code /= 3;
+      if (x < 0 || x >= grid.count[a]) {
+        if (!grid.periodic) {
+          inside = false;
+          break;
+        }
+        x = (x + grid.count[a]) % grid.count[a];
+      }
+      index += static_cast<std::size_t>(x) * stride;
+      stride *= static_cast<std::size_t>(grid.count[a]);
+    }
+    if (inside) out.push_back(index);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+std::span<const double> cell_points(const CellGrid& grid, std::size_t c) {
+  const auto d = static_cast<std::size_t>(grid.dimension);
+  return std::span<const double>(grid.coordinates)
+      .subspan(grid.start[c] * d, (grid.start[c + 1] - grid.start[c]) * d);
+}
+
+double support_radius(const AnyKernel& kernel) {
+  const double radius = kernel.properties().support_radius;
+  if (!(radius > 0) || !std::isfinite(radius))
+    throw std::invalid_argument(fmt::format(
+        "the sparse path needs a kernel of compact support; kernel '{}' has global support",
+        kernel.name()));
+  return radius;
+}
+
+// The BLAS behind CHOLMOD (Debian's libblas.so.3 alternative: reference BLAS, or OpenBLAS
+// when installed) on one thread: a trial's values must not depend on the threads a BLAS starts.
+void single_threaded_blas() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    if (auto* set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
+      set(1);
+  });
+}
+
+// CHOLMOD's supernodal LL^T through Eigen, with access to the factor for the partial solves
+// (P, L^-1, L^-T) the power function needs.
+class SparseCholesky
+    : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+ public:
+  cholmod_factor* factor() const { return m_cholmodFactor; }
+  cholmod_common& common() { return cholmod(); }
+};
+
+const char* ordering_name(int ordering) {
+  switch (ordering) {
+    case CHOLMOD_NATURAL:
+      return "natural";
+    case CHOLMOD_AMD:
+      return "AMD";
+    case CHOLMOD_METIS:
+      return "METIS";
+    case CHOLMOD_NESDIS:
+      return "nested dissection";
+    case CHOLMOD_COLAMD:
+      return "COLAMD";
+    default:
+      return "CHOLMOD's";
+  }
+}
+
+// out := A in, with A = P, L^-1 or L^-T (`system`: CHOLMOD_P, CHOLMOD_L, CHOLMOD_Lt), in place
+// on the dense columns `x`; `common` is the caller's own (one per block, so blocks may run
+// concurrently).
+void solve_in_place(int system, cholmod_factor* factor, Eigen::MatrixXd& x,
+                    cholmod_common& common) {
+  cholmod_dense b = Eigen::viewAsCholmod(x);
+  cholmod_dense* result = cholmod_solve(system, factor, &b, &common);
+  if (!result) throw std::runtime_error("CHOLMOD's solve failed (out of memory?)");
+  std::copy_n(static_cast<const double*>(result->x), x.size(), x.data());
+  cholmod_free_dense(&result, &common);
+}
+
+// The floor of ||Pi f||_H: the same formula as approximation.cpp's native_norm_floor.
+double native_norm_floor(double norm, double coefficients_squared, double data_norm,
+                         const GramSpectrum& spectrum, Eigen::Index n) {
+  const double perturbation = static_cast<double>(n) * eps * spectrum.lambda_max;
+  const double backward = norm > 0 ? perturbation * coefficients_squared / (2 * norm)
+                                   : std::sqrt(perturbation * coefficients_squared);
+  const double kept = std::max(spectrum.lambda_min, perturbation);
+  const double data = kept > 0 ? eps * data_norm / std::sqrt(kept) : 0.0;
+  return std::max(backward, data);
+}
+}  // namespace
+
+Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres) {
+  const Domain& domain = kernel.domain();
+  const double radius = support_radius(kernel);
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const std::size_t n = domain.point_count(centres);
+  CellGrid grid = cell_geometry(domain, radius, n);
+  bucket(grid, domain, centres);
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<std::size_t> near;
+  Eigen::MatrixXd block;
+  for (std::size_t a = 0; a < grid.cells(); ++a) {
+    const auto first = cell_points(grid, a);
+    if (first.empty()) continue;
+    neighbours(grid, a, near);
+    for (const std::size_t b : near) {
+      if (b < a) continue;  // each pair of cells once: the upper half, mirrored
+      const auto second = cell_points(grid, b);
+      if (second.empty()) continue;
+      const auto rows = static_cast<Eigen::Index>(first.size() / d),
+                 cols = static_cast<Eigen::Index>(second.size() / d);
+      block.resize(rows, cols);
+      kernel.cross_into(first, second, block);
+      for (Eigen::Index j = 0; j < cols; ++j)
+        for (Eigen::Index i = 0; i < (a == b ? j + 1 : rows); ++i) {
+          const double v = block(i, j);
+          const auto gi = static_cast<int>(grid.order[grid.start[a] + static_cast<std::size_t>(i)]);
+          const auto gj = static_cast<int>(grid.order[grid.start[b] + static_cast<std::size_t>(j)]);
+          if (v == 0 && gi != gj) continue;
+          entries.emplace_back(gi, gj, v);
+          if (gi != gj) entries.emplace_back(gj, gi, v);
+        }
+    }
+    check_cancelled();
+  }
+  Eigen::SparseMatrix<double> gram(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  gram.setFromTriplets(entries.begin(), entries.end());
+  return gram;
+}
+
+Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
+                                                 std::span<const double> points,
+                                                 std::span<const double> centres) {
+  const Domain& domain = kernel.domain();
+  const double radius = support_radius(kernel);
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const std::size_t n = domain.point_count(centres), m = domain.point_count(points);
+  CellGrid centre_grid = cell_geometry(domain, radius, n);
+  CellGrid point_grid = centre_grid;
+  bucket(centre_grid, domain, centres);
+  bucket(point_grid, domain, points);
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<std::size_t> near;
+  Eigen::MatrixXd block;
+  for (std::size_t a = 0; a < point_grid.cells(); ++a) {
+    const auto at = cell_points(point_grid, a);
+    if (at.empty()) continue;
+    neighbours(point_grid, a, near);
+    for (const std::size_t b : near) {
+      const auto sources = cell_points(centre_grid, b);
+      if (sources.empty()) continue;
+      const auto rows = static_cast<Eigen::Index>(at.size() / d),
+                 cols = static_cast<Eigen::Index>(sources.size() / d);
+      block.resize(rows, cols);
+      kernel.cross_into(at, sources, block);
+      for (Eigen::Index j = 0; j < cols; ++j)
+        for (Eigen::Index i = 0; i < rows; ++i)
+          if (const double v = block(i, j); v != 0)
+            entries.emplace_back(
+                static_cast<int>(
+                    centre_grid.order[centre_grid.start[b] + static_cast<std::size_t>(j)]),
+                static_cast<int>(
+                    point_grid.order[point_grid.start[a] + static_cast<std::size_t>(i)]),
+                v);
+    }
+    check_cancelled();
+  }
+  Eigen::SparseMatrix<double> cross(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
+  cross.setFromTriplets(entries.begin(), entries.end());
+  return cross;
+}
+
+double predicted_gram_nonzeros(const KernelProperties& properties, const Domain& domain,
+                               std::size_t n) {
+  const double count = static_cast<double>(n);
+  const double rho = properties.support_radius;
+  if (!(rho > 0) || !std::isfinite(rho)) return count * count;
+  const double support = domain.dimension == 1   ? 2 * rho
+                         : domain.dimension == 2 ? std::numbers::pi * rho * rho
+                                                 : 4.0 / 3.0 * std::numbers::pi * rho * rho * rho;
+  return count + count * (count - 1) * std::min(1.0, support / domain.volume());
+}
+
+bool choose_sparse(const AnyKernel& kernel, std::size_t n, const SolverOptions& options,
+                   unsigned work) {
+  if (options.algebra == GramAlgebra::dense) return false;
+  const bool compact = kernel.properties().support_radius > 0;
+  const bool dense_only = work & (work_spectrum | work_operator_norm);
+  if (options.algebra == GramAlgebra::sparse) {
+    support_radius(kernel);  // throws for global support
+    if (dense_only)
+      throw std::invalid_argument(
+          "[linear_algebra] solver = \"sparse\" does not compute gram_condition_number, "
+          "gram_min_eigenvalue, gram_max_eigenvalue or projection_operator_norm (an exact "
+          "eigenvalue solve and the dense interpolation operator): leave them out of "
+          "study.metrics, or take solver = \"auto\" or \"dense\"");
+    return true;
+  }
+  if (!compact || dense_only) return false;
+  const double count = static_cast<double>(n);
+  return predicted_gram_nonzeros(kernel.properties(), kernel.domain(), n) <= 0.25 * count * count;
+}
+
+std::optional<ApproximationMeasurement> measure_sparse_approximation(
+    const AnyKernel& kernel, const TargetFunction& target, std::span<const double> centres,
+    std::size_t evaluation_points, const SolverOptions& options, const MetricSelection& selection) {
+  (void)options;
+  single_threaded_blas();
+  unsigned work = work_needed<ApproximationMetric>(selection);
+  if (work & work_projection_residual) work |= work_power;
+  const Domain& domain = kernel.domain();
+  const auto n = static_cast<Eigen::Index>(domain.point_count(centres));
+  using M = ApproximationMetric;
+
+  const Eigen::SparseMatrix<double> gram = sparse_gram(kernel, centres);
+  check_cancelled();
+  SparseCholesky cholesky;
+  cholesky.common().print = 0;  // a matrix that is not positive definite is answered below
+  cholesky.common().quick_return_if_not_posdef = 1;
+  cholesky.analyzePattern(gram);
+  const cholmod_common& analysed = cholesky.common();
+  const int ordering = analysed.method[analysed.selected].ordering;
+  const double factor_nonzeros = analysed.lnz;
+  cholesky.factorize(gram);
+  check_cancelled();
+  if (cholesky.info() != Eigen::Success) return std::nullopt;  // not positive definite
+
+  // The extreme eigenvalues as GramSolver's estimate mode finds them.
+  GramSpectrum spectrum;
+  {
+    const double lambda_max = lanczos_largest(
+        [&](const auto& in, Eigen::VectorXd& out) { out.noalias() = gram * in; }, n, 1e-13, 80);
+    const double inverse_max = lanczos_largest(
+        [&](const auto& in, Eigen::VectorXd& out) { out = cholesky.solve(Eigen::VectorXd(in)); }, n,
+        1e-4, 40);
+    const double lambda_min = 1.0 / inverse_max;
+    if (!(lambda_min > 100.0 * static_cast<double>(n) * eps * lambda_max)) return std::nullopt;
+    spectrum = {lambda_min, lambda_max, lambda_max / lambda_min, false, true};
+  }
+
+  ApproximationMeasurement out;
+  auto& metrics = out.metrics;
+  out.solve_method = fmt::format(
+      "sparse Cholesky (CHOLMOD {}.{}.{} supernodal, {} ordering; {} nonzeros in G, {:.0f} in L)",
+      CHOLMOD_MAIN_VERSION, CHOLMOD_SUB_VERSION, CHOLMOD_SUBSUB_VERSION, ordering_name(ordering),
+      gram.nonZeros(), factor_nonzeros);
+  if (work & work_fill) metrics[M::fill_distance] = fill_distance(centres, domain);
+  if (work & work_separation)
+    metrics[M::separation_distance] = separation_distance(centres, domain);
+
+  const auto points = domain.uniform_points(evaluation_points);
+  const std::size_t point_count = domain.point_count(points);
+  Eigen::VectorXd alpha, at_points;
+  double target_norm_at_centres = 0;
+  if (work & (work_interpolant | work_residual)) {
+    Eigen::VectorXd at_centres(n);
+    target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
+    alpha = cholesky.solve(at_centres);
+    target_norm_at_centres = at_centres.norm();
+  }
+  if (work & work_residual) {
+    at_points.resize(static_cast<Eigen::Index>(point_count));
+    target.evaluate(points, std::span<double>(at_points.data(), point_count));
+  }
+
+  // The blocked pass over the evaluation points: block b's columns of the sparse cross matrix,
+  // densified, permuted and solved with L (and L^T for the floors), each block by itself.
+  const bool power = work & (work_power | work_cardinal), cardinal = work & work_cardinal;
+  const bool residual_wanted = work & work_residual;
+  const auto m_total = static_cast<Eigen::Index>(point_count);
+  Eigen::VectorXd quadratic, solution_norm_squared, residual;
+  if (power || residual_wanted) {
+    const Eigen::SparseMatrix<double> cross = sparse_cross_columns(kernel, points, centres);
+    check_cancelled();
+    if (power) quadratic.resize(m_total);
+    if (cardinal) solution_norm_squared.resize(m_total);
+    if (residual_wanted) residual = at_points - cross.transpose() * alpha;
+    // At most about 32 MB of dense columns per block.
+    const Eigen::Index per_block =
+        std::clamp<Eigen::Index>((Eigen::Index{1} << 22) / std::max<Eigen::Index>(n, 1), 16, 512);
+    const auto blocks = static_cast<std::size_t>((m_total + per_block - 1) / per_block);
+    if (power)
+      run_parts(blocks, [&](std::size_t b) {
+        const Eigen::Index first = static_cast<Eigen::Index>(b) * per_block;
+        const Eigen::Index count = std::min(per_block, m_total - first);
+        Eigen::MatrixXd columns = Eigen::MatrixXd(cross.middleCols(first, count));
+        cholmod_common common;
+        cholmod_start(&common);
+        solve_in_place(CHOLMOD_P, cholesky.factor(), columns, common);
+        solve_in_place(CHOLMOD_L, cholesky.factor(), columns, common);
+        quadratic.segment(first, count) = columns.colwise().squaredNorm().transpose();
+        if (cardinal) {
+          solve_in_place(CHOLMOD_Lt, cholesky.factor(), columns, common);
+          solution_norm_squared.segment(first, count) = columns.colwise().squaredNorm().transpose();
+        }
+        cholmod_finish(&common);
+        check_cancelled();
+      });
+  }
+
+  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
+  const double largest_solution_norm_squared = cardinal ? solution_norm_squared.maxCoeff() : nan;
+  if (power) {
+    const Eigen::VectorXd power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+    const double power_sup = std::sqrt(power_squared.maxCoeff());
+    const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
+    metrics[M::power_function_sup] = power_sup;
+    metrics[M::power_function_floor] = power_floor;
+    out.floors[M::power_function_sup] = power_floor;
+    out.floors[M::power_function_floor] = power_floor * solve_round_off(spectrum, n);
+    if (cardinal && power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+  }
+  if (work & work_interpolant) {
+    const double native_norm = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
+    metrics[M::interpolant_native_norm] = native_norm;
+    out.floors[M::interpolant_native_norm] =
+        native_norm_floor(native_norm, alpha.squaredNorm(), target_norm_at_centres, spectrum, n);
+    if (cardinal) {
+      metrics[M::error_floor] = round_off * std::sqrt(largest_solution_norm_squared) * alpha.norm();
+      out.floors[M::error_floor] = metrics[M::error_floor] * solve_round_off(spectrum, n);
+    }
+  }
+  if (residual_wanted) {
+    const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
+    const double sup = residual.cwiseAbs().maxCoeff();
+    metrics[M::l2_error] = l2;
+    metrics[M::sup_error] = sup;
+    out.floors[M::l2_error] = metrics[M::error_floor] * std::sqrt(domain.volume());
+    out.floors[M::sup_error] = metrics[M::error_floor];
+    if (cardinal) {
+      const double error_floor = metrics[M::error_floor];
+      if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
+      if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
+    }
+  }
+  if (work & work_projection_residual) {
+    const double norm = metrics[M::power_function_sup];
+    metrics[M::projection_norm_H_to_C] = norm;
+    out.floors[M::projection_norm_H_to_C] =
+        projection_norm_floor(kernel, static_cast<std::size_t>(n), points);
+    if (norm <= out.floors[M::projection_norm_H_to_C])
+      out.flags.push_back("projection_norm_at_floor");
+  }
+  // Only what `selection` names (as the dense path's keep_selected).
+  if (!selection.empty())
+    for (std::size_t i = 0; i < MetricValues<ApproximationMetric>::count; ++i)
+      if (i >= selection.size() || !selection[i]) {
+        out.metrics[static_cast<M>(i)] = nan;
+        out.floors[static_cast<M>(i)] = nan;
+      }
+  return out;
+}
+
+}  // namespace rkhs

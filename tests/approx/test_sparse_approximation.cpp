@@ -1,0 +1,189 @@
+// The sparse path of approximation trials (rkhs/approx/sparse_gram.hpp) against the dense one:
+// the same metrics and floors for a compactly supported kernel, bit-identical whatever the
+// number of threads.
+#include <Eigen/Dense>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <numbers>
+
+#include "rkhs/approx/approximation.hpp"
+#include "rkhs/approx/centres.hpp"
+#include "rkhs/approx/sparse_gram.hpp"
+#include "rkhs/approx/target.hpp"
+#include "rkhs/core/concurrency.hpp"
+#include "rkhs/kernel/kernel.hpp"
+
+using namespace rkhs;
+
+namespace {
+
+using Given = std::map<std::string, ParameterValue>;
+
+Domain box(int dimension, bool periodic = false) {
+  Domain d{1.0, periodic};
+  d.dimension = dimension;
+  d.width = 1.0;
+  d.height = dimension == 3 ? 1.0 : 0.0;
+  return d;
+}
+
+std::unique_ptr<AnyKernel> wendland(int k, double radius, const Domain& domain) {
+  const auto* entry = kernel_registry().find("wendland");
+  REQUIRE(entry);
+  return entry->factory(ParameterSet::resolve(entry->info.parameters,
+                                              Given{{"k", std::int64_t{k}}, {"radius", radius}}),
+                        domain);
+}
+
+std::unique_ptr<TargetFunction> expression(const std::string& f, const Domain& domain) {
+  const auto* entry = target_registry().find("expression");
+  REQUIRE(entry);
+  return entry->factory(
+      ParameterSet::resolve(entry->info.parameters, Given{{"f", f}},
+                            entry->info.user_parameters ? &*entry->info.user_parameters : nullptr),
+      domain);
+}
+
+std::vector<double> centres(const std::string& name, std::size_t n, const Domain& domain) {
+  const auto* entry = centre_registry().find(name);
+  REQUIRE(entry);
+  return entry->factory(ParameterSet::resolve(entry->info.parameters, {}))->place(n, domain, 0);
+}
+
+// Every metric but the four only the dense path computes.
+MetricSelection sparse_metrics() {
+  MetricSelection selection(MetricValues<ApproximationMetric>::count, true);
+  for (const auto m :
+       {ApproximationMetric::gram_condition_number, ApproximationMetric::gram_min_eigenvalue,
+        ApproximationMetric::gram_max_eigenvalue, ApproximationMetric::projection_operator_norm})
+    selection[static_cast<std::size_t>(m)] = false;
+  return selection;
+}
+
+ApproximationMeasurement measure(const AnyKernel& kernel, const TargetFunction& target,
+                                 const std::vector<double>& x, std::size_t points,
+                                 GramAlgebra algebra, int threads = 1) {
+  SolverOptions options;
+  options.algebra = algebra;
+  ApproximationMeasurement out;
+  run_concurrently(1, threads, [&](std::size_t) {
+    out = measure_approximation(kernel, target, x, points, options, sparse_metrics());
+  });
+  return out;
+}
+
+// The sparse and dense paths agree on every metric and floor to `tolerance` relative.
+void check_agreement(const AnyKernel& kernel, const TargetFunction& target,
+                     const std::vector<double>& x, std::size_t points, double tolerance) {
+  const auto dense = measure(kernel, target, x, points, GramAlgebra::dense);
+  const auto sparse = measure(kernel, target, x, points, GramAlgebra::sparse);
+  CHECK(dense.solve_method == "cholesky");
+  CHECK_THAT(sparse.solve_method, Catch::StartsWith("sparse Cholesky (CHOLMOD"));
+  const auto& names = approximation_metric_names();
+  const auto selection = sparse_metrics();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    INFO(names[i]);
+    if (!selection[i]) {
+      CHECK(std::isnan(sparse.metrics[i]));
+      continue;
+    }
+    REQUIRE(std::isfinite(dense.metrics[i]));
+    CHECK(std::abs(sparse.metrics[i] - dense.metrics[i]) <= tolerance * std::abs(dense.metrics[i]));
+    if (std::isnan(dense.floors[i])) {
+      CHECK(std::isnan(sparse.floors[i]));
+    } else {
+      CHECK(std::abs(sparse.floors[i] - dense.floors[i]) <= tolerance * std::abs(dense.floors[i]));
+    }
+  }
+  CHECK(sparse.flags == dense.flags);
+}
+
+}  // namespace
+
+TEST_CASE("sparse Gram matrix: the dense one without its zeros, exactly symmetric",
+          "[approximation][sparse]") {
+  for (const bool periodic : {false, true}) {
+    INFO("periodic " << periodic);
+    const Domain square = box(2, periodic);
+    const auto kernel = wendland(1, 0.23, square);
+    const auto x = centres("halton", 300, square);
+    const Eigen::SparseMatrix<double> sparse = sparse_gram(*kernel, x);
+    const Eigen::MatrixXd dense = kernel->gram(x);
+    CHECK((Eigen::MatrixXd(sparse) - dense).cwiseAbs().maxCoeff() == 0.0);
+    CHECK((Eigen::MatrixXd(sparse) - Eigen::MatrixXd(sparse).transpose()).cwiseAbs().maxCoeff() ==
+          0.0);
+    CHECK(sparse.nonZeros() == (dense.array() != 0.0).count());
+    CHECK(sparse.nonZeros() < dense.size() / 4);
+    const auto points = square.uniform_points(1024);
+    const Eigen::SparseMatrix<double> cross = sparse_cross_columns(*kernel, points, x);
+    CHECK((Eigen::MatrixXd(cross).transpose() - kernel->cross(points, x)).cwiseAbs().maxCoeff() ==
+          0.0);
+  }
+}
+
+TEST_CASE("sparse and dense paths agree: Wendland phi_{2,1} in 2-D and phi_{3,1} in 3-D",
+          "[approximation][sparse]") {
+  SECTION("2-D, 400 Halton centres, radius 0.2 (about 5 spacings)") {
+    const Domain square = box(2);
+    const auto kernel = wendland(1, 0.2, square);
+    const auto target = expression("exp(x1) * cos(x2) + x1 * x2", square);
+    check_agreement(*kernel, *target, centres("halton", 400, square), 4096, 1e-9);
+  }
+  SECTION("3-D, 512 grid centres, radius 0.35") {
+    const Domain unit_cube = box(3);
+    const auto kernel = wendland(1, 0.35, unit_cube);
+    const auto target = expression("exp(x1) * cos(x2) + x3", unit_cube);
+    check_agreement(*kernel, *target, centres("uniform", 512, unit_cube), 8000, 1e-9);
+  }
+}
+
+TEST_CASE("sparse path: bit-identical on 1 and 2 threads", "[approximation][sparse]") {
+  const Domain square = box(2);
+  const auto kernel = wendland(1, 0.2, square);
+  const auto target = expression("sin(3 * x1) * x2", square);
+  const auto x = centres("halton", 400, square);
+  const auto one = measure(*kernel, *target, x, 4096, GramAlgebra::sparse, 1);
+  const auto two = measure(*kernel, *target, x, 4096, GramAlgebra::sparse, 2);
+  for (std::size_t i = 0; i < one.metrics.size(); ++i) {
+    INFO(approximation_metric_names()[i]);
+    CHECK(std::memcmp(&one.metrics.values()[i], &two.metrics.values()[i], sizeof(double)) == 0);
+    CHECK(std::memcmp(&one.floors.values()[i], &two.floors.values()[i], sizeof(double)) == 0);
+  }
+  CHECK(one.solve_method == two.solve_method);
+}
+
+TEST_CASE("choosing the sparse path", "[approximation][sparse]") {
+  const Domain square = box(2);
+  const auto compact = wendland(1, 0.2, square);
+  const auto everywhere = wendland(1, 2.0, square);  // covers the square: dense
+  SolverOptions options;
+  const unsigned all = work_needed<ApproximationMetric>({});
+  const unsigned some = work_needed<ApproximationMetric>(sparse_metrics());
+  CHECK_FALSE(choose_sparse(*compact, 1000, options, some));  // dense by default
+  options.algebra = GramAlgebra::automatic;
+  CHECK(choose_sparse(*compact, 1000, options, some));
+  CHECK_FALSE(choose_sparse(*compact, 1000, options, all));  // eigenvalues: dense
+  CHECK_FALSE(choose_sparse(*everywhere, 1000, options, some));
+  CHECK(predicted_gram_nonzeros(compact->properties(), square, 1000) ==
+        Approx(1000 + 1000.0 * 999 * std::numbers::pi * 0.04));
+  options.algebra = GramAlgebra::sparse;
+  CHECK(choose_sparse(*everywhere, 1000, options, some));  // forced
+  CHECK_THROWS_WITH(choose_sparse(*compact, 1000, options, all),
+                    Catch::Contains("does not compute gram_condition_number"));
+  const auto* gaussian = kernel_registry().find("gaussian");
+  REQUIRE(gaussian);
+  const auto global =
+      gaussian->factory(ParameterSet::resolve(gaussian->info.parameters, {}), square);
+  CHECK_THROWS_WITH(choose_sparse(*global, 1000, options, some),
+                    Catch::Contains("has global support"));
+}
+
+TEST_CASE("sparse and dense paths agree at n = 4096 in 2-D (slower)",
+          "[approximation][sparse][slow]") {
+  const Domain square = box(2);
+  const auto kernel = wendland(1, 0.08, square);  // about 5 spacings of the 64 x 64 grid
+  const auto target = expression("exp(x1) * cos(x2) + x1 * x2", square);
+  check_agreement(*kernel, *target, centres("uniform", 4096, square), 16384, 1e-9);
+}
