@@ -131,13 +131,6 @@ namespace {
 // glibc maps afresh each time).
 constexpr std::size_t points_per_block = 512;
 
-// What the blocked pass over the evaluation points gives, one entry per point.
-struct GridPass {
-  Eigen::VectorXd power_squared;          // max(0, k(s,s) - k_X^T G^-1 k_X)
-  Eigen::VectorXd solution_norm_squared;  // |G^-1 k_X(s_m)|^2 (work_cardinal)
-  Eigen::VectorXd residual;               // f(s_m) - Pi_n f(s_m) (work_residual)
-};
-
 // One pass over the evaluation points in blocks (run_parts: on idle threads of the trial's
 // arena): the cross matrix K_b = k(s_b, X) of each block, then what `work` asks of it.
 // `alpha` and `at_points` are needed for work_residual; `cross` (M x n), when not null,
@@ -190,17 +183,6 @@ GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
   return out;
 }
 
-// Leaves NaN in every metric `selection` does not name (MetricSelection; empty: keep all), so
-// a trial's record holds exactly what it was asked to compute.
-void keep_selected(const MetricSelection& selection, ApproximationMeasurement& out) {
-  if (selection.empty()) return;
-  for (std::size_t i = 0; i < MetricValues<ApproximationMetric>::count; ++i)
-    if (i >= selection.size() || !selection[i]) {
-      out.metrics[static_cast<ApproximationMetric>(i)] = nan;
-      out.floors[static_cast<ApproximationMetric>(i)] = nan;
-    }
-}
-
 // The floor of ||Pi f||_H = sqrt(alpha^T G alpha): the larger of what a backward error E of
 // n eps lambda_max in G moves it by (alpha^T E alpha in the square) and what the round-off of the
 // data, eps |f(X)|, becomes through the smallest eigenvalue the solve keeps (lambda_min, at least
@@ -227,6 +209,79 @@ void set_spectrum_floors(const GramSpectrum& spectrum, double n,
       spectrum.lambda_min > 0 ? spectrum.condition_number * perturbation / spectrum.lambda_min
                               : std::numeric_limits<double>::infinity();
 }
+
+}  // namespace
+
+// Leaves NaN in every metric `selection` does not name (MetricSelection; empty: keep all), so
+// a trial's record holds exactly what it was asked to compute.
+void keep_selected(const MetricSelection& selection, ApproximationMeasurement& out) {
+  if (selection.empty()) return;
+  for (std::size_t i = 0; i < MetricValues<ApproximationMetric>::count; ++i)
+    if (i >= selection.size() || !selection[i]) {
+      out.metrics[static_cast<ApproximationMetric>(i)] = nan;
+      out.floors[static_cast<ApproximationMetric>(i)] = nan;
+    }
+}
+
+void record_interpolant_metrics(const AnyKernel& kernel, std::span<const double> points,
+                                Eigen::Index n, const GramSpectrum& spectrum, unsigned work,
+                                const Eigen::VectorXd& alpha, double native_norm_squared,
+                                double target_norm_at_centres, const GridPass& pass,
+                                ApproximationMeasurement& out) {
+  using M = ApproximationMetric;
+  const Domain& domain = kernel.domain();
+  auto& metrics = out.metrics;
+  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
+  const bool cardinal = work & work_cardinal;
+  const double largest_solution_norm_squared =
+      cardinal ? pass.solution_norm_squared.maxCoeff() : nan;
+  if (work & (work_power | work_cardinal)) {
+    const double power_sup = std::sqrt(pass.power_squared.maxCoeff());
+    const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
+    metrics[M::power_function_sup] = power_sup;
+    metrics[M::power_function_floor] = power_floor;
+    out.floors[M::power_function_sup] = power_floor;
+    out.floors[M::power_function_floor] = power_floor * solve_round_off(spectrum, n);
+    if (cardinal && power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
+  }
+  if (work & work_interpolant) {
+    const double native_norm = std::sqrt(std::max(0.0, native_norm_squared));
+    metrics[M::interpolant_native_norm] = native_norm;
+    out.floors[M::interpolant_native_norm] =
+        native_norm_floor(native_norm, alpha.squaredNorm(), target_norm_at_centres, spectrum, n);
+    if (cardinal) {
+      metrics[M::error_floor] = round_off * std::sqrt(largest_solution_norm_squared) * alpha.norm();
+      out.floors[M::error_floor] = metrics[M::error_floor] * solve_round_off(spectrum, n);
+    }
+  }
+  if (work & work_residual) {
+    const Eigen::VectorXd& residual = pass.residual;
+    const double l2 = domain.l2_norm(
+        std::span<const double>(residual.data(), static_cast<std::size_t>(residual.size())));
+    const double sup = residual.cwiseAbs().maxCoeff();
+    metrics[M::l2_error] = l2;
+    metrics[M::sup_error] = sup;
+    out.floors[M::l2_error] = metrics[M::error_floor] * std::sqrt(domain.volume());
+    out.floors[M::sup_error] = metrics[M::error_floor];
+    if (cardinal) {
+      const double error_floor = metrics[M::error_floor];
+      if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
+      if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
+    }
+  }
+  // ||I - Pi_n||_{H -> C} of the H-orthogonal projection onto span{k(c_i, .)} is the power
+  // function (projection.hpp; tests/approx check it against the operator's own definition).
+  if (work & work_projection_residual) {
+    const double norm = metrics[M::power_function_sup];
+    metrics[M::projection_norm_H_to_C] = norm;
+    out.floors[M::projection_norm_H_to_C] =
+        projection_norm_floor(kernel, static_cast<std::size_t>(n), points);
+    if (norm <= out.floors[M::projection_norm_H_to_C])
+      out.flags.push_back("projection_norm_at_floor");
+  }
+}
+
+namespace {
 
 // measure_approximation on a built Gram matrix and solver, computing what `work` asks.
 ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const TargetFunction& target,
@@ -278,53 +333,9 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
   if (grid_work || cross_out)
     pass = grid_pass(kernel, solver, centres, points, grid_work, alpha, at_points, cross_out);
   check_cancelled();
-  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
-  const bool cardinal = work & work_cardinal;
-  const double largest_solution_norm_squared =
-      cardinal ? pass.solution_norm_squared.maxCoeff() : nan;
-  if (work & (work_power | work_cardinal)) {
-    const double power_sup = std::sqrt(pass.power_squared.maxCoeff());
-    const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
-    metrics[M::power_function_sup] = power_sup;
-    metrics[M::power_function_floor] = power_floor;
-    out.floors[M::power_function_sup] = power_floor;
-    out.floors[M::power_function_floor] = power_floor * solve_round_off(spectrum, n);
-    if (cardinal && power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
-  }
-  if (work & work_interpolant) {
-    const double native_norm = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
-    metrics[M::interpolant_native_norm] = native_norm;
-    out.floors[M::interpolant_native_norm] =
-        native_norm_floor(native_norm, alpha.squaredNorm(), target_norm_at_centres, spectrum, n);
-    if (cardinal) {
-      metrics[M::error_floor] = round_off * std::sqrt(largest_solution_norm_squared) * alpha.norm();
-      out.floors[M::error_floor] = metrics[M::error_floor] * solve_round_off(spectrum, n);
-    }
-  }
-  if (work & work_residual) {
-    const Eigen::VectorXd& residual = pass.residual;
-    const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
-    const double sup = residual.cwiseAbs().maxCoeff();
-    metrics[M::l2_error] = l2;
-    metrics[M::sup_error] = sup;
-    out.floors[M::l2_error] = metrics[M::error_floor] * std::sqrt(domain.volume());
-    out.floors[M::sup_error] = metrics[M::error_floor];
-    if (cardinal) {
-      const double error_floor = metrics[M::error_floor];
-      if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
-      if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
-    }
-  }
-  // ||I - Pi_n||_{H -> C} of the H-orthogonal projection onto span{k(c_i, .)} is the power
-  // function (projection.hpp; tests/approx check it against the operator's own definition).
-  if (work & work_projection_residual) {
-    const double norm = metrics[M::power_function_sup];
-    metrics[M::projection_norm_H_to_C] = norm;
-    out.floors[M::projection_norm_H_to_C] =
-        projection_norm_floor(kernel, static_cast<std::size_t>(n), points);
-    if (norm <= out.floors[M::projection_norm_H_to_C])
-      out.flags.push_back("projection_norm_at_floor");
-  }
+  record_interpolant_metrics(kernel, points, n, spectrum, work, alpha,
+                             (work & work_interpolant) ? alpha.dot(gram * alpha) : nan,
+                             target_norm_at_centres, pass, out);
   return out;
 }
 }  // namespace

@@ -188,16 +188,6 @@ void solve_in_place(int system, cholmod_factor* factor, Eigen::MatrixXd& x,
   cholmod_free_dense(&result, &common);
 }
 
-// The floor of ||Pi f||_H: the same formula as approximation.cpp's native_norm_floor.
-double native_norm_floor(double norm, double coefficients_squared, double data_norm,
-                         const GramSpectrum& spectrum, Eigen::Index n) {
-  const double perturbation = static_cast<double>(n) * eps * spectrum.lambda_max;
-  const double backward = norm > 0 ? perturbation * coefficients_squared / (2 * norm)
-                                   : std::sqrt(perturbation * coefficients_squared);
-  const double kept = std::max(spectrum.lambda_min, perturbation);
-  const double data = kept > 0 ? eps * data_norm / std::sqrt(kept) : 0.0;
-  return std::max(backward, data);
-}
 }  // namespace
 
 Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres) {
@@ -409,56 +399,14 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
       });
   }
 
-  const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
-  const double largest_solution_norm_squared = cardinal ? solution_norm_squared.maxCoeff() : nan;
-  if (power) {
-    const Eigen::VectorXd power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
-    const double power_sup = std::sqrt(power_squared.maxCoeff());
-    const double power_floor = std::sqrt(round_off * largest_solution_norm_squared);
-    metrics[M::power_function_sup] = power_sup;
-    metrics[M::power_function_floor] = power_floor;
-    out.floors[M::power_function_sup] = power_floor;
-    out.floors[M::power_function_floor] = power_floor * solve_round_off(spectrum, n);
-    if (cardinal && power_sup <= power_floor) out.flags.push_back("power_function_at_floor");
-  }
-  if (work & work_interpolant) {
-    const double native_norm = std::sqrt(std::max(0.0, alpha.dot(gram * alpha)));
-    metrics[M::interpolant_native_norm] = native_norm;
-    out.floors[M::interpolant_native_norm] =
-        native_norm_floor(native_norm, alpha.squaredNorm(), target_norm_at_centres, spectrum, n);
-    if (cardinal) {
-      metrics[M::error_floor] = round_off * std::sqrt(largest_solution_norm_squared) * alpha.norm();
-      out.floors[M::error_floor] = metrics[M::error_floor] * solve_round_off(spectrum, n);
-    }
-  }
-  if (residual_wanted) {
-    const double l2 = domain.l2_norm(std::span<const double>(residual.data(), point_count));
-    const double sup = residual.cwiseAbs().maxCoeff();
-    metrics[M::l2_error] = l2;
-    metrics[M::sup_error] = sup;
-    out.floors[M::l2_error] = metrics[M::error_floor] * std::sqrt(domain.volume());
-    out.floors[M::sup_error] = metrics[M::error_floor];
-    if (cardinal) {
-      const double error_floor = metrics[M::error_floor];
-      if (sup <= error_floor) out.flags.push_back("sup_error_at_floor");
-      if (l2 <= error_floor * std::sqrt(domain.volume())) out.flags.push_back("l2_error_at_floor");
-    }
-  }
-  if (work & work_projection_residual) {
-    const double norm = metrics[M::power_function_sup];
-    metrics[M::projection_norm_H_to_C] = norm;
-    out.floors[M::projection_norm_H_to_C] =
-        projection_norm_floor(kernel, static_cast<std::size_t>(n), points);
-    if (norm <= out.floors[M::projection_norm_H_to_C])
-      out.flags.push_back("projection_norm_at_floor");
-  }
-  // Only what `selection` names (as the dense path's keep_selected).
-  if (!selection.empty())
-    for (std::size_t i = 0; i < MetricValues<ApproximationMetric>::count; ++i)
-      if (i >= selection.size() || !selection[i]) {
-        out.metrics[static_cast<M>(i)] = nan;
-        out.floors[static_cast<M>(i)] = nan;
-      }
+  GridPass pass;
+  if (power) pass.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+  pass.solution_norm_squared = std::move(solution_norm_squared);
+  pass.residual = std::move(residual);
+  record_interpolant_metrics(kernel, points, n, spectrum, work, alpha,
+                             (work & work_interpolant) ? alpha.dot(gram * alpha) : nan,
+                             target_norm_at_centres, pass, out);
+  keep_selected(selection, out);
   return out;
 }
 

@@ -32,6 +32,29 @@
 
 namespace rkhs {
 
+// What the dense path (approximation.cpp) and the sparse path (sparse_approximation.cpp) share,
+// so that the two give the same metrics, floors and flags from what their passes found.
+
+/// What a pass over the evaluation points gives, one entry per point.
+struct GridPass {
+  Eigen::VectorXd power_squared;          ///< max(0, k(s,s) - k_X^T G^-1 k_X)
+  Eigen::VectorXd solution_norm_squared;  ///< |G^-1 k_X(s_m)|^2 (work_cardinal)
+  Eigen::VectorXd residual;               ///< f(s_m) - Pi_n f(s_m) (work_residual)
+};
+
+/// Sets, from `pass` over `points`, what `work` asks of the interpolant Pi_n f = sum_i alpha_i
+/// k(c_i, .) of n centres: the power function's sup and floor, the native norm
+/// (native_norm_squared = alpha^T G alpha) and the error floor, the L2 and sup errors, and
+/// ||I - Pi_n||_{H -> C}, with their floors and the *_at_floor flags (approximation.cpp).
+void record_interpolant_metrics(const AnyKernel& kernel, std::span<const double> points,
+                                Eigen::Index n, const GramSpectrum& spectrum, unsigned work,
+                                const Eigen::VectorXd& alpha, double native_norm_squared,
+                                double target_norm_at_centres, const GridPass& pass,
+                                ApproximationMeasurement& out);
+
+/// Leaves NaN in every metric `selection` does not name (empty: keeps all).
+void keep_selected(const MetricSelection& selection, ApproximationMeasurement& out);
+
 /// The n x n Gram matrix G_ij = k(c_i, c_j) of a kernel with support_radius > 0, both
 /// triangles stored (column-major, compressed), without its zeros but for the diagonal. Each
 /// entry of the upper triangle is computed once (AnyKernel::cross_into on the centres of two
