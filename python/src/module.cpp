@@ -286,6 +286,16 @@ struct RunSummary {
   std::optional<rkhs::StoredRun> interrupted;
   PlotSummary plots;                      // Study.run(plots=True)
   std::shared_ptr<FinishedRun> finished;  // for Results.report (`run` only)
+
+  // The counts and times of a completed run of `trial_count` trials.
+  void record_run(const rkhs::pipeline::CompletedRun& run, std::size_t trial_count) {
+    trials = trial_count;
+    failed = run.failed;
+    reused = run.stored.reused;
+    ran = run.stored.ran;
+    seconds = run.seconds;
+    started = run.started;
+  }
 };
 
 // rkhs_study.RunInterrupted, a KeyboardInterrupt (set at import).
@@ -423,12 +433,7 @@ RunSummary run_study_into(const StudyDefinition& definition, const std::string& 
   summary.outcomes = finished->verdicts;
   summary.plots = write_folder(finished->record(), out_dir, plots, stop);
   summary.finished = finished;
-  summary.trials = trials.size();
-  summary.failed = run.failed;
-  summary.reused = run.stored.reused;
-  summary.ran = run.stored.ran;
-  summary.seconds = run.seconds;
-  summary.started = run.started;
+  summary.record_run(run, trials.size());
   summary.verification = rkhs::format_verification(summary.outcomes);
   summary.exit_code = rkhs::check_exit_code(rkhs::count_verdicts(summary.outcomes));
   return summary;
@@ -607,12 +612,7 @@ PYBIND11_MODULE(_core, m) {
               }
               const auto& run = *judged.outcome.completed;
               summary.outcomes = std::move(judged.verdicts);
-              summary.trials = trials.size();
-              summary.failed = run.failed;
-              summary.reused = run.stored.reused;
-              summary.ran = run.stored.ran;
-              summary.seconds = run.seconds;
-              summary.started = run.started;
+              summary.record_run(run, trials.size());
               summary.verification =
                   rkhs::format_verification(summary.outcomes, policy, c.cases.deselected);
               return summary;
