@@ -34,6 +34,7 @@ import hashlib
 import inspect
 import itertools
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
@@ -290,6 +291,10 @@ def _info(cls, base) -> dict:
     if not isinstance(name, str) or not name:
         raise ValueError(f"{cls.__qualname__}: set the class attribute `name` (the name study "
                          "files use)")
+    if not re.fullmatch(r"[a-z][a-z0-9_]*", name):
+        raise ValueError(f"{cls.__qualname__}: name {name!r} is not a plugin name (a lower-case "
+                         "letter, then lower-case letters, digits and _), as study files, "
+                         "trials.csv and plots write it")
     doc = cls.doc or (inspect.getdoc(cls) or "").split("\n")[0]
     return {"name": name, "doc": doc, "parameters": _parameter_specs(cls)}
 

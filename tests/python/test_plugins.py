@@ -402,3 +402,14 @@ def test_domain_radial_periodises_by_images_like_the_builtin_kernels(domain, pyt
     extra = {"nu": 1.5} if builtin == "matern" else {}
     expected = rkhs_study.kernel_matrix(builtin, X, Y, domain, **parameters, **matern, **extra)
     np.testing.assert_allclose(found, expected, rtol=2e-14, atol=0)
+
+
+@pytest.mark.parametrize("name", ["", "My Kernel", "k\x1b[31m", 'a"; rm', "9lives"])
+def test_a_plugin_name_that_study_files_cannot_write_is_refused(name):
+    class Badly(rkhs_study.Kernel):
+        def k(self, X, Y):
+            return np.ones((len(X), len(Y)))
+
+    Badly.name = name
+    with pytest.raises(ValueError, match="name"):
+        rkhs_study.register_kernel(Badly)
