@@ -110,8 +110,10 @@ def wendland_3(k, r):
 def kernel(row, x, y):
     if row["kernel"] != "wendland":
         raise SystemExit(f"no reference implementation for kernel '{row['kernel']}'")
-    distance = np.sqrt(((x[:, None, :] - y[None, :, :]) ** 2).sum(axis=2))
-    return wendland_3(int(row["k"]), distance / float(row["radius"]))
+    squared = np.zeros((len(x), len(y)))
+    for a in range(x.shape[1]):  # axis by axis: no (len(x), len(y), d) temporary
+        squared += (x[:, a, None] - y[None, :, a]) ** 2
+    return wendland_3(int(row["k"]), np.sqrt(squared) / float(row["radius"]))
 
 
 def expression(text, points, lengths):
