@@ -52,13 +52,10 @@ std::vector<double> centres(const std::string& name, std::size_t n, const Domain
   return entry->factory(ParameterSet::resolve(entry->info.parameters, {}))->place(n, domain, 0);
 }
 
-// Every metric but the four only the dense path computes.
+// Every metric but the one only the dense path computes.
 MetricSelection sparse_metrics() {
   MetricSelection selection(MetricValues<ApproximationMetric>::count, true);
-  for (const auto m :
-       {ApproximationMetric::gram_condition_number, ApproximationMetric::gram_min_eigenvalue,
-        ApproximationMetric::gram_max_eigenvalue, ApproximationMetric::projection_operator_norm})
-    selection[static_cast<std::size_t>(m)] = false;
+  selection[static_cast<std::size_t>(ApproximationMetric::projection_operator_norm)] = false;
   return selection;
 }
 
@@ -164,14 +161,14 @@ TEST_CASE("choosing the sparse path", "[approximation][sparse]") {
   CHECK_FALSE(choose_sparse(*compact, 1000, options, some));  // dense by default
   options.algebra = GramAlgebra::automatic;
   CHECK(choose_sparse(*compact, 1000, options, some));
-  CHECK_FALSE(choose_sparse(*compact, 1000, options, all));  // eigenvalues: dense
+  CHECK_FALSE(choose_sparse(*compact, 1000, options, all));  // the operator norm: dense
   CHECK_FALSE(choose_sparse(*everywhere, 1000, options, some));
   CHECK(predicted_gram_nonzeros(compact->properties(), square, 1000) ==
         Approx(1000 + 1000.0 * 999 * std::numbers::pi * 0.04));
   options.algebra = GramAlgebra::sparse;
   CHECK(choose_sparse(*everywhere, 1000, options, some));  // forced
   CHECK_THROWS_WITH(choose_sparse(*compact, 1000, options, all),
-                    Catch::Contains("does not compute gram_condition_number"));
+                    Catch::Contains("does not compute projection_operator_norm"));
   const auto* gaussian = kernel_registry().find("gaussian");
   REQUIRE(gaussian);
   const auto global =
