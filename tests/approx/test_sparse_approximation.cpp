@@ -13,6 +13,7 @@
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/concurrency.hpp"
+#include "rkhs/core/work_counters.hpp"
 #include "rkhs/kernel/kernel.hpp"
 
 using namespace rkhs;
@@ -202,6 +203,36 @@ TEST_CASE("predicted factor nonzeros: within a factor 2 of CHOLMOD's analysis",
     CHECK(predicted.gram_nonzeros > 0.5 * static_cast<double>(gram.nonZeros()));
     CHECK(predicted.gram_nonzeros < 2.0 * static_cast<double>(gram.nonZeros()));
   }
+}
+
+TEST_CASE("the sparse path counts its nonzeros and fill and solves",
+          "[approximation][sparse][work]") {
+  const Domain square = box(2);
+  const auto kernel = wendland(1, 0.2, square);
+  const auto target = expression("exp(x1) * cos(x2) + x1 * x2", square);
+  const auto x = centres("halton", 400, square);
+  const std::size_t points = 4096;
+  auto counted = [&](GramAlgebra algebra) {
+    WorkCounters counters;
+    const WorkCounterScope scope(&counters);
+    measure(*kernel, *target, x, points, algebra, 2);
+    return snapshot(counters);
+  };
+  const auto sparse = counted(GramAlgebra::sparse);
+  const auto gram = sparse_gram(*kernel, x);
+  const auto cross = sparse_cross_columns(*kernel, square.uniform_points(points), x);
+  CHECK(sparse.factorisations == 1);
+  CHECK(sparse.sparse_nonzeros == static_cast<std::uint64_t>(gram.nonZeros() + cross.nonZeros()));
+  CHECK(sparse.factor_nonzeros == static_cast<std::uint64_t>(analysed_factor_nonzeros(gram)));
+  // A solve with L and one with L^T at every point (the power function and its floor), two
+  // for the coefficients, two for each Lanczos step on G^-1.
+  CHECK(sparse.sparse_solve_columns >= 2 * points + 2);
+  CHECK(sparse.sparse_solve_columns <= 2 * points + 2 + 2 * 500 * 2);
+  const auto dense = counted(GramAlgebra::dense);
+  CHECK(dense.sparse_nonzeros == 0);
+  CHECK(dense.factor_nonzeros == 0);
+  CHECK(dense.sparse_solve_columns == 0);
+  CHECK(dense.factorisations >= 1);
 }
 
 TEST_CASE("sparse and dense paths agree at n = 4096 in 2-D (slower)",

@@ -16,6 +16,7 @@
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
+#include "rkhs/core/work_counters.hpp"
 
 namespace rkhs {
 
@@ -189,6 +190,14 @@ void solve_in_place(int system, cholmod_factor* factor, Eigen::MatrixXd& x,
   if (!result) throw std::runtime_error("CHOLMOD's solve failed (out of memory?)");
   std::copy_n(static_cast<const double*>(result->x), x.size(), x.data());
   cholmod_free_dense(&result, &common);
+  if (system != CHOLMOD_P) count_sparse_work(0, 0, static_cast<std::uint64_t>(x.cols()));
+}
+
+// x with G x = b through the factor (a solve with L and one with L^T).
+template <class Factor>
+Eigen::VectorXd solve_with(const Factor& cholesky, const Eigen::VectorXd& b) {
+  count_sparse_work(0, 0, 2);
+  return cholesky.solve(b);
 }
 
 }  // namespace
@@ -229,6 +238,7 @@ Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const
   }
   Eigen::SparseMatrix<double> gram(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   gram.setFromTriplets(entries.begin(), entries.end());
+  count_sparse_work(static_cast<std::uint64_t>(gram.nonZeros()), 0, 0);
   return gram;
 }
 
@@ -271,6 +281,7 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
   }
   Eigen::SparseMatrix<double> cross(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
   cross.setFromTriplets(entries.begin(), entries.end());
+  count_sparse_work(static_cast<std::uint64_t>(cross.nonZeros()), 0, 0);
   return cross;
 }
 
@@ -321,6 +332,8 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   const int ordering = analysed.method[analysed.selected].ordering;
   const double factor_nonzeros = analysed.lnz;
   cholesky.factorize(gram);
+  count_factorisation();
+  count_sparse_work(0, static_cast<std::uint64_t>(factor_nonzeros), 0);
   check_cancelled();
   if (cholesky.info() != Eigen::Success) return std::nullopt;  // not positive definite
 
@@ -330,7 +343,7 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   {
     const auto by_gram = [&](const auto& in, Eigen::VectorXd& out) { out.noalias() = gram * in; };
     const auto by_inverse = [&](const auto& in, Eigen::VectorXd& out) {
-      out = cholesky.solve(Eigen::VectorXd(in));
+      out = solve_with(cholesky, Eigen::VectorXd(in));
     };
     double lambda_max = 0, inverse_max = 0;
     if (work & work_spectrum) {
@@ -366,7 +379,7 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   if (work & (work_interpolant | work_residual)) {
     Eigen::VectorXd at_centres(n);
     target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
-    alpha = cholesky.solve(at_centres);
+    alpha = solve_with(cholesky, at_centres);
     target_norm_at_centres = at_centres.norm();
   }
   if (work & work_residual) {
