@@ -39,7 +39,10 @@ int command_validate(const std::string& study_file) {
     if (refused == 0 || n < first_too_large) first_too_large = n;
     last_too_large = std::max(last_too_large, n);
     refused += count;
-    if (footprint.megabytes > largest.megabytes) largest = footprint, largest_n = n;
+    if (footprint.megabytes > largest.megabytes) {
+      largest = footprint;
+      largest_n = n;
+    }
   };
   if (study.solver.algebra == GramAlgebra::dense || study.kind() != StudyKind::approximation)
     for (const std::size_t n : study.n_values)

@@ -134,6 +134,39 @@ std::span<const double> cell_points(const CellGrid& grid, std::size_t c) {
       .subspan(grid.start[c] * d, (grid.start[c + 1] - grid.start[c]) * d);
 }
 
+// The indices (into the bucketed point set) of the points of cell `c`, in `cell_points` order.
+std::span<const std::size_t> cell_indices(const CellGrid& grid, std::size_t c) {
+  return std::span<const std::size_t>(grid.order)
+      .subspan(grid.start[c], grid.start[c + 1] - grid.start[c]);
+}
+
+// For every cell a of `rows` holding points and every neighbouring cell b of `columns` (the
+// same cell geometry) holding points, in increasing order of a, then b, on the calling thread:
+// visit(block, row_indices, column_indices, a == b) with block(i, j) = k(row point i, column
+// point j). With `upper` (rows and columns the same grid) each pair of cells once, b >= a.
+template <class Visit>
+void for_each_neighbour_block(const AnyKernel& kernel, const CellGrid& rows,
+                              const CellGrid& columns, bool upper, Visit&& visit) {
+  const auto d = static_cast<std::size_t>(rows.dimension);
+  std::vector<std::size_t> near;
+  Eigen::MatrixXd block;
+  for (std::size_t a = 0; a < rows.cells(); ++a) {
+    const auto first = cell_points(rows, a);
+    if (first.empty()) continue;
+    neighbours(rows, a, near);
+    for (const std::size_t b : near) {
+      if (upper && b < a) continue;
+      const auto second = cell_points(columns, b);
+      if (second.empty()) continue;
+      block.resize(static_cast<Eigen::Index>(first.size() / d),
+                   static_cast<Eigen::Index>(second.size() / d));
+      kernel.cross_into(first, second, block);
+      visit(block, cell_indices(rows, a), cell_indices(columns, b), a == b);
+    }
+    check_cancelled();
+  }
+}
+
 double support_radius(const AnyKernel& kernel) {
   const double radius = kernel.properties().support_radius;
   if (!(radius > 0) || !std::isfinite(radius))
@@ -204,38 +237,25 @@ Eigen::VectorXd solve_with(const Factor& cholesky, const Eigen::VectorXd& b) {
 
 Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres) {
   const Domain& domain = kernel.domain();
-  const double radius = support_radius(kernel);
-  const auto d = static_cast<std::size_t>(domain.dimension);
   const std::size_t n = domain.point_count(centres);
-  CellGrid grid = cell_geometry(domain, radius, n);
+  CellGrid grid = cell_geometry(domain, support_radius(kernel), n);
   bucket(grid, domain, centres);
   std::vector<Eigen::Triplet<double>> entries;
-  std::vector<std::size_t> near;
-  Eigen::MatrixXd block;
-  for (std::size_t a = 0; a < grid.cells(); ++a) {
-    const auto first = cell_points(grid, a);
-    if (first.empty()) continue;
-    neighbours(grid, a, near);
-    for (const std::size_t b : near) {
-      if (b < a) continue;  // each pair of cells once: the upper half, mirrored
-      const auto second = cell_points(grid, b);
-      if (second.empty()) continue;
-      const auto rows = static_cast<Eigen::Index>(first.size() / d),
-                 cols = static_cast<Eigen::Index>(second.size() / d);
-      block.resize(rows, cols);
-      kernel.cross_into(first, second, block);
-      for (Eigen::Index j = 0; j < cols; ++j)
-        for (Eigen::Index i = 0; i < (a == b ? j + 1 : rows); ++i) {
-          const double v = block(i, j);
-          const auto gi = static_cast<int>(grid.order[grid.start[a] + static_cast<std::size_t>(i)]);
-          const auto gj = static_cast<int>(grid.order[grid.start[b] + static_cast<std::size_t>(j)]);
-          if (v == 0 && gi != gj) continue;
-          entries.emplace_back(gi, gj, v);
-          if (gi != gj) entries.emplace_back(gj, gi, v);
-        }
-    }
-    check_cancelled();
-  }
+  // Each pair of cells once: the upper half, mirrored.
+  for_each_neighbour_block(
+      kernel, grid, grid, true,
+      [&](const Eigen::MatrixXd& block, std::span<const std::size_t> rows,
+          std::span<const std::size_t> cols, bool same_cell) {
+        for (Eigen::Index j = 0; j < block.cols(); ++j)
+          for (Eigen::Index i = 0; i < (same_cell ? j + 1 : block.rows()); ++i) {
+            const double v = block(i, j);
+            const auto gi = static_cast<int>(rows[static_cast<std::size_t>(i)]);
+            const auto gj = static_cast<int>(cols[static_cast<std::size_t>(j)]);
+            if (v == 0 && gi != gj) continue;
+            entries.emplace_back(gi, gj, v);
+            if (gi != gj) entries.emplace_back(gj, gi, v);
+          }
+      });
   Eigen::SparseMatrix<double> gram(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   gram.setFromTriplets(entries.begin(), entries.end());
   count_sparse_work(static_cast<std::uint64_t>(gram.nonZeros()), 0, 0);
@@ -246,39 +266,23 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
                                                  std::span<const double> points,
                                                  std::span<const double> centres) {
   const Domain& domain = kernel.domain();
-  const double radius = support_radius(kernel);
-  const auto d = static_cast<std::size_t>(domain.dimension);
   const std::size_t n = domain.point_count(centres), m = domain.point_count(points);
-  CellGrid centre_grid = cell_geometry(domain, radius, n);
+  CellGrid centre_grid = cell_geometry(domain, support_radius(kernel), n);
   CellGrid point_grid = centre_grid;
   bucket(centre_grid, domain, centres);
   bucket(point_grid, domain, points);
   std::vector<Eigen::Triplet<double>> entries;
-  std::vector<std::size_t> near;
-  Eigen::MatrixXd block;
-  for (std::size_t a = 0; a < point_grid.cells(); ++a) {
-    const auto at = cell_points(point_grid, a);
-    if (at.empty()) continue;
-    neighbours(point_grid, a, near);
-    for (const std::size_t b : near) {
-      const auto sources = cell_points(centre_grid, b);
-      if (sources.empty()) continue;
-      const auto rows = static_cast<Eigen::Index>(at.size() / d),
-                 cols = static_cast<Eigen::Index>(sources.size() / d);
-      block.resize(rows, cols);
-      kernel.cross_into(at, sources, block);
-      for (Eigen::Index j = 0; j < cols; ++j)
-        for (Eigen::Index i = 0; i < rows; ++i)
-          if (const double v = block(i, j); v != 0)
-            entries.emplace_back(
-                static_cast<int>(
-                    centre_grid.order[centre_grid.start[b] + static_cast<std::size_t>(j)]),
-                static_cast<int>(
-                    point_grid.order[point_grid.start[a] + static_cast<std::size_t>(i)]),
-                v);
-    }
-    check_cancelled();
-  }
+  // Row i of a block is a point, column j a centre: the entry (centre, point) of the result.
+  for_each_neighbour_block(kernel, point_grid, centre_grid, false,
+                           [&](const Eigen::MatrixXd& block, std::span<const std::size_t> at,
+                               std::span<const std::size_t> sources, bool) {
+                             for (Eigen::Index j = 0; j < block.cols(); ++j)
+                               for (Eigen::Index i = 0; i < block.rows(); ++i)
+                                 if (const double v = block(i, j); v != 0)
+                                   entries.emplace_back(
+                                       static_cast<int>(sources[static_cast<std::size_t>(j)]),
+                                       static_cast<int>(at[static_cast<std::size_t>(i)]), v);
+                           });
   Eigen::SparseMatrix<double> cross(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
   cross.setFromTriplets(entries.begin(), entries.end());
   count_sparse_work(static_cast<std::uint64_t>(cross.nonZeros()), 0, 0);
