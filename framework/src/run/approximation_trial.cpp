@@ -25,11 +25,10 @@ double measure_approximation_trial(const TrialInputs& in, TrialResult& result) {
     measured = measure_approximation(in.kernel, in.target, in.centres, study.evaluation_points,
                                      study.solver, in.computed);
   } else {
+    // An operator W, E measured by the framework, or a matrix-free projection measuring itself.
     const ProjectionRequest request{in.kernel, trial.n, in.centres, study.solver};
-    const auto op = build_projection(projection, trial.projection.parameters, request);
-    check_cancelled();
-    measured = measure_projection(in.kernel, in.target, op, study.evaluation_points, study.solver,
-                                  in.computed);
+    measured = measure_projection_trial(projection, trial.projection.parameters, request,
+                                        in.target, study.evaluation_points, in.computed);
   }
   result.metrics = std::move(measured.metrics).values();
   result.floors = std::move(measured.floors).values();

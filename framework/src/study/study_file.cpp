@@ -497,6 +497,19 @@ void check_common_instances(const Reporter& report, const toml::table& root,
     check_instances(report, root, *projections, [&](const PluginChoice& c, const PluginEntry&) {
       const auto projection = projection_registry().find(c.name)->factory(c.parameters);
       const auto properties = projection->properties();
+      if (properties.matrix_free && study.kind() == StudyKind::approximation) {
+        std::vector<std::string> missing;
+        for (const auto& row : MetricTable<ApproximationMetric>::rows)
+          if (!(properties.measures & measured_metric_bit(row.id)) &&
+              std::find(study.metrics.begin(), study.metrics.end(), row.name) !=
+                  study.metrics.end())
+            missing.emplace_back(row.name);
+        if (!missing.empty())
+          throw std::invalid_argument(fmt::format(
+              "is matrix-free (it measures its trials without an operator W, E) and does not "
+              "compute {}: list the metrics it computes in study.metrics",
+              fmt::join(missing, ", ")));
+      }
       for (const auto& k : study.kernels) {
         const auto kernel = kernel_registry().find(k.name)->factory(k.parameters, study.domain);
         if (!properties.requires_kernel.empty() && kernel->name() != properties.requires_kernel)

@@ -27,6 +27,13 @@
 //   void build(const ProjectionRequest&, ProjectionOperator& out) const;
 // registered with RKHS_REGISTER_PROJECTION(P) (through the same boundary rules as every plugin:
 // the operator's storage is allocated on the caller's side by ProjectionOperator::resize).
+//
+// A matrix-free projection (ProjectionProperties::matrix_free) has no operator of this form that
+// fits in memory (a multilevel interpolation at 2^18 centres): it measures a trial itself through
+// Projection::measure() and declares which metrics of the approximation table it computes
+// (ProjectionProperties::measures). A study that asks such a projection for another metric (the
+// operator norms, the power function of one space) is refused when it is read, naming them;
+// build() is not called for it.
 
 #include <Eigen/Dense>
 #include <cstdint>
@@ -39,6 +46,8 @@
 #include <vector>
 
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/approx/metrics.hpp"
+#include "rkhs/approx/target.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/core/registry.hpp"
 #include "rkhs/kernel/kernel.hpp"
@@ -49,7 +58,8 @@ namespace rkhs {
 enum class ProjectionResolution {
   centres,  ///< H_n = span{k(c_i, .)} at the trial's n centres (the centres axis)
   level,    ///< H_j = the splines of level j; the trial's n is the number of level-j cells,
-            ///< n = n0 2^j (h = h0 2^-j), and the centres axis is not used
+            ///< n = n0 2^j (h = h0 2^-j), and the centres axis is not used; for the
+            ///< multilevel projection the number of centres of its finest level j
 };
 
 /// What a projection declares about itself; the contract test checks each claim.
@@ -66,7 +76,17 @@ struct ProjectionProperties {
   /// The kernel the projection needs ("bspline" for the spline spaces), empty for any kernel
   /// (a literal: nothing the plugin allocates crosses the boundary).
   std::string_view requires_kernel;
+  /// Measures its trials itself (Projection::measure) instead of building a ProjectionOperator.
+  bool matrix_free = false;
+  /// A matrix-free projection's metrics: bit i set when it computes metric i of
+  /// MetricTable<ApproximationMetric> (measured_metric_bit); unused otherwise.
+  std::uint64_t measures = 0;
 };
+
+/// The bit of `metric` in ProjectionProperties::measures.
+constexpr std::uint64_t measured_metric_bit(ApproximationMetric metric) {
+  return std::uint64_t{1} << static_cast<std::size_t>(metric);
+}
 
 /// The properties in words, for `rkhs-study list projection` and the docs: "resolution: level;
 /// nested; H-orthogonal; ||Pi_j|| <= 1; kernel: bspline".
@@ -79,6 +99,34 @@ struct ProjectionRequest {
   std::size_t n = 0;                ///< the trial's n (level projections: cells n0 2^j)
   std::span<const double> centres;  ///< the trial's centres (centre projections only)
   SolverOptions solver;
+};
+
+/// What a matrix-free projection measures a trial on: the kernel, the target, the trial's n,
+/// the evaluation points (the study's uniform grid) and the ApproximationWork bits its selected
+/// metrics need (MetricInfo::needs; a metric whose needs are all 0 is always wanted).
+struct ProjectionTrial {
+  const AnyKernel& kernel;
+  const TargetFunction& target;
+  std::size_t n = 0;
+  std::span<const double> points;
+  SolverOptions solver;
+  unsigned work = 0;
+};
+
+/// A matrix-free projection's measurement, in storage the caller owns: the plugin writes the
+/// values (and the floors it estimates; NaN: none) of the metrics it declares by identifier, and
+/// adds flags and its solve method through the framework's functions.
+class ProjectionMeasurement {
+ public:
+  MetricValues<ApproximationMetric> metrics, floors;
+  void add_flag(std::string_view flag);
+  void set_solve_method(std::string_view method);
+  const std::vector<std::string>& flags() const noexcept { return flags_; }
+  const std::string& solve_method() const noexcept { return solve_method_; }
+
+ private:
+  std::vector<std::string> flags_;
+  std::string solve_method_;
 };
 
 /// The operator in the form of the file comment, in storage the caller owns. A plugin calls
@@ -134,6 +182,11 @@ class Projection {
   /// Builds Pi_j for `request` into `out`. Throws std::invalid_argument naming what does not
   /// fit (a kernel it cannot work with, an n that is not n0 2^j with j <= J, ...).
   virtual void build(const ProjectionRequest& request, ProjectionOperator& out) const = 0;
+  /// A matrix-free projection's trial (properties().matrix_free): sets every metric of
+  /// properties().measures whose needs intersect trial.work (or are 0), with the kernel and n that
+  /// check() accepted. Throws std::invalid_argument as build() does. The default throws
+  /// std::logic_error: a projection with an operator is measured from it.
+  virtual void measure(const ProjectionTrial& trial, ProjectionMeasurement& out) const;
 };
 
 using ProjectionRegistry = Registry<Projection>;
@@ -153,6 +206,7 @@ bool register_projection() noexcept {
 }
 
 /// Pi_j as a concrete operator: makes the plugin `name` and builds it for `request`.
+/// std::invalid_argument for a matrix-free projection (it has no operator).
 ProjectionOperator build_projection(std::string_view name, const ParameterSet& parameters,
                                     const ProjectionRequest& request);
 
