@@ -180,6 +180,33 @@ TEST_CASE("choosing the sparse path", "[approximation][sparse]") {
                     Catch::Contains("has global support"));
 }
 
+TEST_CASE("predicted factor nonzeros: within a factor 2 of CHOLMOD's analysis",
+          "[approximation][sparse]") {
+  struct Case {
+    int dimension;
+    std::size_t n;
+    double radius;
+  };
+  // Grids from a few to tens of neighbours a row, the support radius fixed or a multiple of h.
+  for (const auto& c :
+       {Case{1, 4000, 0.01}, Case{2, 1024, 0.2}, Case{2, 4096, 0.08}, Case{2, 16384, 0.03},
+        Case{3, 4096, 0.2}, Case{3, 4913, 0.25}, Case{3, 13824, 0.1}}) {
+    const Domain domain = box(c.dimension);
+    const auto kernel = wendland(1, c.radius, domain);
+    const auto x = centres("uniform", c.n, domain);
+    const auto gram = sparse_gram(*kernel, x);
+    const auto predicted = predict_sparse_factor(kernel->properties(), domain, c.n);
+    const double analysed = analysed_factor_nonzeros(gram);
+    INFO("d = " << c.dimension << ", n = " << c.n << ", radius " << c.radius << ": predicted "
+                << predicted.factor_nonzeros << " nonzeros in L, CHOLMOD " << analysed
+                << "; G: predicted " << predicted.gram_nonzeros << ", built " << gram.nonZeros());
+    CHECK(predicted.factor_nonzeros > analysed / 2);
+    CHECK(predicted.factor_nonzeros < analysed * 2);
+    CHECK(predicted.gram_nonzeros > 0.5 * static_cast<double>(gram.nonZeros()));
+    CHECK(predicted.gram_nonzeros < 2.0 * static_cast<double>(gram.nonZeros()));
+  }
+}
+
 TEST_CASE("sparse and dense paths agree at n = 4096 in 2-D (slower)",
           "[approximation][sparse][slow]") {
   const Domain square = box(2);

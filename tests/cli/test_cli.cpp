@@ -330,14 +330,57 @@ matrix_megabytes = 100
   CHECK(validated.exit_code == 1);
   CHECK_THAT(validated.output,
              Catch::Contains("limits: 1 trial of n = 20000 needs more than "
-                             "limits.matrix_megabytes = 100 MB of dense matrices (n = 20000 with "
-                             "80000 evaluation points: 33569 MB)"));
+                             "limits.matrix_megabytes = 100 MB of matrices (the largest, n = "
+                             "20000 with 80000 evaluation points, dense: the n x n Gram matrix "
+                             "three times and two n x E matrices: 33569 MB)"));
   const auto ran = run("run " + (dir / "study.toml").string() + " --no-store --no-plots --out " +
                        (dir / "out").string());
   INFO(ran.output);
   CHECK(ran.exit_code == 1);
   CHECK_THAT(read_text(dir / "out" / "trials.csv"),
-             Catch::Contains("needs 33569 MB of matrices, above limits.matrix_megabytes = 100"));
+             Catch::Contains("needs 33569 MB of matrices (dense: the n x n Gram matrix three "
+                             "times and two n x E matrices), above "
+                             "limits.matrix_megabytes = 100"));
+}
+
+TEST_CASE(
+    "validate predicts a sparse trial's footprint from its nonzeros: a 3-D study at n = 10^6 is "
+    "refused with its estimate, n = 4096 is not",
+    "[cli][limits][sparse]") {
+  // Wendland phi_{3,1} of support radius 0.05 on the unit cube, solver "sparse": at n = 10^6
+  // (spacing 0.01) about 520 neighbours a centre, 5.2e8 nonzeros in G; the dense estimate of
+  // the same trial would be 2.3e7 MB. Nothing is built: validate answers at once.
+  const auto dir = scratch("validate_sparse_limit");
+  std::ofstream(dir / "study.toml") << R"([study]
+name = "sparse_limit"
+evaluation_points = 1030301
+metrics = ["power_function_sup", "l2_error"]
+[domain]
+lengths = [1.0, 1.0, 1.0]
+periodic = false
+[grid]
+n = [4096, 1000000]
+[linear_algebra]
+solver = "sparse"
+[[kernel]]
+name = "wendland"
+k = 1
+radius = 0.05
+[[target]]
+name = "expression"
+f = "x1 * x2 * x3"
+[limits]
+matrix_megabytes = 8192
+)";
+  const auto validated = run("validate " + (dir / "study.toml").string());
+  INFO(validated.output);
+  CHECK(validated.exit_code == 1);
+  CHECK_THAT(validated.output,
+             Catch::Contains("limits: 1 trial of n = 1000000 needs more than "
+                             "limits.matrix_megabytes = 8192 MB of matrices (the largest, n = "
+                             "1000000 with 1030301 evaluation points, sparse: 5.2e+08 nonzeros "
+                             "in G, "));
+  CHECK_THAT(validated.output, Catch::Contains("in its Cholesky factor (predicted): "));
 }
 
 TEST_CASE("validate and run say which metrics a trial will compute", "[cli][work]") {

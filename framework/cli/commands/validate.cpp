@@ -3,6 +3,7 @@
 #include <fmt/ranges.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
@@ -27,26 +28,36 @@ int command_validate(const std::string& study_file) {
   std::cout << fmt::format("{}: valid; {} = {}\n", study_file, fmt::join(factors, " x "),
                            counted(trials, "trial", "trials"));
   std::cout << "  " << computed_metrics_text(study) << "\n";
-  // [limits] matrix_megabytes from the counts alone (run fails such trials before it builds
-  // anything): the largest n first names how far beyond the limit the grid goes.
-  std::size_t too_large = 0, first_too_large = 0;
-  for (const std::size_t n : study.n_values)
-    if (trial_matrix_megabytes(n, study.evaluation_points) > study.limits.matrix_megabytes) {
-      if (too_large == 0) first_too_large = n;
-      ++too_large;
-    }
+  // [limits] matrix_megabytes from the predicted footprints (run fails such trials before it
+  // builds anything): the largest names how far beyond the limit the grid goes. Dense trials'
+  // footprints depend on n alone, so a dense study is checked from its n axis.
+  std::size_t refused = 0, first_too_large = 0, last_too_large = 0;
+  TrialFootprint largest;
+  std::size_t largest_n = 0;
+  const auto check = [&](std::size_t n, const TrialFootprint& footprint, std::size_t count) {
+    if (footprint.megabytes <= study.limits.matrix_megabytes) return;
+    if (refused == 0 || n < first_too_large) first_too_large = n;
+    last_too_large = std::max(last_too_large, n);
+    refused += count;
+    if (footprint.megabytes > largest.megabytes) largest = footprint, largest_n = n;
+  };
+  if (study.solver.algebra == GramAlgebra::dense || study.kind() != StudyKind::approximation)
+    for (const std::size_t n : study.n_values)
+      check(n, {trial_matrix_megabytes(n, study.evaluation_points)},
+            trials / study.n_values.size());
+  else
+    for (const auto& trial : study.trials()) check(trial.n, trial_footprint(study, trial), 1);
   int status = exit_ok;
-  if (too_large > 0) {
-    const std::size_t largest = study.n_values.back(),
-                      refused = trials / study.n_values.size() * too_large;
+  if (refused > 0) {
     std::cerr << fmt::format(
-        "  limits: {} of n = {}{} {} more than limits.matrix_megabytes = {} MB of dense "
-        "matrices (n = {} with {} evaluation points: {:.0f} MB); run fails {} before building "
-        "anything: {}\n",
-        counted(refused, "trial", "trials"), first_too_large, too_large > 1 ? " and above" : "",
-        refused == 1 ? "needs" : "need", format_real(study.limits.matrix_megabytes), largest,
-        study.evaluation_points, trial_matrix_megabytes(largest, study.evaluation_points),
-        refused == 1 ? "it" : "them", "raise the limit or lower n");
+        "  limits: {} of n = {}{} {} more than limits.matrix_megabytes = {} MB of "
+        "matrices (the largest, n = {} with {} evaluation points, {}: {:.0f} MB); run fails {} "
+        "before building anything: {}\n",
+        counted(refused, "trial", "trials"), first_too_large,
+        last_too_large > first_too_large ? " and above" : "", refused == 1 ? "needs" : "need",
+        format_real(study.limits.matrix_megabytes), largest_n, study.evaluation_points,
+        largest.describe(), largest.megabytes, refused == 1 ? "it" : "them",
+        "raise the limit or lower n");
     status = exit_failed_trials;
   }
   if (const auto tiers = study_tiers(study); !study.expectations.empty() || !tiers.empty())

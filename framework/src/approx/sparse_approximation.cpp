@@ -9,7 +9,6 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
-#include <numbers>
 #include <stdexcept>
 #include <vector>
 
@@ -271,15 +270,11 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
   return cross;
 }
 
-double predicted_gram_nonzeros(const KernelProperties& properties, const Domain& domain,
-                               std::size_t n) {
-  const double count = static_cast<double>(n);
-  const double rho = properties.support_radius;
-  if (!(rho > 0) || !std::isfinite(rho)) return count * count;
-  const double support = domain.dimension == 1   ? 2 * rho
-                         : domain.dimension == 2 ? std::numbers::pi * rho * rho
-                                                 : 4.0 / 3.0 * std::numbers::pi * rho * rho * rho;
-  return count + count * (count - 1) * std::min(1.0, support / domain.volume());
+double analysed_factor_nonzeros(const Eigen::SparseMatrix<double>& gram) {
+  SparseCholesky cholesky;
+  cholesky.common().print = 0;
+  cholesky.analyzePattern(gram);
+  return cholesky.common().lnz;
 }
 
 bool choose_sparse(const AnyKernel& kernel, std::size_t n, const SolverOptions& options,

@@ -96,8 +96,13 @@ double adaptive_cost(const StudyDefinition& study, const TrialSpec& trial,
   return adaptive_trial_cost(shape, study.evaluation_points);
 }
 
+// Adaptive trials are dense.
+TrialFootprint adaptive_footprint(const StudyDefinition& study, const TrialSpec& trial) {
+  return {trial_matrix_megabytes(trial.n, study.evaluation_points)};
+}
+
 }  // namespace
 
-const TrialKind adaptive_trials{measure_adaptive_trial, adaptive_cost};
+const TrialKind adaptive_trials{measure_adaptive_trial, adaptive_cost, adaptive_footprint};
 
 }  // namespace rkhs

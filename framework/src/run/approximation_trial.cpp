@@ -1,11 +1,13 @@
 // An approximation trial (rkhs/run/trial_kinds.hpp): the projection of the target onto the
 // trial's space, measured on the evaluation grid; only the metrics the study asks for.
+#include <exception>
 #include <set>
 #include <string>
 #include <string_view>
 
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/projection.hpp"
+#include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/run/trial_cost.hpp"
 #include "rkhs/run/trial_kinds.hpp"
@@ -37,13 +39,41 @@ double measure_approximation_trial(const TrialInputs& in, TrialResult& result) {
   return 0;
 }
 
+// Interpolation with a compactly supported kernel takes the sparse path when choose_sparse
+// says so; everything else is dense.
+TrialFootprint approximation_footprint(const StudyDefinition& study, const TrialSpec& trial) {
+  TrialFootprint dense{trial_matrix_megabytes(trial.n, study.evaluation_points)};
+  if (study.solver.algebra == GramAlgebra::dense ||
+      !(trial.projection.name.empty() || trial.projection.name == default_projection))
+    return dense;
+  try {
+    const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study.domain);
+    if (!choose_sparse(*kernel, trial.n, study.solver,
+                       work_needed<ApproximationMetric>(study.computed_metrics())))
+      return dense;
+    const auto factor = predict_sparse_factor(kernel->properties(), study.domain, trial.n);
+    TrialFootprint sparse{sparse_trial_megabytes(factor.gram_nonzeros, factor.factor_nonzeros,
+                                                 trial.n, study.evaluation_points),
+                          true, factor.gram_nonzeros, factor.factor_nonzeros};
+    // The factorisation, and a solve with L and one with L^T (the floors) per point.
+    sparse.sparse_flops = factor.factor_flops + 4.0 * factor.factor_nonzeros *
+                                                    static_cast<double>(study.evaluation_points);
+    return sparse;
+  } catch (const std::exception&) {
+    return dense;  // the trial fails at once, with the reason
+  }
+}
+
 double approximation_cost(const StudyDefinition& study, const TrialSpec& trial,
                           std::set<std::string>*) {
+  if (const auto footprint = approximation_footprint(study, trial); footprint.sparse)
+    return footprint.sparse_flops;
   return approximation_trial_cost(trial.n, study.evaluation_points);
 }
 
 }  // namespace
 
-const TrialKind approximation_trials{measure_approximation_trial, approximation_cost};
+const TrialKind approximation_trials{measure_approximation_trial, approximation_cost,
+                                     approximation_footprint};
 
 }  // namespace rkhs

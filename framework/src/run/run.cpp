@@ -122,11 +122,11 @@ TrialResult run_trial(const StudyDefinition& study, const TrialSpec& trial,
   };
   try {
     const CancellationScope cancellation(stop_requested, deadline);
-    if (const double mb = trial_matrix_megabytes(trial.n, study.evaluation_points);
-        mb > study.limits.matrix_megabytes)
-      throw std::runtime_error(fmt::format(
-          "needs {:.0f} MB of matrices, above limits.matrix_megabytes = {:.0f}", mb,
-          study.limits.matrix_megabytes));
+    if (const auto footprint = trial_footprint(study, trial);
+        footprint.megabytes > study.limits.matrix_megabytes)
+      throw std::runtime_error(
+          fmt::format("needs {:.0f} MB of matrices ({}), above limits.matrix_megabytes = {:.0f}",
+                      footprint.megabytes, footprint.describe(), study.limits.matrix_megabytes));
     const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study.domain);
     const auto target =
         target_registry().find(trial.target.name)->factory(trial.target.parameters, study.domain);

@@ -1,5 +1,7 @@
 #include "rkhs/run/trial_cost.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <exception>
 #include <numeric>
@@ -56,6 +58,31 @@ double integrated_laps(const AdaptiveTrialShape& shape) noexcept {
 double trial_matrix_megabytes(std::size_t n, std::size_t evaluation_points) noexcept {
   const auto m = static_cast<double>(n);
   return 8.0 * (3 * m * m + 2 * m * static_cast<double>(evaluation_points)) / 1048576.0;
+}
+
+double sparse_trial_megabytes(double gram_nonzeros, double factor_nonzeros, std::size_t n,
+                              std::size_t evaluation_points) noexcept {
+  // Bytes: a stored nonzero of G or of the cross matrix takes 12 (value, row index); their
+  // assembly from triplets takes 16 more per entry (32 while the vector grows) and 12 for the
+  // transposed copy setFromTriplets makes. CHOLMOD keeps a permuted copy of G's upper
+  // triangle; its supernodal factor stores L's nonzeros with about a quarter more for the
+  // supernodes' dense blocks. The solves take blocks of at most 32 MB on each of two threads.
+  const double per_point = gram_nonzeros / std::max(1.0, static_cast<double>(n));
+  const double cross = per_point * static_cast<double>(evaluation_points);
+  const double assembly = 44.0 * std::max(gram_nonzeros, cross);
+  const double held = 12.0 * gram_nonzeros + 6.0 * gram_nonzeros + 10.0 * factor_nonzeros;
+  return (held + 12.0 * cross + assembly) / 1048576.0 + 64.0;
+}
+
+std::string TrialFootprint::describe() const {
+  if (sparse)
+    return fmt::format("sparse: {:.2g} nonzeros in G, {:.2g} in its Cholesky factor (predicted)",
+                       gram_nonzeros, factor_nonzeros);
+  return "dense: the n x n Gram matrix three times and two n x E matrices";
+}
+
+TrialFootprint trial_footprint(const StudyDefinition& study, const TrialSpec& trial) {
+  return trial_kind(study.kind()).footprint(study, trial);
 }
 
 double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) noexcept {

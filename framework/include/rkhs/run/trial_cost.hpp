@@ -22,6 +22,7 @@
 // every integrator (they depend on tolerances and stiffness, which the estimate does not model).
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "rkhs/study/study.hpp"
@@ -43,9 +44,38 @@ struct AdaptiveTrialShape {
 
 /// The dense matrices of a trial with `n` centres and `evaluation_points` points, in MiB: the
 /// Gram matrix (three n x n: itself, its factor or eigenvectors, a working copy) and the cross
-/// matrix with its derivative (two n x E). run_trial fails a trial above limits.matrix_megabytes
-/// before it builds anything, and `validate` names such trials from this alone.
+/// matrix with its derivative (two n x E).
 double trial_matrix_megabytes(std::size_t n, std::size_t evaluation_points) noexcept;
+
+/// The matrices a trial holds at its peak, predicted from the study alone before anything is
+/// built, on the path the trial will take. run_trial fails a trial above
+/// limits.matrix_megabytes before it builds anything, and `validate` names such trials from
+/// this alone.
+struct TrialFootprint {
+  double megabytes = 0;
+  /// An approximation trial on the sparse path (a compactly supported kernel; `[linear_algebra]
+  /// solver`): its Gram matrix's and Cholesky factor's predicted nonzeros. Dense otherwise
+  /// (trial_matrix_megabytes).
+  bool sparse = false;
+  double gram_nonzeros = 0, factor_nonzeros = 0;
+  /// The predicted flops of the sparse factorisation and of the solves at the evaluation points.
+  double sparse_flops = 0;
+  /// "dense: 3 n x n and 2 n x E matrices", "sparse: 1.2e+08 nonzeros in G, 3.4e+09 in its
+  /// Cholesky factor (predicted)": what the estimate counts, for messages.
+  std::string describe() const;
+};
+
+/// The footprint of `trial` of `study` (the kind's own, trial_kinds.hpp). Never throws for a
+/// trial of study.trials(): a trial whose kernel cannot be made is estimated dense (it fails
+/// at once).
+TrialFootprint trial_footprint(const StudyDefinition& study, const TrialSpec& trial);
+
+/// The sparse path's peak memory, MiB, from its predicted nonzeros (sparse_gram.hpp): the Gram
+/// matrix with its assembly, CHOLMOD's permuted copy of its upper triangle and its supernodal
+/// factor, the sparse cross matrix with its assembly (about gram_nonzeros / n nonzeros per
+/// evaluation point) and the dense blocks of the solves.
+double sparse_trial_megabytes(double gram_nonzeros, double factor_nonzeros, std::size_t n,
+                              std::size_t evaluation_points) noexcept;
 
 /// The estimate of an approximation trial with `n` centres and `evaluation_points` points.
 double approximation_trial_cost(std::size_t n, std::size_t evaluation_points) noexcept;

@@ -74,6 +74,25 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
 double predicted_gram_nonzeros(const KernelProperties& properties, const Domain& domain,
                                std::size_t n);
 
+/// The sparse path's factorisation of the Gram matrix of n quasi-uniform centres, predicted
+/// before anything is built (sparse_prediction.cpp): the nonzeros of G (predicted_gram_nonzeros)
+/// and, from a geometric nested dissection of the domain (slabs as thick as the support radius
+/// across the longest axis of each box, the ordering METIS finds on such a graph), the nonzeros
+/// of L and the flops of the factorisation. About n log n nonzeros in L in 2-D and n^(4/3) in
+/// 3-D for a fixed number of neighbours; within a factor 2 of CHOLMOD's own count on grids
+/// (tests/approx/test_sparse_approximation.cpp). A kernel of global support: the dense factor.
+struct SparseFactorPrediction {
+  double gram_nonzeros = 0;
+  double factor_nonzeros = 0;
+  double factor_flops = 0;
+};
+SparseFactorPrediction predict_sparse_factor(const KernelProperties& properties,
+                                             const Domain& domain, std::size_t n);
+
+/// The nonzeros of L that CHOLMOD's analysis of `gram` (its fill-reducing ordering, as the
+/// sparse path orders it) finds, without factorising.
+double analysed_factor_nonzeros(const Eigen::SparseMatrix<double>& gram);
+
 /// Whether measure_approximation takes the sparse path for `kernel` at n centres, computing
 /// `work` (ApproximationWork bits): never for GramAlgebra::dense; always for `sparse`, which
 /// throws std::invalid_argument naming the reason when the kernel has global support or `work`

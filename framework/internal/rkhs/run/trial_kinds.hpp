@@ -12,6 +12,7 @@
 #include "rkhs/approx/target.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/run/run.hpp"
+#include "rkhs/run/trial_cost.hpp"
 #include "rkhs/study/study.hpp"
 
 namespace rkhs {
@@ -37,6 +38,9 @@ struct TrialKind {
   /// the kind counts shared work once and adds the key.
   double (*cost)(const StudyDefinition& study, const TrialSpec& trial,
                  std::set<std::string>* shared);
+  /// The matrices `trial` holds at its peak (rkhs/run/trial_cost.hpp), predicted before
+  /// anything is built. Never throws for a trial of study.trials().
+  TrialFootprint (*footprint)(const StudyDefinition& study, const TrialSpec& trial);
 };
 
 /// The entry of `kind`.
