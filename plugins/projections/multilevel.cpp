@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -46,6 +48,12 @@ class Multilevel final : public Projection {
     kernel_with_radius(kernel, settings_.nu);  // a compactly supported kernel with a radius
   }
 
+  std::optional<ProjectionFootprint> footprint(const AnyKernel& kernel, std::size_t n,
+                                               std::size_t evaluation_points) const override {
+    check(kernel, n);
+    return predict_multilevel(kernel, settings_, level_of(kernel, n), evaluation_points);
+  }
+
   void build(const ProjectionRequest&, ProjectionOperator&) const override {
     throw std::invalid_argument("projection 'multilevel' is matrix-free: it has no operator");
   }
@@ -67,12 +75,28 @@ class Multilevel final : public Projection {
     }
     out.metrics[M::fill_distance] = 0.5 * std::sqrt(diagonal);
     out.metrics[M::separation_distance] = 0.5 * smallest;
-    out.metrics[M::l2_error] = finest.l2_error;
     out.metrics[M::sup_error] = finest.sup_error;
     const double previous = result.levels.size() > 1
                                 ? result.levels[result.levels.size() - 2].l2_error
                                 : result.target_l2;
-    out.metrics[M::level_reduction_factor] = finest.l2_error / previous;
+    // Round-off of a level's L2 error, at the scale of the target: n_l eps ||f||, the n eps
+    // of a solve with a Gram matrix whose entries are at most 1 (a Wendland function); the
+    // reduction factor's floor propagated from the two errors' to first order (e_{-1} = f
+    // has none).
+    const auto error_floor = [&](const MultilevelLevel& l) {
+      return static_cast<double>(l.centres) * std::numeric_limits<double>::epsilon() *
+             result.target_l2;
+    };
+    const double factor = finest.l2_error / previous;
+    out.metrics[M::l2_error] = finest.l2_error;
+    out.floors[M::l2_error] = error_floor(finest);
+    if (finest.l2_error <= out.floors[M::l2_error]) out.add_flag("l2_error_at_floor");
+    out.metrics[M::level_reduction_factor] = factor;
+    out.floors[M::level_reduction_factor] =
+        factor *
+        (error_floor(finest) / finest.l2_error +
+         (result.levels.size() > 1 ? error_floor(result.levels[result.levels.size() - 2]) / previous
+                                   : 0.0));
     out.metrics[M::level_condition_number] = finest.lambda_max / finest.lambda_min;
     out.metrics[M::level_nonzeros] = static_cast<double>(finest.nonzeros);
     out.set_solve_method(fmt::format(

@@ -1,7 +1,6 @@
 // Multilevel interpolation with a compactly supported kernel (rkhs/approx/multilevel.hpp).
 #include "rkhs/approx/multilevel.hpp"
 
-#include <dlfcn.h>
 #include <fmt/format.h>
 
 #include <Eigen/CholmodSupport>
@@ -9,7 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <mutex>
 #include <stdexcept>
 
 #include "rkhs/approx/lanczos.hpp"
@@ -21,17 +19,6 @@ namespace rkhs {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-
-// The BLAS behind CHOLMOD on one thread when it is OpenBLAS, as on the sparse path
-// (sparse_approximation.cpp): a trial's values must not depend on the threads a BLAS starts.
-void single_threaded_blas() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    using SetThreads = void (*)(int);
-    if (auto* set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-      set(1);
-  });
-}
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -132,6 +119,39 @@ std::unique_ptr<AnyKernel> kernel_with_radius(const AnyKernel& kernel, double ra
       ParameterSet::resolve(entry->info.parameters, given,
                             entry->info.user_parameters ? &*entry->info.user_parameters : nullptr),
       kernel.domain());
+}
+
+ProjectionFootprint predict_multilevel(const AnyKernel& kernel, const MultilevelSettings& settings,
+                                       int finest_level, std::size_t evaluation_points) {
+  const Domain& domain = kernel.domain();
+  const auto d = static_cast<double>(domain.dimension);
+  const auto points = static_cast<double>(evaluation_points);
+  const auto fine = static_cast<double>(multilevel_centre_count(domain, settings.m0, finest_level));
+  ProjectionFootprint out;
+  double largest_level = 0;  // bytes
+  for (int j = 0; j <= finest_level; ++j) {
+    const std::size_t n = multilevel_centre_count(domain, settings.m0, j);
+    const auto level_kernel =
+        kernel_with_radius(kernel, settings.nu * largest_spacing(domain, settings.m0, j));
+    const auto factor = predict_sparse_factor(level_kernel->properties(), domain, n);
+    // Bytes as sparse_trial_megabytes (trial_cost.cpp) counts them: 12 a stored nonzero of G
+    // and 44 of its assembly, 6 of CHOLMOD's copy of its upper triangle, 10 a nonzero of the
+    // supernodal factor; a chunk's cross matrix holds (nonzeros of G / n) entries a point, 56
+    // bytes each with its assembly, on two threads.
+    const double per_point = factor.gram_nonzeros / static_cast<double>(n);
+    const double chunks = 2.0 * 56.0 * per_point *
+                          std::min(static_cast<double>(points_per_chunk), std::max(points, fine));
+    largest_level = std::max(largest_level, (12.0 + 44.0 + 6.0) * factor.gram_nonzeros +
+                                                10.0 * factor.factor_nonzeros + chunks);
+    out.gram_nonzeros += factor.gram_nonzeros;
+    out.factor_nonzeros += factor.factor_nonzeros;
+    // The factorisation, one solve, and the residual updates on X_J and the evaluation points.
+    out.flops +=
+        factor.factor_flops + 4.0 * factor.factor_nonzeros + 2.0 * per_point * (fine + points);
+  }
+  const double vectors = 8.0 * ((d + 1.0) * fine + (d + 1.0) * points);
+  out.megabytes = (largest_level + vectors) / 1048576.0 + 64.0;
+  return out;
 }
 
 MultilevelResult multilevel_interpolation(const AnyKernel& kernel, const TargetFunction& target,

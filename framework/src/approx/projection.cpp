@@ -33,7 +33,9 @@ void ProjectionOperator::set_solve_method(std::string_view method) {
   solve_method_.assign(method.begin(), method.end());
 }
 
-void ProjectionMeasurement::add_flag(std::string_view flag) { flags_.emplace_back(flag); }
+void ProjectionMeasurement::add_flag(std::string_view flag) {
+  flags_.emplace_back(flag);
+}
 
 void ProjectionMeasurement::set_solve_method(std::string_view method) {
   solve_method_.assign(method.begin(), method.end());
@@ -42,6 +44,11 @@ void ProjectionMeasurement::set_solve_method(std::string_view method) {
 void Projection::measure(const ProjectionTrial&, ProjectionMeasurement&) const {
   throw std::logic_error(
       "Projection::measure called for a projection that is not matrix-free (it has an operator)");
+}
+
+std::optional<ProjectionFootprint> Projection::footprint(const AnyKernel&, std::size_t,
+                                                         std::size_t) const {
+  return std::nullopt;
 }
 
 std::string describe_projection(const ProjectionProperties& properties) {

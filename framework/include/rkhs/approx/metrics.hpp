@@ -290,9 +290,9 @@ struct MetricTable<ApproximationMetric> {
       { {"projection_operator_norm", "norm of Π on H", F::round_off, "1",
        "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
        work_operator_norm}, M::projection_operator_norm},
-      { {"level_reduction_factor", "error reduction of the level", F::exact, "1",
+      { {"level_reduction_factor", "error reduction of the level", F::propagated, "1",
        "multilevel: ||e_j|| / ||e_{j-1}|| in L2(Omega) on the grid, e_j = f - s_0 - ... - s_j, "
-       "e_{-1} = f; NaN for other projections", true, "", true,
+       "e_{-1} = f; its floor from the two errors' floors; NaN for other projections", true, "", true,
        work_interpolant | work_residual, true}, M::level_reduction_factor},
       { {"level_condition_number", "condition number of the level's Gram matrix", F::exact, "1",
        "multilevel: lambda_max / lambda_min of level j's sparse Gram matrix (Lanczos estimates); "

@@ -169,6 +169,14 @@ class ProjectionOperator {
   std::string solve_method_;
 };
 
+/// A matrix-free projection's trial predicted before anything is built (Projection::footprint):
+/// its peak memory and what it factorises, summed over everything it factorises.
+struct ProjectionFootprint {
+  double megabytes = 0;  ///< peak MiB of its matrices and vectors
+  double gram_nonzeros = 0, factor_nonzeros = 0;
+  double flops = 0;  ///< of its factorisations and evaluations, for the scheduler's order
+};
+
 /// A projection family Pi_j (see the file comment).
 class Projection {
  public:
@@ -187,6 +195,12 @@ class Projection {
   /// check() accepted. Throws std::invalid_argument as build() does. The default throws
   /// std::logic_error: a projection with an operator is measured from it.
   virtual void measure(const ProjectionTrial& trial, ProjectionMeasurement& out) const;
+  /// A matrix-free projection's prediction of a trial with `kernel` and `n` on
+  /// `evaluation_points` points, which run and validate compare with limits.matrix_megabytes.
+  /// Empty (the default): the trial's matrices are estimated dense, n x n. Throws
+  /// std::invalid_argument as check() does.
+  virtual std::optional<ProjectionFootprint> footprint(const AnyKernel& kernel, std::size_t n,
+                                                       std::size_t evaluation_points) const;
 };
 
 using ProjectionRegistry = Registry<Projection>;

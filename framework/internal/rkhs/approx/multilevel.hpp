@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/kernel/kernel.hpp"
 
@@ -63,6 +64,16 @@ int multilevel_level_of(const Domain& domain, std::int64_t m0, std::size_t n);
 /// `kernel` with its parameter `radius` set to `radius` (through the kernel registry).
 /// std::invalid_argument when the kernel has no parameter `radius` or global support.
 std::unique_ptr<AnyKernel> kernel_with_radius(const AnyKernel& kernel, double radius);
+
+/// The peak memory and work of multilevel_interpolation up to `finest_level` on
+/// `evaluation_points` points, predicted before anything is built: per level j the sparse
+/// path's prediction (predict_sparse_factor, sparse_gram.hpp) for its centres with the radius
+/// nu h_j; the nonzeros and flops summed over the levels, the memory that of the largest level
+/// (a level's matrices are freed before the next is assembled: its Gram matrix with its assembly,
+/// CHOLMOD's copy and factor, the cross matrices of two chunks of points being updated) plus the
+/// vectors kept throughout (X_J, the residuals on X_J and on the evaluation points, the points).
+ProjectionFootprint predict_multilevel(const AnyKernel& kernel, const MultilevelSettings& settings,
+                                       int finest_level, std::size_t evaluation_points);
 
 /// Levels 0 .. finest_level of the multilevel interpolant of `target` (the kernel's other
 /// parameters kept, its radius replaced per level), measured on `points`. With `spectra`, the
