@@ -13,6 +13,7 @@
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/approx/target.hpp"
 #include "rkhs/core/concurrency.hpp"
+#include "rkhs/core/work_counters.hpp"
 #include "rkhs/kernel/kernel.hpp"
 
 using namespace rkhs;
@@ -52,13 +53,10 @@ std::vector<double> centres(const std::string& name, std::size_t n, const Domain
   return entry->factory(ParameterSet::resolve(entry->info.parameters, {}))->place(n, domain, 0);
 }
 
-// Every metric but the four only the dense path computes.
+// Every metric but the one only the dense path computes.
 MetricSelection sparse_metrics() {
   MetricSelection selection(MetricValues<ApproximationMetric>::count, true);
-  for (const auto m :
-       {ApproximationMetric::gram_condition_number, ApproximationMetric::gram_min_eigenvalue,
-        ApproximationMetric::gram_max_eigenvalue, ApproximationMetric::projection_operator_norm})
-    selection[static_cast<std::size_t>(m)] = false;
+  selection[static_cast<std::size_t>(ApproximationMetric::projection_operator_norm)] = false;
   return selection;
 }
 
@@ -164,14 +162,14 @@ TEST_CASE("choosing the sparse path", "[approximation][sparse]") {
   CHECK_FALSE(choose_sparse(*compact, 1000, options, some));  // dense by default
   options.algebra = GramAlgebra::automatic;
   CHECK(choose_sparse(*compact, 1000, options, some));
-  CHECK_FALSE(choose_sparse(*compact, 1000, options, all));  // eigenvalues: dense
+  CHECK_FALSE(choose_sparse(*compact, 1000, options, all));  // the operator norm: dense
   CHECK_FALSE(choose_sparse(*everywhere, 1000, options, some));
   CHECK(predicted_gram_nonzeros(compact->properties(), square, 1000) ==
         Approx(1000 + 1000.0 * 999 * std::numbers::pi * 0.04));
   options.algebra = GramAlgebra::sparse;
   CHECK(choose_sparse(*everywhere, 1000, options, some));  // forced
   CHECK_THROWS_WITH(choose_sparse(*compact, 1000, options, all),
-                    Catch::Contains("does not compute gram_condition_number"));
+                    Catch::Contains("does not compute projection_operator_norm"));
   const auto* gaussian = kernel_registry().find("gaussian");
   REQUIRE(gaussian);
   const auto global =
@@ -205,6 +203,36 @@ TEST_CASE("predicted factor nonzeros: within a factor 2 of CHOLMOD's analysis",
     CHECK(predicted.gram_nonzeros > 0.5 * static_cast<double>(gram.nonZeros()));
     CHECK(predicted.gram_nonzeros < 2.0 * static_cast<double>(gram.nonZeros()));
   }
+}
+
+TEST_CASE("the sparse path counts its nonzeros and fill and solves",
+          "[approximation][sparse][work]") {
+  const Domain square = box(2);
+  const auto kernel = wendland(1, 0.2, square);
+  const auto target = expression("exp(x1) * cos(x2) + x1 * x2", square);
+  const auto x = centres("halton", 400, square);
+  const std::size_t points = 4096;
+  auto counted = [&](GramAlgebra algebra) {
+    WorkCounters counters;
+    const WorkCounterScope scope(&counters);
+    measure(*kernel, *target, x, points, algebra, 2);
+    return snapshot(counters);
+  };
+  const auto sparse = counted(GramAlgebra::sparse);
+  const auto gram = sparse_gram(*kernel, x);
+  const auto cross = sparse_cross_columns(*kernel, square.uniform_points(points), x);
+  CHECK(sparse.factorisations == 1);
+  CHECK(sparse.sparse_nonzeros == static_cast<std::uint64_t>(gram.nonZeros() + cross.nonZeros()));
+  CHECK(sparse.factor_nonzeros == static_cast<std::uint64_t>(analysed_factor_nonzeros(gram)));
+  // A solve with L and one with L^T at every point (the power function and its floor), two
+  // for the coefficients, two for each Lanczos step on G^-1.
+  CHECK(sparse.sparse_solve_columns >= 2 * points + 2);
+  CHECK(sparse.sparse_solve_columns <= 2 * points + 2 + 2 * 500 * 2);
+  const auto dense = counted(GramAlgebra::dense);
+  CHECK(dense.sparse_nonzeros == 0);
+  CHECK(dense.factor_nonzeros == 0);
+  CHECK(dense.sparse_solve_columns == 0);
+  CHECK(dense.factorisations >= 1);
 }
 
 TEST_CASE("sparse and dense paths agree at n = 4096 in 2-D (slower)",

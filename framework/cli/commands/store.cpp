@@ -192,15 +192,7 @@ std::string json_reals(const std::vector<double>& values) {
 // allocation counts null when the build that stored it did not count them.
 std::string work_json(const std::optional<WorkCounts>& work) {
   if (!work) return "null";
-  const auto tracked = [&](std::uint64_t value) {
-    return work->allocations_tracked ? std::to_string(value) : std::string("null");
-  };
-  return fmt::format(
-      "{{\"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
-      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
-      "\"peak_bytes\": {}}}",
-      work->kernel_evaluations, work->kernel_derivative_evaluations, work->factorisations,
-      tracked(work->allocations), tracked(work->allocated_bytes), tracked(work->peak_bytes));
+  return "{" + work_counts_json(*work) + "}";
 }
 
 std::string export_json(const std::vector<ResultStore::Entry>& entries) {

@@ -234,6 +234,13 @@ void record_interpolant_metrics(const AnyKernel& kernel, std::span<const double>
   using M = ApproximationMetric;
   const Domain& domain = kernel.domain();
   auto& metrics = out.metrics;
+  if (work & work_spectrum) {
+    metrics[M::gram_condition_number] = spectrum.condition_number;
+    metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
+    metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+    set_spectrum_floors(spectrum, static_cast<double>(n), out.floors);
+  }
+  if (spectrum.singular) out.flags.push_back("gram_singular");
   const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
   const bool cardinal = work & work_cardinal;
   const double largest_solution_norm_squared =
@@ -307,13 +314,6 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
 
   const auto& spectrum = solver.spectrum();
   out.solve_method = solver.method();
-  if (work & work_spectrum) {
-    metrics[M::gram_condition_number] = spectrum.condition_number;
-    metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
-    metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
-    set_spectrum_floors(spectrum, static_cast<double>(n), out.floors);
-  }
-  if (spectrum.singular) out.flags.push_back("gram_singular");
 
   // The interpolant Pi_n f = sum_i alpha_i k(c_i, .) with G alpha = f(X).
   Eigen::VectorXd alpha, at_points;

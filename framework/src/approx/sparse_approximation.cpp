@@ -16,12 +16,17 @@
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
+#include "rkhs/core/work_counters.hpp"
 
 namespace rkhs {
 
 namespace {
 constexpr double eps = std::numeric_limits<double>::epsilon();
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+// The extreme eigenvalues a study reports: Lanczos until an eigenvalue lies within this
+// relative distance of the Ritz value, in at most this many steps.
+constexpr double spectrum_tolerance = 1e-11;
+constexpr Eigen::Index spectrum_steps = 500;
 
 // A uniform grid of cells of side at least the support radius on every axis, so that two points
 // closer than the radius lie in the same or in neighbouring cells (across the seam on a
@@ -174,6 +179,14 @@ void solve_in_place(int system, cholmod_factor* factor, Eigen::MatrixXd& x,
   if (!result) throw std::runtime_error("CHOLMOD's solve failed (out of memory?)");
   std::copy_n(static_cast<const double*>(result->x), x.size(), x.data());
   cholmod_free_dense(&result, &common);
+  if (system != CHOLMOD_P) count_sparse_work(0, 0, static_cast<std::uint64_t>(x.cols()));
+}
+
+// x with G x = b through the factor (a solve with L and one with L^T).
+template <class Factor>
+Eigen::VectorXd solve_with(const Factor& cholesky, const Eigen::VectorXd& b) {
+  count_sparse_work(0, 0, 2);
+  return cholesky.solve(b);
 }
 
 }  // namespace
@@ -223,6 +236,7 @@ Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const
   }
   Eigen::SparseMatrix<double> gram(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   gram.setFromTriplets(entries.begin(), entries.end());
+  count_sparse_work(static_cast<std::uint64_t>(gram.nonZeros()), 0, 0);
   return gram;
 }
 
@@ -265,6 +279,7 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
   }
   Eigen::SparseMatrix<double> cross(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
   cross.setFromTriplets(entries.begin(), entries.end());
+  count_sparse_work(static_cast<std::uint64_t>(cross.nonZeros()), 0, 0);
   return cross;
 }
 
@@ -279,15 +294,14 @@ bool choose_sparse(const AnyKernel& kernel, std::size_t n, const SolverOptions& 
                    unsigned work) {
   if (options.algebra == GramAlgebra::dense) return false;
   const bool compact = kernel.properties().support_radius > 0;
-  const bool dense_only = work & (work_spectrum | work_operator_norm);
+  const bool dense_only = work & work_operator_norm;
   if (options.algebra == GramAlgebra::sparse) {
     support_radius(kernel);  // throws for global support
     if (dense_only)
       throw std::invalid_argument(
-          "[linear_algebra] solver = \"sparse\" does not compute gram_condition_number, "
-          "gram_min_eigenvalue, gram_max_eigenvalue or projection_operator_norm (an exact "
-          "eigenvalue solve and the dense interpolation operator): leave them out of "
-          "study.metrics, or take solver = \"auto\" or \"dense\"");
+          "[linear_algebra] solver = \"sparse\" does not compute projection_operator_norm "
+          "(the dense interpolation operator): leave it out of study.metrics, or take solver = "
+          "\"auto\" or \"dense\"");
     return true;
   }
   if (!compact || dense_only) return false;
@@ -316,20 +330,34 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   const int ordering = analysed.method[analysed.selected].ordering;
   const double factor_nonzeros = analysed.lnz;
   cholesky.factorize(gram);
+  count_factorisation();
+  count_sparse_work(0, static_cast<std::uint64_t>(factor_nonzeros), 0);
   check_cancelled();
   if (cholesky.info() != Eigen::Success) return std::nullopt;  // not positive definite
 
-  // The extreme eigenvalues as GramSolver's estimate mode finds them.
+  // The extreme eigenvalues: as GramSolver's estimate mode finds them, or resolved to
+  // spectrum_tolerance when the study reports them (Lanczos on G and on G^-1 through the factor).
   GramSpectrum spectrum;
   {
-    const double lambda_max = lanczos_largest(
-        [&](const auto& in, Eigen::VectorXd& out) { out.noalias() = gram * in; }, n, 1e-13, 80);
-    const double inverse_max = lanczos_largest(
-        [&](const auto& in, Eigen::VectorXd& out) { out = cholesky.solve(Eigen::VectorXd(in)); }, n,
-        1e-4, 40);
+    const auto by_gram = [&](const auto& in, Eigen::VectorXd& out) { out.noalias() = gram * in; };
+    const auto by_inverse = [&](const auto& in, Eigen::VectorXd& out) {
+      out = solve_with(cholesky, Eigen::VectorXd(in));
+    };
+    double lambda_max = 0, inverse_max = 0;
+    if (work & work_spectrum) {
+      const auto largest = lanczos_largest_resolved(by_gram, n, spectrum_tolerance, spectrum_steps);
+      const auto inverse =
+          lanczos_largest_resolved(by_inverse, n, spectrum_tolerance, spectrum_steps);
+      if (!largest || !inverse) return std::nullopt;  // not resolved: the dense path's exact solve
+      lambda_max = *largest;
+      inverse_max = *inverse;
+    } else {
+      lambda_max = lanczos_largest(by_gram, n, 1e-13, 80);
+      inverse_max = lanczos_largest(by_inverse, n, 1e-4, 40);
+    }
     const double lambda_min = 1.0 / inverse_max;
     if (!(lambda_min > 100.0 * static_cast<double>(n) * eps * lambda_max)) return std::nullopt;
-    spectrum = {lambda_min, lambda_max, lambda_max / lambda_min, false, true};
+    spectrum = {lambda_min, lambda_max, lambda_max / lambda_min, false, !(work & work_spectrum)};
   }
 
   ApproximationMeasurement out;
@@ -349,7 +377,7 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   if (work & (work_interpolant | work_residual)) {
     Eigen::VectorXd at_centres(n);
     target.evaluate(centres, std::span<double>(at_centres.data(), static_cast<std::size_t>(n)));
-    alpha = cholesky.solve(at_centres);
+    alpha = solve_with(cholesky, at_centres);
     target_norm_at_centres = at_centres.norm();
   }
   if (work & work_residual) {

@@ -20,6 +20,9 @@ WorkCounts snapshot(const WorkCounters& counters) noexcept {
   out.kernel_evaluations = counters.kernel_evaluations.load(relaxed);
   out.kernel_derivative_evaluations = counters.kernel_derivative_evaluations.load(relaxed);
   out.factorisations = counters.factorisations.load(relaxed);
+  out.sparse_nonzeros = counters.sparse_nonzeros.load(relaxed);
+  out.factor_nonzeros = counters.factor_nonzeros.load(relaxed);
+  out.sparse_solve_columns = counters.sparse_solve_columns.load(relaxed);
   out.allocations_tracked = allocation_tracking_enabled();
   if (out.allocations_tracked) {
     out.allocations = counters.allocations.load(relaxed);
@@ -47,6 +50,15 @@ void count_kernel_derivative_evaluations(std::uint64_t count) noexcept {
 
 void count_factorisation() noexcept {
   if (auto* counters = current) counters->factorisations.fetch_add(1, relaxed);
+}
+
+void count_sparse_work(std::uint64_t nonzeros, std::uint64_t factor_nonzeros,
+                       std::uint64_t solve_columns) noexcept {
+  auto* counters = current;
+  if (!counters) return;
+  counters->sparse_nonzeros.fetch_add(nonzeros, relaxed);
+  counters->factor_nonzeros.fetch_add(factor_nonzeros, relaxed);
+  counters->sparse_solve_columns.fetch_add(solve_columns, relaxed);
 }
 
 void count_heap_block(std::uint64_t bytes, bool allocated) noexcept {

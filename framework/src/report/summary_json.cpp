@@ -99,17 +99,9 @@ std::string expectations_json(const RunRecord& run) {
 // includes the code version, docs/results.md).
 std::string trial_work_json(const StudyDefinition& study, const TrialResult& result) {
   if (!result.work) return "null";
-  const auto& w = *result.work;
-  const auto tracked = [&](std::uint64_t value) {
-    return w.allocations_tracked ? std::to_string(value) : std::string("null");
-  };
-  std::string out = fmt::format(
-      "{{\"source\": {}, \"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
-      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
-      "\"peak_bytes\": {}",
-      json_string(result.reused ? "store" : "run"), w.kernel_evaluations,
-      w.kernel_derivative_evaluations, w.factorisations, tracked(w.allocations),
-      tracked(w.allocated_bytes), tracked(w.peak_bytes));
+  std::string out =
+      fmt::format("{{\"source\": {}, {}", json_string(result.reused ? "store" : "run"),
+                  work_counts_json(*result.work));
   // The counts of work the kind's metrics hold already (an adaptive trial's steps): reported
   // with the work counters, not counted twice.
   for (const auto metric : study.kind_descriptor().outputs().work_metrics)
@@ -139,12 +131,10 @@ std::string study_work_json(const StudyDefinition& study, const std::vector<Tria
     if (!r.work) continue;
     ++counted;
     from_store += r.reused ? 1 : 0;
-    total.kernel_evaluations += r.work->kernel_evaluations;
-    total.kernel_derivative_evaluations += r.work->kernel_derivative_evaluations;
-    total.factorisations += r.work->factorisations;
+    // Sums of every counter but the peak, which is the largest.
+    for (const auto& field : work_count_fields)
+      if (field.member != &WorkCounts::peak_bytes) total.*field.member += (*r.work).*field.member;
     total.allocations_tracked = total.allocations_tracked && r.work->allocations_tracked;
-    total.allocations += r.work->allocations;
-    total.allocated_bytes += r.work->allocated_bytes;
     total.peak_bytes = std::max(total.peak_bytes, r.work->peak_bytes);
     for (std::size_t i = 0; i < work_metrics.size(); ++i) {
       const double value = r.metrics[study.metric_index(work_metrics[i])];
@@ -152,23 +142,25 @@ std::string study_work_json(const StudyDefinition& study, const std::vector<Tria
     }
   }
   total.allocations_tracked = total.allocations_tracked && counted > 0;
-  const auto tracked = [&](std::uint64_t value) {
-    return total.allocations_tracked ? std::to_string(value) : std::string("null");
-  };
   std::string out = fmt::format(
-      "{{\"trials_counted\": {}, \"trials_from_store\": {}, \"trials_without_counters\": {}, "
-      "\"kernel_evaluations\": {}, \"kernel_derivative_evaluations\": {}, "
-      "\"factorisations\": {}, \"allocations\": {}, \"allocated_bytes\": {}, "
-      "\"peak_bytes\": {}",
-      counted, from_store, results.size() - counted, total.kernel_evaluations,
-      total.kernel_derivative_evaluations, total.factorisations, tracked(total.allocations),
-      tracked(total.allocated_bytes), tracked(total.peak_bytes));
+      "{{\"trials_counted\": {}, \"trials_from_store\": {}, \"trials_without_counters\": {}, {}",
+      counted, from_store, results.size() - counted, work_counts_json(total));
   for (std::size_t i = 0; i < work_metrics.size(); ++i)
     out += fmt::format(", {}: {}", json_string(work_metrics[i]), json_number(sums[i]));
   return out + "}";
 }
 
 }  // namespace
+
+std::string work_counts_json(const WorkCounts& work) {
+  std::string out;
+  for (const auto& field : work_count_fields)
+    out += fmt::format("{}\"{}\": {}", out.empty() ? "" : ", ", field.name,
+                       field.allocation && !work.allocations_tracked
+                           ? std::string("null")
+                           : std::to_string(work.*field.member));
+  return out;
+}
 
 std::string summary_json(const RunRecord& run) {
   const auto& study = run.study;

@@ -53,29 +53,13 @@ std::vector<double> split_reals(std::string_view text) {
 }
 
 // One line per field: strings have '\\' and line breaks escaped.
-// The fields of a `work` line, in the order written: name and member. The allocation fields
-// come all together, only when allocations were tracked.
-using WorkField = std::pair<std::string_view, std::uint64_t WorkCounts::*>;
-constexpr std::array<WorkField, 3> work_fields = {{
-    {"kernel_evaluations", &WorkCounts::kernel_evaluations},
-    {"kernel_derivative_evaluations", &WorkCounts::kernel_derivative_evaluations},
-    {"factorisations", &WorkCounts::factorisations},
-}};
-constexpr std::array<WorkField, 3> allocation_fields = {{
-    {"allocations", &WorkCounts::allocations},
-    {"allocated_bytes", &WorkCounts::allocated_bytes},
-    {"peak_bytes", &WorkCounts::peak_bytes},
-}};
-
-// "kernel_evaluations=12 kernel_derivative_evaluations=0 factorisations=1 [allocations=...]".
+// "kernel_evaluations=12 kernel_derivative_evaluations=0 factorisations=1 ... [allocations=...]":
+// the fields of work_count_fields in order, the allocation fields only when tracked.
 std::string work_line(const WorkCounts& work) {
   std::string out;
-  auto append = [&](const WorkField& field) {
-    out += fmt::format("{}{}={}", out.empty() ? "" : " ", field.first, work.*field.second);
-  };
-  for (const auto& field : work_fields) append(field);
-  if (work.allocations_tracked)
-    for (const auto& field : allocation_fields) append(field);
+  for (const auto& field : work_count_fields)
+    if (!field.allocation || work.allocations_tracked)
+      out += fmt::format("{}{}={}", out.empty() ? "" : " ", field.name, work.*field.member);
   return out;
 }
 
@@ -94,17 +78,15 @@ WorkCounts parse_work_line(std::string_view text) {
       throw std::invalid_argument("stored work counter '" + item.substr(0, equals) + "' twice");
   }
   WorkCounts work;
-  auto take = [&](const WorkField& field) {
-    const auto found = values.find(field.first);
+  work.allocations_tracked = values.contains("allocations");
+  for (const auto& field : work_count_fields) {
+    if (field.allocation && !work.allocations_tracked) continue;
+    const auto found = values.find(field.name);
     if (found == values.end())
-      throw std::invalid_argument("stored work counters lack " + std::string(field.first));
-    work.*field.second = found->second;
+      throw std::invalid_argument("stored work counters lack " + std::string(field.name));
+    work.*field.member = found->second;
     values.erase(found);
-  };
-  for (const auto& field : work_fields) take(field);
-  work.allocations_tracked = values.contains(allocation_fields.front().first);
-  if (work.allocations_tracked)
-    for (const auto& field : allocation_fields) take(field);
+  }
   if (!values.empty())
     throw std::invalid_argument("unknown stored work counter '" + values.begin()->first + "'");
   return work;

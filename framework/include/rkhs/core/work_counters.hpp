@@ -23,7 +23,12 @@
 //   - kernel_derivative_evaluations: derivatives of sections asked for the same way: a
 //     KernelBasis derivative (plain or mapped) counts size(), a PointSections gradient n x d;
 //   - factorisations: factorisations of Gram matrices (count_factorisation, called by the Gram
-//     solver for each Cholesky factorisation and each symmetric eigenvalue solve);
+//     solver for each Cholesky factorisation and each symmetric eigenvalue solve, and by the
+//     sparse path for each sparse Cholesky factorisation);
+//   - sparse_nonzeros, factor_nonzeros, sparse_solve_columns: the sparse path's work
+//     (count_sparse_work): the stored nonzeros of the sparse Gram and cross matrices it
+//     assembled, the nonzeros of the Cholesky factors it computed, and the right-hand sides it
+//     solved with a sparse triangular factor (a solve with L and one with L^T count two);
 //   - allocations, allocated_bytes, peak_bytes: heap blocks allocated by the trial's threads
 //     while its counters are current, their bytes, and the peak over the trial of the bytes they
 //     allocated minus the bytes they freed (starting from 0 when the scope opens). Counted only
@@ -35,8 +40,10 @@
 //     exactly reproducible; when parts of a trial run on several threads the totals still are,
 //     the peak depends on how the parts interleave.
 
+#include <array>
 #include <atomic>
 #include <cstdint>
+#include <string_view>
 
 namespace rkhs {
 
@@ -45,6 +52,9 @@ struct WorkCounters {
   std::atomic<std::uint64_t> kernel_evaluations{0};
   std::atomic<std::uint64_t> kernel_derivative_evaluations{0};
   std::atomic<std::uint64_t> factorisations{0};
+  std::atomic<std::uint64_t> sparse_nonzeros{0};
+  std::atomic<std::uint64_t> factor_nonzeros{0};
+  std::atomic<std::uint64_t> sparse_solve_columns{0};
   std::atomic<std::uint64_t> allocations{0};
   std::atomic<std::uint64_t> allocated_bytes{0};
   /// Bytes allocated minus bytes freed while these counters were current (may go below 0 when
@@ -61,6 +71,9 @@ struct WorkCounts {
   std::uint64_t kernel_evaluations = 0;
   std::uint64_t kernel_derivative_evaluations = 0;
   std::uint64_t factorisations = 0;
+  std::uint64_t sparse_nonzeros = 0;
+  std::uint64_t factor_nonzeros = 0;
+  std::uint64_t sparse_solve_columns = 0;
   bool allocations_tracked = false;
   std::uint64_t allocations = 0;
   std::uint64_t allocated_bytes = 0;
@@ -68,6 +81,26 @@ struct WorkCounts {
 
   bool operator==(const WorkCounts&) const = default;
 };
+
+/// A counter of WorkCounts by name: the one list that the stored records, summary.json and
+/// `rkhs-study store show` write and read, in their order. The allocation counters come last
+/// and are written only when allocations_tracked.
+struct WorkCountField {
+  std::string_view name;
+  std::uint64_t WorkCounts::*member;
+  bool allocation = false;
+};
+inline constexpr std::array<WorkCountField, 9> work_count_fields = {{
+    {"kernel_evaluations", &WorkCounts::kernel_evaluations},
+    {"kernel_derivative_evaluations", &WorkCounts::kernel_derivative_evaluations},
+    {"factorisations", &WorkCounts::factorisations},
+    {"sparse_nonzeros", &WorkCounts::sparse_nonzeros},
+    {"factor_nonzeros", &WorkCounts::factor_nonzeros},
+    {"sparse_solve_columns", &WorkCounts::sparse_solve_columns},
+    {"allocations", &WorkCounts::allocations, true},
+    {"allocated_bytes", &WorkCounts::allocated_bytes, true},
+    {"peak_bytes", &WorkCounts::peak_bytes, true},
+}};
 
 /// The counters' values now; allocations_tracked is allocation_tracking_enabled().
 WorkCounts snapshot(const WorkCounters& counters) noexcept;
@@ -95,6 +128,10 @@ void count_kernel_evaluations(std::uint64_t count) noexcept;
 void count_kernel_derivative_evaluations(std::uint64_t count) noexcept;
 /// Counts one factorisation of a Gram matrix in the current counters.
 void count_factorisation() noexcept;
+/// Adds the sparse path's work to the current counters: stored nonzeros of assembled sparse
+/// matrices, nonzeros of computed Cholesky factors, right-hand sides of sparse triangular solves.
+void count_sparse_work(std::uint64_t nonzeros, std::uint64_t factor_nonzeros,
+                       std::uint64_t solve_columns) noexcept;
 
 /// Records a heap block of `bytes` allocated (`allocated`) or freed on the calling thread into
 /// the current counters. Called by the allocation interposer (core/allocation_tracking.cpp)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 #include "rkhs/core/cancellation.hpp"
 
@@ -27,18 +28,26 @@ inline Eigen::VectorXd lanczos_start(Eigen::Index n) {
   return v.normalized();
 }
 
-// The largest eigenvalue of the symmetric positive semi-definite operator `apply` (out = A in)
-// of size n: the largest Ritz value of Lanczos with full reorthogonalisation, from
-// lanczos_start, stopped when it changes by less than `tolerance` relative in one step, at an
-// invariant subspace, or after `max_steps`. A Ritz value never exceeds the eigenvalue. Checks
-// cancellation before every step (rkhs/core/cancellation.hpp).
-template <class Apply>
-double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::Index max_steps) {
+// Lanczos with full reorthogonalisation on the symmetric positive semi-definite operator
+// `apply` (out = A in) of size n, from lanczos_start, for at most `max_steps` steps: after each
+// step, `stop(ritz, previous, residual)` sees the largest Ritz value, the one before, and the
+// residual |beta_k s_k| of its Ritz pair (an eigenvalue lies within it of the Ritz value); the
+// iteration ends when it returns true, at an invariant subspace (residual 0), or after the last
+// step. The residual is computed only `with_residual` (it needs the Ritz vectors; 1 otherwise).
+// Returns the last largest Ritz value and whether `stop` ended it or the subspace was invariant.
+// Checks cancellation before every step (rkhs/core/cancellation.hpp).
+struct LanczosResult {
+  double ritz = 0;
+  bool resolved = false;
+};
+template <class Apply, class Stop>
+LanczosResult lanczos_iterate(Apply&& apply, Eigen::Index n, Eigen::Index max_steps,
+                              bool with_residual, Stop&& stop) {
   const Eigen::Index steps = std::min(n, max_steps);
   Eigen::MatrixXd basis(n, steps);
   basis.col(0) = lanczos_start(n);
   Eigen::VectorXd diagonal(steps), off_diagonal(steps), w(n);
-  double ritz = 0;
+  LanczosResult result;
   for (Eigen::Index k = 0; k < steps; ++k) {
     check_cancelled();  // a step is one product with G or one pair of solves: O(n^2)
     apply(basis.col(k), w);
@@ -47,21 +56,51 @@ double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::I
     for (int pass = 0; pass < 2; ++pass)
       w.noalias() -= basis.leftCols(k + 1) * (basis.leftCols(k + 1).transpose() * w);
     const double beta = w.norm();
-    double next = diagonal[0];
+    double next = diagonal[0], last_component = 1;
     if (k > 0) {
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> tridiagonal;
       const Eigen::VectorXd d = diagonal.head(k + 1), e = off_diagonal.head(k);
-      tridiagonal.computeFromTridiagonal(d, e, Eigen::EigenvaluesOnly);
+      tridiagonal.computeFromTridiagonal(
+          d, e, with_residual ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
       next = tridiagonal.eigenvalues()[k];
+      if (with_residual) last_component = tridiagonal.eigenvectors()(k, k);
     }
-    const bool converged = k > 0 && std::abs(next - ritz) <= tolerance * std::abs(next);
-    ritz = next;
-    if (converged || beta <= std::numeric_limits<double>::epsilon() * std::abs(ritz) ||
-        k + 1 == steps)
+    const double previous = result.ritz;
+    result.ritz = next;
+    const bool invariant = beta <= std::numeric_limits<double>::epsilon() * std::abs(next);
+    if (invariant || (k > 0 && stop(next, previous, beta * std::abs(last_component)))) {
+      result.resolved = true;
       break;
+    }
+    if (k + 1 == steps) break;
     off_diagonal[k] = beta;
     basis.col(k + 1) = w / beta;
   }
-  return ritz;
+  return result;
+}
+
+// The largest eigenvalue of `apply` (lanczos_iterate), stopped when the largest Ritz value
+// changes by less than `tolerance` relative in one step: an estimate (a Ritz value never
+// exceeds the eigenvalue), what GramSolver's estimate mode and the sparse path's floors use.
+template <class Apply>
+double lanczos_largest(Apply&& apply, Eigen::Index n, double tolerance, Eigen::Index max_steps) {
+  return lanczos_iterate(apply, n, max_steps, false,
+                         [&](double ritz, double previous, double) {
+                           return std::abs(ritz - previous) <= tolerance * std::abs(ritz);
+                         })
+      .ritz;
+}
+
+// The largest eigenvalue of `apply` to `tolerance` relative, resolved: stopped when the residual
+// of the largest Ritz pair is at most `tolerance` times its Ritz value, so that an eigenvalue
+// lies that close to it. Empty when `max_steps` pass first.
+template <class Apply>
+std::optional<double> lanczos_largest_resolved(Apply&& apply, Eigen::Index n, double tolerance,
+                                               Eigen::Index max_steps) {
+  const auto result = lanczos_iterate(
+      apply, n, max_steps, true,
+      [&](double ritz, double, double residual) { return residual <= tolerance * std::abs(ritz); });
+  if (!result.resolved) return std::nullopt;
+  return result.ritz;
 }
 }  // namespace rkhs

@@ -14,10 +14,12 @@
 //   projection_norm_H_to_C                 the power function
 // The round-off floors use lambda_max of G from Lanczos on the sparse matrix and lambda_min from
 // Lanczos on G^-1 through the factor, the same estimates as GramSolver's
-// GramSpectrumMode::estimate. Not computed yet: gram_condition_number, gram_min_eigenvalue,
-// gram_max_eigenvalue (an exact symmetric eigenvalue solve) and projection_operator_norm (the
-// dense interpolation operator). A study that forces the sparse path and asks for one of them
-// has its trials fail with that reason (choose_sparse); `auto` takes the dense path for them.
+// GramSpectrumMode::estimate; when the study reports gram_condition_number, gram_min_eigenvalue
+// or gram_max_eigenvalue, the same iterations resolved until an eigenvalue lies within 1e-11
+// relative of each (lanczos_largest_resolved; the dense path's exact solve when they do not get
+// there). Not computed: projection_operator_norm (the dense interpolation operator). A study
+// that forces the sparse path and asks for it has its trials fail with that reason
+// (choose_sparse); `auto` takes the dense path for it.
 //
 // Deterministic: the assembly runs in a fixed order on the calling thread; the blocks of
 // evaluation points are independent (run_parts); CHOLMOD's own OpenMP loops only copy into

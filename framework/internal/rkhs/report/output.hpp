@@ -111,4 +111,9 @@ std::string json_string(std::string_view text);
 /// A real for JSON: shortest round-trip representation, "inf"/"-inf" as strings, null for NaN.
 std::string json_number(double value);
 
+/// The members of a JSON object for `work`'s counters, in work_count_fields order
+/// (`"kernel_evaluations": 12, ..., "peak_bytes": null`; the allocation counters null when
+/// not tracked): what summary.json and `rkhs-study store export` write.
+std::string work_counts_json(const WorkCounts& work);
+
 }  // namespace rkhs
