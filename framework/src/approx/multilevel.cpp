@@ -14,6 +14,7 @@
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
+#include "rkhs/core/work_counters.hpp"
 
 namespace rkhs {
 
@@ -198,6 +199,8 @@ MultilevelResult multilevel_interpolation(const AnyKernel& kernel, const TargetF
           "definite to working precision for CHOLMOD",
           j, level.centres, level.radius));
     level.factor_nonzeros = static_cast<std::size_t>(cholesky.cholmod().lnz);
+    count_factorisation();
+    count_sparse_work(0, static_cast<std::uint64_t>(level.factor_nonzeros), 2);
     const Eigen::VectorXd alpha = cholesky.solve(values);
     check_cancelled();
     if (spectra && j == finest_level) {
@@ -207,6 +210,7 @@ MultilevelResult multilevel_interpolation(const AnyKernel& kernel, const TargetF
           80);
       level.lambda_min = 1.0 / lanczos_largest(
                                    [&](const auto& in, Eigen::VectorXd& result) {
+                                     count_sparse_work(0, 0, 2);
                                      result = cholesky.solve(Eigen::VectorXd(in));
                                    },
                                    n, 1e-4, 40);
