@@ -55,8 +55,12 @@ std::vector<double> centres(const std::string& name, std::size_t n, const Domain
 
 // Every metric but the one only the dense path computes.
 MetricSelection sparse_metrics() {
-  MetricSelection selection(MetricValues<ApproximationMetric>::count, true);
-  selection[static_cast<std::size_t>(ApproximationMetric::projection_operator_norm)] = false;
+  // Every metric of the interpolation projection (not the matrix-free projections' own) but
+  // the operator norm.
+  MetricSelection selection;
+  for (const auto& row : MetricTable<ApproximationMetric>::rows)
+    selection.push_back(!row.matrix_free_only &&
+                        row.id != ApproximationMetric::projection_operator_norm);
   return selection;
 }
 

@@ -186,8 +186,9 @@ TEST_CASE("study file errors name file, line, column, key, what was found and wh
           "s.toml:4:12: study.metrics: unknown metric 'power_function_supp' (known: "
           "fill_distance, separation_distance, gram_condition_number, gram_min_eigenvalue, "
           "gram_max_eigenvalue, power_function_sup, power_function_floor, l2_error, sup_error, "
-          "error_floor, interpolant_native_norm, projection_norm_H_to_C, projection_operator_norm; "
-          "did you mean 'power_function_sup'?)");
+          "error_floor, interpolant_native_norm, projection_norm_H_to_C, projection_operator_norm, "
+          "level_reduction_factor, level_condition_number, level_nonzeros; did you mean "
+          "'power_function_sup'?)");
   }
   SECTION("a target that is not periodic on a closed track") {
     // The plugin's ParameterError names cycles: reported at its value, like the declaration's.

@@ -235,6 +235,29 @@ theory = true
              Catch::Contains("target.tier: expected a tier name"));
 }
 
+TEST_CASE("a tier of some values of n: grid.tier_n", "[verification]") {
+  std::string text = base;
+  const std::string n_line = "n = { from = 10, to = 100, step = 10 }\n";
+  text.replace(text.find(n_line), n_line.size(),
+               n_line + "tier_n = { quick = { from = 10, to = 40, step = 10 }, slow = [100] }\n");
+  const auto study = parse_study(text, "s.toml");
+  CHECK(study_tiers(study) == std::vector<std::string>{"quick", "slow"});
+  const auto quick = restrict_to_tier(study, "quick");
+  CHECK(quick.n_values == std::vector<std::size_t>{10, 20, 30, 40});
+  CHECK(quick.kernels.size() == study.kernels.size());  // no axis is restricted
+  CHECK(quick.trials().size() == 4 * study.kernels.size());
+  CHECK(restrict_to_tier(study, "slow").n_values == std::vector<std::size_t>{100});
+  // A trial's key does not depend on the tier.
+  CHECK(quick.trials().front().key == study.trials().front().key);
+
+  std::string outside = base;
+  outside.replace(outside.find(n_line), n_line.size(), n_line + "tier_n = { quick = [10, 15] }\n");
+  CHECK_THAT(error_of(outside), Catch::Contains("grid.tier_n.quick: n = 15 is not one of grid.n"));
+  std::string not_table = base;
+  not_table.replace(not_table.find(n_line), n_line.size(), n_line + "tier_n = [10]\n");
+  CHECK_THAT(error_of(not_table), Catch::Contains("grid.tier_n: expected a table of tiers"));
+}
+
 TEST_CASE("theory rates from kernel metadata, converted to the fitted abscissa", "[verification]") {
   KernelProperties sobolev;
   sobolev.sobolev_order = 2.0;

@@ -50,7 +50,7 @@ std::string counted(std::size_t count, const char* singular, const char* plural)
 
 std::string computed_metrics_text(const StudyDefinition& study) {
   const auto computed = study.computed_metric_names();
-  const auto total = study.all_metrics().size();
+  const auto total = study.computable_metrics().size();
   if (computed.size() == total)
     return fmt::format("metrics computed: all {} of an {} trial", total,
                        study_kind_name(study.kind()));

@@ -30,7 +30,8 @@ int command_validate(const std::string& study_file) {
   std::cout << "  " << computed_metrics_text(study) << "\n";
   // [limits] matrix_megabytes from the predicted footprints (run fails such trials before it
   // builds anything): the largest names how far beyond the limit the grid goes. Dense trials'
-  // footprints depend on n alone, so a dense study is checked from its n axis.
+  // footprints depend on n alone, so a dense study is checked from its n axis (one with
+  // [[projection]] entries trial by trial: a matrix-free projection predicts its own).
   std::size_t refused = 0, first_too_large = 0, last_too_large = 0;
   TrialFootprint largest;
   std::size_t largest_n = 0;
@@ -44,7 +45,8 @@ int command_validate(const std::string& study_file) {
       largest_n = n;
     }
   };
-  if (study.solver.algebra == GramAlgebra::dense || study.kind() != StudyKind::approximation)
+  if (study.kind() != StudyKind::approximation ||
+      (study.solver.algebra == GramAlgebra::dense && study.projections.empty()))
     for (const std::size_t n : study.n_values)
       check(n, {trial_matrix_megabytes(n, study.evaluation_points)},
             trials / study.n_values.size());

@@ -1,8 +1,11 @@
 #include "rkhs/approx/approximation.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <queue>
@@ -517,6 +520,50 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
     }
   }
   measure_projection_norms(kernel, op, evaluation_points, out, work);
+  keep_selected(selection, out);
+  return out;
+}
+
+std::vector<std::string> unmeasured_metrics(const ProjectionProperties& properties,
+                                            const MetricSelection& selection) {
+  std::vector<std::string> missing;
+  const auto& rows = MetricTable<ApproximationMetric>::rows;
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if ((selection.empty() || (i < selection.size() && selection[i])) &&
+        !(properties.measures & measured_metric_bit(rows[i].id)))
+      missing.emplace_back(rows[i].name);
+  return missing;
+}
+
+ApproximationMeasurement measure_projection_trial(
+    std::string_view name, const ParameterSet& parameters, const ProjectionRequest& request,
+    const TargetFunction& target, std::size_t evaluation_points, const MetricSelection& selection) {
+  const auto* entry = projection_registry().find(name);
+  if (!entry) throw std::invalid_argument(fmt::format("unknown projection '{}'", name));
+  const auto projection = entry->factory(parameters);
+  const auto properties = projection->properties();
+  if (!properties.matrix_free) {
+    const auto op = build_projection(name, parameters, request);
+    check_cancelled();
+    return measure_projection(request.kernel, target, op, evaluation_points, request.solver,
+                              selection);
+  }
+  if (const auto missing = unmeasured_metrics(properties, selection); !missing.empty())
+    throw std::invalid_argument(fmt::format(
+        "projection '{}' is matrix-free and does not compute {}: leave them out of study.metrics",
+        name, fmt::join(missing, ", ")));
+  projection->check(request.kernel, request.n);
+  const auto points = request.kernel.domain().uniform_points(evaluation_points);
+  const ProjectionTrial trial{request.kernel, target,
+                              request.n,      points,
+                              request.solver, work_needed<ApproximationMetric>(selection)};
+  ProjectionMeasurement measured;
+  projection->measure(trial, measured);
+  ApproximationMeasurement out;
+  out.metrics = std::move(measured.metrics);
+  out.floors = std::move(measured.floors);
+  out.flags = measured.flags();
+  out.solve_method = measured.solve_method();
   keep_selected(selection, out);
   return out;
 }

@@ -3,11 +3,14 @@
 #include "rkhs/approx/projection.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string_view>
+#include <vector>
 
 #include "rkhs/core/parameters.hpp"
 
@@ -33,6 +36,24 @@ void ProjectionOperator::set_solve_method(std::string_view method) {
   solve_method_.assign(method.begin(), method.end());
 }
 
+void ProjectionMeasurement::add_flag(std::string_view flag) {
+  flags_.emplace_back(flag);
+}
+
+void ProjectionMeasurement::set_solve_method(std::string_view method) {
+  solve_method_.assign(method.begin(), method.end());
+}
+
+void Projection::measure(const ProjectionTrial&, ProjectionMeasurement&) const {
+  throw std::logic_error(
+      "Projection::measure called for a projection that is not matrix-free (it has an operator)");
+}
+
+std::optional<ProjectionFootprint> Projection::footprint(const AnyKernel&, std::size_t,
+                                                         std::size_t) const {
+  return std::nullopt;
+}
+
 std::string describe_projection(const ProjectionProperties& properties) {
   std::string out = properties.resolution == ProjectionResolution::level
                         ? "resolution: level j (n = n0 2^j cells)"
@@ -43,6 +64,13 @@ std::string describe_projection(const ProjectionProperties& properties) {
     out += fmt::format(", ||Pi_j||_(H->H) <= {}", format_real(*properties.operator_norm_bound));
   if (!properties.requires_kernel.empty())
     out += fmt::format(", kernel: {}", properties.requires_kernel);
+  if (properties.matrix_free) {
+    std::vector<std::string_view> computed;
+    for (const auto& row : MetricTable<ApproximationMetric>::rows)
+      if (properties.measures & measured_metric_bit(row.id)) computed.push_back(row.name);
+    out += fmt::format(", matrix-free (measures its trials itself; metrics: {})",
+                       fmt::join(computed, ", "));
+  }
   return out;
 }
 
@@ -57,6 +85,11 @@ ProjectionOperator build_projection(std::string_view name, const ParameterSet& p
         "projection '{}' works with the {} kernel only (its spaces are that kernel's levels), "
         "not with '{}'",
         name, properties.requires_kernel, request.kernel.name()));
+  if (properties.matrix_free)
+    throw std::invalid_argument(fmt::format(
+        "projection '{}' is matrix-free: it has no operator W, E to build (it measures its "
+        "trials itself, Projection::measure)",
+        name));
   ProjectionOperator out;
   projection->build(request, out);
   const auto dim = static_cast<Eigen::Index>(out.dimension());

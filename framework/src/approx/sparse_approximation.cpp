@@ -176,17 +176,6 @@ double support_radius(const AnyKernel& kernel) {
   return radius;
 }
 
-// The BLAS behind CHOLMOD (Debian's libblas.so.3 alternative: reference BLAS, or OpenBLAS
-// when installed) on one thread: a trial's values must not depend on the threads a BLAS starts.
-void single_threaded_blas() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    using SetThreads = void (*)(int);
-    if (auto* set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-      set(1);
-  });
-}
-
 // CHOLMOD's supernodal LL^T through Eigen, with access to the factor for the partial solves
 // (P, L^-1, L^-T) the power function needs.
 class SparseCholesky
@@ -234,6 +223,15 @@ Eigen::VectorXd solve_with(const Factor& cholesky, const Eigen::VectorXd& b) {
 }
 
 }  // namespace
+
+void single_threaded_blas() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    if (auto* set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
+      set(1);
+  });
+}
 
 Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres) {
   const Domain& domain = kernel.domain();

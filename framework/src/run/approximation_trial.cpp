@@ -27,11 +27,10 @@ double measure_approximation_trial(const TrialInputs& in, TrialResult& result) {
     measured = measure_approximation(in.kernel, in.target, in.centres, study.evaluation_points,
                                      study.solver, in.computed);
   } else {
+    // An operator W, E measured by the framework, or a matrix-free projection measuring itself.
     const ProjectionRequest request{in.kernel, trial.n, in.centres, study.solver};
-    const auto op = build_projection(projection, trial.projection.parameters, request);
-    check_cancelled();
-    measured = measure_projection(in.kernel, in.target, op, study.evaluation_points, study.solver,
-                                  in.computed);
+    measured = measure_projection_trial(projection, trial.projection.parameters, request, in.target,
+                                        study.evaluation_points, in.computed);
   }
   result.metrics = std::move(measured.metrics).values();
   result.floors = std::move(measured.floors).values();
@@ -41,12 +40,25 @@ double measure_approximation_trial(const TrialInputs& in, TrialResult& result) {
 }
 
 // Interpolation with a compactly supported kernel takes the sparse path when choose_sparse
-// says so; everything else is dense.
+// says so; a matrix-free projection predicts its own footprint (Projection::footprint, sparse
+// when it gives one); everything else is dense.
 TrialFootprint approximation_footprint(const StudyDefinition& study, const TrialSpec& trial) {
   TrialFootprint dense{trial_matrix_megabytes(trial.n, study.evaluation_points)};
-  if (study.solver.algebra == GramAlgebra::dense ||
-      !(trial.projection.name.empty() || trial.projection.name == default_projection))
-    return dense;
+  if (!(trial.projection.name.empty() || trial.projection.name == default_projection)) {
+    try {
+      const auto* entry = projection_registry().find(trial.projection.name);
+      if (!entry) return dense;
+      const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study.domain);
+      const auto predicted = entry->factory(trial.projection.parameters)
+                                 ->footprint(*kernel, trial.n, study.evaluation_points);
+      if (!predicted) return dense;
+      return {predicted->megabytes, true, predicted->gram_nonzeros, predicted->factor_nonzeros,
+              predicted->flops};
+    } catch (const std::exception&) {
+      return dense;  // the trial fails at once, with the reason
+    }
+  }
+  if (study.solver.algebra == GramAlgebra::dense) return dense;
   try {
     const auto kernel = make_kernel(trial.kernel.name, trial.kernel.parameters, study.domain);
     if (!choose_sparse(*kernel, trial.n, study.solver,

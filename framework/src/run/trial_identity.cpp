@@ -114,6 +114,8 @@ std::vector<ExcludedField> not_in_identity(const StudyDefinition& study) {
       exclusion(study.description, "description", "a label"),
       exclusion(study.source, "source", "where the file was read from, not what it says"),
       exclusion(study.n_values, "n_values", "each trial's n is in its key"),
+      exclusion(study.tier_n_values, "tier_n_values",
+                "which values of n a tier runs; each trial's n is in its key"),
       exclusion(study.kernels, "kernels", "each trial's kernel and its parameters are in its key"),
       exclusion(study.targets, "targets", "each trial's target is in its key"),
       exclusion(study.centres, "centres", "each trial's centre placement is in its key"),

@@ -51,50 +51,50 @@ constexpr std::uint64_t max_max_trials = 10'000'000;
 // n = [10, 20] | { from = 10, to = 100, step = 10 } | { from = 8, to = 1024, factor = 2 }.
 // Ranges are counted before they are expanded, without overflow: bounds above max_n and more
 // than max_n_values values are errors.
-std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node) {
+std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node,
+                                 const std::string& key) {
   std::vector<std::pair<std::int64_t, toml::source_region>> values;
   if (const auto* array = node.as_array()) {
     for (const auto& item : *array) {
       if (!item.is_integer())
-        report.fail(item.source(), "grid.n",
+        report.fail(item.source(), key,
                     fmt::format("expected integers, found {} ({})", describe(item), show(item)));
       values.emplace_back(item.as_integer()->get(), item.source());
     }
   } else if (const auto* range = node.as_table()) {
-    check_keys(report, *range, "grid.n.", {"from", "to", "step", "factor"});
-    auto integer = [&](std::string_view key) -> std::optional<std::int64_t> {
-      const auto* v = range->get(key);
+    check_keys(report, *range, key + ".", {"from", "to", "step", "factor"});
+    auto integer = [&](std::string_view name) -> std::optional<std::int64_t> {
+      const auto* v = range->get(name);
       if (!v) return std::nullopt;
       if (!v->is_integer())
-        report.fail(v->source(), fmt::format("grid.n.{}", key),
+        report.fail(v->source(), fmt::format("{}.{}", key, name),
                     fmt::format("expected an integer, found {} ({})", describe(*v), show(*v)));
       return v->as_integer()->get();
     };
     const auto from = integer("from"), to = integer("to"), step = integer("step"),
                factor = integer("factor");
-    if (!from || !to) report.fail(range->source(), "grid.n", "a range needs 'from' and 'to'");
+    if (!from || !to) report.fail(range->source(), key, "a range needs 'from' and 'to'");
     if (step.has_value() == factor.has_value())
-      report.fail(range->source(), "grid.n", "a range needs exactly one of 'step' or 'factor'");
-    for (const char* key : {"from", "to"}) {
-      const auto value = *integer(key);
+      report.fail(range->source(), key, "a range needs exactly one of 'step' or 'factor'");
+    for (const char* name : {"from", "to"}) {
+      const auto value = *integer(name);
       if (value < 1 || value > max_n)
-        report.fail(range->get(key)->source(), fmt::format("grid.n.{}", key),
+        report.fail(range->get(name)->source(), fmt::format("{}.{}", key, name),
                     fmt::format("must be between 1 and {} (centres), found {}", max_n, value));
     }
     if (step && *step < 1)
-      report.fail(range->get("step")->source(), "grid.n.step",
+      report.fail(range->get("step")->source(), key + ".step",
                   fmt::format("must be >= 1, found {}", *step));
     if (factor && *factor < 2)
-      report.fail(range->get("factor")->source(), "grid.n.factor",
+      report.fail(range->get("factor")->source(), key + ".factor",
                   fmt::format("must be >= 2, found {}", *factor));
     if (*to < *from)
-      report.fail(range->source(), "grid.n",
-                  fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
+      report.fail(range->source(), key, fmt::format("'to' ({}) is below 'from' ({})", *to, *from));
     // 1 <= from <= to <= max_n: neither the count nor the values can overflow.
     if (step) {
       const std::int64_t count = (*to - *from) / *step + 1;
       if (count > max_n_values)
-        report.fail(range->source(), "grid.n",
+        report.fail(range->source(), key,
                     fmt::format("{} values of n (from {} to {} in steps of {}), more than {}",
                                 count, *from, *to, *step, max_n_values));
       for (std::int64_t i = 0; i < count; ++i)
@@ -106,22 +106,22 @@ std::vector<std::size_t> parse_n(const Reporter& report, const toml::node& node)
       }
     }
   } else {
-    report.fail(node.source(), "grid.n",
+    report.fail(node.source(), key,
                 fmt::format("expected an array of integers or a range table "
                             "{{ from, to, step | factor }}, found {} ({})",
                             describe(node), show(node)));
   }
-  if (values.empty()) report.fail(node.source(), "grid.n", "no values");
+  if (values.empty()) report.fail(node.source(), key, "no values");
   std::vector<std::size_t> n;
   for (const auto& [v, where] : values) {
     if (v < 1 || v > max_n)
-      report.fail(where, "grid.n",
+      report.fail(where, key,
                   fmt::format("must be between 1 and {} (centres), found {}", max_n, v));
     n.push_back(static_cast<std::size_t>(v));
   }
   std::sort(n.begin(), n.end());
   if (std::adjacent_find(n.begin(), n.end()) != n.end())
-    report.fail(node.source(), "grid.n", "values must be distinct");
+    report.fail(node.source(), key, "values must be distinct");
   return n;
 }
 
@@ -172,71 +172,6 @@ bool valid_study_name(const std::string& name) {
   }) && name.front() != '.';
 }
 
-// Can the evaluation grid measure what the grid metrics mean? Sups and L2 norms over the domain
-// are taken on M points; with M <= n the grid is no finer than the centres (uniform centres with
-// n a multiple of M are all on it), so it sees the power function and the error at or next to
-// the centres, where they vanish, and reports round-off as if it were the result: refused. With
-// fewer than 4 points per centre spacing the sups may miss the peaks between centres: warned.
-void check_evaluation_grid(const Reporter& report, const toml::table& header,
-                           StudyDefinition& study) {
-  std::vector<std::string> on_grid;
-  for (const auto& metric : study.metrics)
-    if (const auto* row = study.kind_descriptor().find_metric(metric); row && row->on_grid)
-      on_grid.push_back(metric);
-  if (on_grid.empty() || study.n_values.empty()) return;
-  const std::size_t largest_n = study.n_values.back();
-  // In d > 1: per axis, the grid's m points against the centres' n^(1/d) (4 per centre spacing
-  // asks for 4^d n grid points); in d = 1 simply M against n.
-  const int d = study.domain.dimension;
-  const std::size_t per_axis = study.domain.points_per_axis(study.evaluation_points);
-  const double centres_per_axis = std::pow(static_cast<double>(largest_n), 1.0 / d);
-  const std::size_t points = study.evaluation_points;
-  const double spacing = std::pow(4.0, d);
-  if (d > 1) {
-    const auto* node = header.get("evaluation_points");
-    const auto where = node ? node->source() : header.source();
-    const std::string given = node ? "" : " (the default)";
-    const auto advised =
-        static_cast<std::size_t>(std::ceil(spacing * static_cast<double>(largest_n)));
-    if (static_cast<double>(per_axis) <= centres_per_axis)
-      report.fail(where, "study.evaluation_points",
-                  fmt::format("{} evaluation points{} ({} per axis of d = {}) for up to n = {} "
-                              "centres ({:.4g} per axis): the grid is no finer than the centres, "
-                              "so {} would be measured at or next to the centres, where they "
-                              "vanish (round-off), not over the domain; use evaluation_points "
-                              ">= {} (4 per centre spacing on every axis) or leave these metrics "
-                              "out of study.metrics",
-                              points, given, per_axis, d, largest_n, centres_per_axis,
-                              fmt::join(on_grid, ", "), advised));
-    if (static_cast<double>(per_axis) < 4.0 * centres_per_axis)
-      study.warnings.push_back(report.locate(
-          where, "study.evaluation_points",
-          fmt::format("warning: {} evaluation points{} ({} per axis) give fewer than 4 per "
-                      "centre spacing for n = {}: {} are taken on the grid and may miss the "
-                      "peaks between centres; evaluation_points >= {} avoids it",
-                      points, given, per_axis, largest_n, fmt::join(on_grid, ", "), advised)));
-    return;
-  }
-  const auto* node = header.get("evaluation_points");
-  const auto where = node ? node->source() : header.source();
-  const std::string given = node ? "" : " (the default)";
-  if (points <= largest_n)
-    report.fail(
-        where, "study.evaluation_points",
-        fmt::format("{} evaluation points{} for up to n = {} centres: the grid is no finer than "
-                    "the centres, so {} would be measured at or next to the centres, where they "
-                    "vanish (round-off), not over the domain; use evaluation_points >= {} (4 per "
-                    "centre spacing) or leave these metrics out of study.metrics",
-                    points, given, largest_n, fmt::join(on_grid, ", "), 4 * largest_n));
-  if (points < 4 * largest_n)
-    study.warnings.push_back(report.locate(
-        where, "study.evaluation_points",
-        fmt::format("warning: {} evaluation points{} give fewer than 4 per centre spacing for "
-                    "n > {}: {} are taken on the grid and may miss the peaks between centres; "
-                    "evaluation_points >= {} avoids it",
-                    points, given, points / 4, fmt::join(on_grid, ", "), 4 * largest_n)));
-}
-
 // [study]: name, description, kind, abscissa, evaluation_points; the sections of other kinds
 // are refused.
 const toml::table& read_header(const Reporter& report, const toml::table& root,
@@ -282,35 +217,6 @@ const toml::table& read_header(const Reporter& report, const toml::table& root,
   study.evaluation_points = static_cast<std::size_t>(
       get_whole_number(report, *header, "evaluation_points", "study.", 4096, 2, 100000000));
   return *header;
-}
-
-// [study] metrics: the metrics written and fitted, in output order (all of the kind's when the
-// file names none).
-void read_metrics(const Reporter& report, const toml::table& header, StudyDefinition& study) {
-  const auto& all_metrics = metric_names(study.kind());
-  if (const auto* metrics = header.get("metrics")) {
-    const auto* array = metrics->as_array();
-    if (!array || array->empty())
-      report.fail(metrics->source(), "study.metrics",
-                  fmt::format("expected a non-empty array of metric names (known: {})",
-                              fmt::join(all_metrics, ", ")));
-    std::set<std::string> chosen;
-    for (const auto& item : *array) {
-      if (!item.is_string())
-        report.fail(item.source(), "study.metrics",
-                    fmt::format("expected a metric name, found {}", describe(item)));
-      const std::string metric = item.as_string()->get();
-      if (std::find(all_metrics.begin(), all_metrics.end(), metric) == all_metrics.end())
-        report.fail(
-            item.source(), "study.metrics",
-            fmt::format("unknown metric '{}' {}", metric, with_suggestion(metric, all_metrics)));
-      chosen.insert(metric);
-    }
-    for (const auto& metric : all_metrics)  // output order is the canonical order
-      if (chosen.contains(metric)) study.metrics.push_back(metric);
-  } else {
-    study.metrics = all_metrics;
-  }
 }
 
 // [domain]: an interval, a closed track or a box or torus in R^d.
@@ -383,8 +289,25 @@ const toml::node& read_grid_and_limits(const Reporter& report, const toml::table
   if (!grid || !grid->contains("n"))
     report.fail(grid ? grid->source() : toml::source_region{}, "grid.n",
                 "missing: the number of centres, e.g. n = { from = 10, to = 100, step = 10 }");
-  check_keys(report, *grid, "grid.", {"n"});
-  study.n_values = parse_n(report, *grid->get("n"));
+  check_keys(report, *grid, "grid.", {"n", "tier_n"});
+  study.n_values = parse_n(report, *grid->get("n"), "grid.n");
+  if (const auto* tiers = grid->get("tier_n")) {
+    const auto* table = tiers->as_table();
+    if (!table || table->empty())
+      report.fail(tiers->source(), "grid.tier_n",
+                  fmt::format("expected a table of tiers and their values of n, e.g. tier_n = "
+                              "{{ quick = [10, 20] }}, found {} ({})",
+                              describe(*tiers), show(*tiers)));
+    for (const auto& [tier, values] : *table) {
+      const std::string key = fmt::format("grid.tier_n.{}", tier.str());
+      auto n = parse_n(report, values, key);
+      for (const auto v : n)
+        if (!std::binary_search(study.n_values.begin(), study.n_values.end(), v))
+          report.fail(values.source(), key,
+                      fmt::format("n = {} is not one of grid.n (a tier runs some of them)", v));
+      study.tier_n_values.emplace(std::string(tier.str()), std::move(n));
+    }
+  }
 
   std::uint64_t max_trials = default_max_trials;
   if (const auto* limits = optional_table(report, root, "limits")) {
@@ -534,7 +457,6 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   StudyDefinition study;
   study.source = source_name;
   const auto& header = read_header(report, root, study);
-  read_metrics(report, header, study);
   read_domain(report, root, study);
   const auto& n_node = read_grid_and_limits(report, root, study);
   const auto& kind_sections = study.kind_descriptor().file_sections();
@@ -556,6 +478,8 @@ StudyDefinition parse_study(std::string_view text, const std::string& source_nam
   if (root.get("projection"))
     projections =
         read_plugins(report, root, "projection", catalogue_of(projection_registry()), std::nullopt);
+  read_metrics(report, header, study,
+               projections ? first_choices(report, *projections) : std::vector<PluginChoice>{});
   read_solver_and_rates(report, root, study);
   if (const auto* plot = optional_table(report, root, "plot"))
     study.plot = parse_plot(report, *plot, study);

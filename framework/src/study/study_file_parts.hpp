@@ -118,6 +118,18 @@ std::vector<PluginChoice> expand_plugins(const Reporter& report, const PluginAxi
 void check_instances(const Reporter& report, const toml::table& root, const PluginAxis& axis,
                      const std::function<void(const PluginChoice&, const PluginEntry&)>& make);
 
+/// [study] metrics into study.metrics (metrics_section.cpp): the listed ones in output order,
+/// or, when the file lists none, the kind's metrics that every one of `projections` computes
+/// (the interpolation projection's when it is empty); a listed metric that a projection does not
+/// compute fails at its name.
+void read_metrics(const Reporter& report, const toml::table& header, StudyDefinition& study,
+                  const std::vector<PluginChoice>& projections);
+
+/// Refuses an evaluation grid no finer than the centres when the study asks for a metric taken
+/// on it (MetricInfo::on_grid) and warns below 4 points per centre spacing.
+void check_evaluation_grid(const Reporter& report, const toml::table& header,
+                           StudyDefinition& study);
+
 /// `plugins = ["path.so", ...]`: plugin modules, relative to the study file's directory, loaded
 /// before any plugin name in the file is looked up.
 void load_study_plugins(const Reporter& report, const toml::table& root);

@@ -21,6 +21,7 @@ std::vector<std::string> study_tiers(const StudyDefinition& study) {
     for (const auto& choice : *axis.second) tiers.insert(choice.tiers.begin(), choice.tiers.end());
   for (const auto& expectation : study.expectations)
     tiers.insert(expectation.tiers.begin(), expectation.tiers.end());
+  for (const auto& entry : study.tier_n_values) tiers.insert(entry.first);
   return {tiers.begin(), tiers.end()};
 }
 
@@ -40,6 +41,8 @@ StudyDefinition restrict_to_tier(StudyDefinition study, std::string_view tier) {
                                    "tiers, none names '{}')",
                                    study.source, tier, section, tier));
   }
+  if (const auto n = study.tier_n_values.find(tier); n != study.tier_n_values.end())
+    study.n_values = n->second;
   std::erase_if(study.expectations, [&](const Expectation& e) { return !e.in_tier(tier); });
   const auto trials = study.trials();
   for (const auto& expectation : study.expectations)

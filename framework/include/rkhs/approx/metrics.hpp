@@ -108,6 +108,11 @@ struct MetricInfo {
   /// grid is no finer than its centres is refused when it asks for one (docs/metrics.md).
   bool on_grid = false;
   TheoryLaw theory = TheoryLaw::none;  ///< what theory predicts for it (approximation trials)
+  /// Computed only by the matrix-free projections that declare it (ProjectionProperties::
+  /// measures: the multilevel projection's level_* metrics), NaN in every other trial. A study
+  /// that lists no metrics writes the metrics every one of its projections computes, so such a
+  /// metric only when all its projections declare it.
+  bool matrix_free_only = false;
 };
 
 /// One row of a metric table: the metric's facts and its identifier, the row's position
@@ -207,6 +212,9 @@ enum ApproximationWork : unsigned {
   work_projection_residual = 1u << 7,
   /// ||Pi||_{H -> H} of the built operator (the interpolation projection is then built too).
   work_operator_norm = 1u << 8,
+  /// The extreme eigenvalues of a multilevel projection's finest Gram matrix (Lanczos on the
+  /// sparse matrix and on its inverse through the factor).
+  work_level_spectrum = 1u << 9,
 };
 
 /// Which metrics of a table a trial computes, by table position (true: computed). Empty means
@@ -238,6 +246,9 @@ enum class ApproximationMetric : std::size_t {
   interpolant_native_norm,
   projection_norm_H_to_C,
   projection_operator_norm,
+  level_reduction_factor,
+  level_condition_number,
+  level_nonzeros,
 };
 
 template <>
@@ -284,6 +295,18 @@ struct MetricTable<ApproximationMetric> {
       { {"projection_operator_norm", "norm of Π on H", F::round_off, "1",
        "||Pi||_{H -> H}, measured (1 for an H-orthogonal projection)", false, "", true,
        work_operator_norm}, M::projection_operator_norm},
+      { {"level_reduction_factor", "error reduction of the level", F::propagated, "1",
+       "multilevel: ||e_j|| / ||e_{j-1}|| in L2(Omega) on the grid, e_j = f - s_0 - ... - s_j, "
+       "e_{-1} = f; its floor from the two errors' floors; NaN for other projections", true, "", true,
+       work_interpolant | work_residual, true, TheoryLaw::none, true}, M::level_reduction_factor},
+      { {"level_condition_number", "condition number of the level's Gram matrix", F::round_off,
+       "1",
+       "multilevel: lambda_max / lambda_min of level j's sparse Gram matrix (Lanczos, each "
+       "resolved to 1e-8 relative); NaN for other projections", true, "", true,
+       work_level_spectrum, false, TheoryLaw::none, true}, M::level_condition_number},
+      { {"level_nonzeros", "nonzeros of the level's Gram matrix", F::exact, "count",
+       "multilevel: nonzero entries of level j's sparse Gram matrix; NaN for other projections",
+       true, "", true, work_interpolant, false, TheoryLaw::none, true}, M::level_nonzeros},
   });
 };
 static_assert(table_in_enum_order<ApproximationMetric>());

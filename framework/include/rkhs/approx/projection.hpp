@@ -27,6 +27,13 @@
 //   void build(const ProjectionRequest&, ProjectionOperator& out) const;
 // registered with RKHS_REGISTER_PROJECTION(P) (through the same boundary rules as every plugin:
 // the operator's storage is allocated on the caller's side by ProjectionOperator::resize).
+//
+// A matrix-free projection (ProjectionProperties::matrix_free) has no operator of this form that
+// fits in memory (a multilevel interpolation at 2^18 centres): it measures a trial itself through
+// Projection::measure() and declares which metrics of the approximation table it computes
+// (ProjectionProperties::measures). A study that asks such a projection for another metric (the
+// operator norms, the power function of one space) is refused when it is read, naming them;
+// build() is not called for it.
 
 #include <Eigen/Dense>
 #include <cstdint>
@@ -39,6 +46,8 @@
 #include <vector>
 
 #include "rkhs/approx/gram_solver.hpp"
+#include "rkhs/approx/metrics.hpp"
+#include "rkhs/approx/target.hpp"
 #include "rkhs/core/domain.hpp"
 #include "rkhs/core/registry.hpp"
 #include "rkhs/kernel/kernel.hpp"
@@ -49,7 +58,8 @@ namespace rkhs {
 enum class ProjectionResolution {
   centres,  ///< H_n = span{k(c_i, .)} at the trial's n centres (the centres axis)
   level,    ///< H_j = the splines of level j; the trial's n is the number of level-j cells,
-            ///< n = n0 2^j (h = h0 2^-j), and the centres axis is not used
+            ///< n = n0 2^j (h = h0 2^-j), and the centres axis is not used; for the
+            ///< multilevel projection the number of centres of its finest level j
 };
 
 /// What a projection declares about itself; the contract test checks each claim.
@@ -66,7 +76,31 @@ struct ProjectionProperties {
   /// The kernel the projection needs ("bspline" for the spline spaces), empty for any kernel
   /// (a literal: nothing the plugin allocates crosses the boundary).
   std::string_view requires_kernel;
+  /// Measures its trials itself (Projection::measure) instead of building a ProjectionOperator.
+  bool matrix_free = false;
+  /// A matrix-free projection's metrics: bit i set when it computes metric i of
+  /// MetricTable<ApproximationMetric> (measured_metric_bit); unused otherwise.
+  std::uint64_t measures = 0;
 };
+
+static_assert(MetricTable<ApproximationMetric>::rows.size() <= 64,
+              "ProjectionProperties::measures holds a bit per approximation metric");
+
+/// The bit of `metric` in ProjectionProperties::measures.
+constexpr std::uint64_t measured_metric_bit(ApproximationMetric metric) {
+  return std::uint64_t{1} << static_cast<std::size_t>(metric);
+}
+
+/// The metrics a projection with `properties` computes, as measured_metric_bit()s: its
+/// ProjectionProperties::measures when it is matrix-free, else every metric of the table but the
+/// matrix-free projections' own (MetricInfo::matrix_free_only).
+constexpr std::uint64_t computed_metric_bits(const ProjectionProperties& properties) {
+  if (properties.matrix_free) return properties.measures;
+  std::uint64_t bits = 0;
+  for (const auto& row : MetricTable<ApproximationMetric>::rows)
+    if (!row.matrix_free_only) bits |= measured_metric_bit(row.id);
+  return bits;
+}
 
 /// The properties in words, for `rkhs-study list projection` and the docs: "resolution: level;
 /// nested; H-orthogonal; ||Pi_j|| <= 1; kernel: bspline".
@@ -79,6 +113,34 @@ struct ProjectionRequest {
   std::size_t n = 0;                ///< the trial's n (level projections: cells n0 2^j)
   std::span<const double> centres;  ///< the trial's centres (centre projections only)
   SolverOptions solver;
+};
+
+/// What a matrix-free projection measures a trial on: the kernel, the target, the trial's n,
+/// the evaluation points (the study's uniform grid) and the ApproximationWork bits its selected
+/// metrics need (MetricInfo::needs; a metric whose needs are all 0 is always wanted).
+struct ProjectionTrial {
+  const AnyKernel& kernel;
+  const TargetFunction& target;
+  std::size_t n = 0;
+  std::span<const double> points;
+  SolverOptions solver;
+  unsigned work = 0;
+};
+
+/// A matrix-free projection's measurement, in storage the caller owns: the plugin writes the
+/// values (and the floors it estimates; NaN: none) of the metrics it declares by identifier, and
+/// adds flags and its solve method through the framework's functions.
+class ProjectionMeasurement {
+ public:
+  MetricValues<ApproximationMetric> metrics, floors;
+  void add_flag(std::string_view flag);
+  void set_solve_method(std::string_view method);
+  const std::vector<std::string>& flags() const noexcept { return flags_; }
+  const std::string& solve_method() const noexcept { return solve_method_; }
+
+ private:
+  std::vector<std::string> flags_;
+  std::string solve_method_;
 };
 
 /// The operator in the form of the file comment, in storage the caller owns. A plugin calls
@@ -121,6 +183,14 @@ class ProjectionOperator {
   std::string solve_method_;
 };
 
+/// A matrix-free projection's trial predicted before anything is built (Projection::footprint):
+/// its peak memory and what it factorises, summed over everything it factorises.
+struct ProjectionFootprint {
+  double megabytes = 0;  ///< peak MiB of its matrices and vectors
+  double gram_nonzeros = 0, factor_nonzeros = 0;
+  double flops = 0;  ///< of its factorisations and evaluations, for the scheduler's order
+};
+
 /// A projection family Pi_j (see the file comment).
 class Projection {
  public:
@@ -134,6 +204,17 @@ class Projection {
   /// Builds Pi_j for `request` into `out`. Throws std::invalid_argument naming what does not
   /// fit (a kernel it cannot work with, an n that is not n0 2^j with j <= J, ...).
   virtual void build(const ProjectionRequest& request, ProjectionOperator& out) const = 0;
+  /// A matrix-free projection's trial (properties().matrix_free): sets every metric of
+  /// properties().measures whose needs intersect trial.work (or are 0), with the kernel and n that
+  /// check() accepted. Throws std::invalid_argument as build() does. The default throws
+  /// std::logic_error: a projection with an operator is measured from it.
+  virtual void measure(const ProjectionTrial& trial, ProjectionMeasurement& out) const;
+  /// A matrix-free projection's prediction of a trial with `kernel` and `n` on
+  /// `evaluation_points` points, which run and validate compare with limits.matrix_megabytes.
+  /// Empty (the default): the trial's matrices are estimated dense, n x n. Throws
+  /// std::invalid_argument as check() does.
+  virtual std::optional<ProjectionFootprint> footprint(const AnyKernel& kernel, std::size_t n,
+                                                       std::size_t evaluation_points) const;
 };
 
 using ProjectionRegistry = Registry<Projection>;
@@ -153,6 +234,7 @@ bool register_projection() noexcept {
 }
 
 /// Pi_j as a concrete operator: makes the plugin `name` and builds it for `request`.
+/// std::invalid_argument for a matrix-free projection (it has no operator).
 ProjectionOperator build_projection(std::string_view name, const ParameterSet& parameters,
                                     const ProjectionRequest& request);
 

@@ -71,7 +71,7 @@ struct ProjectionKind {
   static constexpr std::string_view singular = projection_kind_name;
   static constexpr std::string_view plural = "projections";
   static constexpr std::string_view builtins[] = {"interpolation", "l2_projection", "mra_level",
-                                                  "quasi_interpolant"};
+                                                  "multilevel", "quasi_interpolant"};
   static Registry& registry() { return projection_registry(); }
 };
 

@@ -179,6 +179,9 @@ struct StudyDefinition {
   StudyKindAxes kind_axes;
   Domain domain;
   std::vector<std::size_t> n_values;  ///< increasing, distinct
+  /// [grid] tier_n: the values of n a tier runs (increasing, some of n_values); a tier it does not
+  /// name runs them all (restrict_to_tier, rkhs/study/tiers.hpp).
+  std::map<std::string, std::vector<std::size_t>, std::less<>> tier_n_values;
   std::size_t evaluation_points = 4096;
   std::vector<PluginChoice> kernels, targets, centres;
   /// [[projection]] entries (empty when the file has none): in an adaptive study each trial
@@ -239,6 +242,11 @@ struct StudyDefinition {
   /// it), and the position of one of them (throws std::out_of_range for an unknown name).
   const std::vector<std::string>& all_metrics() const;
   std::size_t metric_index(std::string_view metric) const;
+  /// The metrics of all_metrics() that every projection of the study computes (the
+  /// interpolation projection's without [[projection]]: all but the matrix-free projections'
+  /// own; a matrix-free projection's those it declares), in output order: what `metrics` may
+  /// list and lists when the file names none.
+  std::vector<std::string> computable_metrics() const;
 
   /// The metrics a trial of this study computes, by position in all_metrics(): for an
   /// approximation study `metrics`, with the fill distance when rates are fitted against h and

@@ -101,6 +101,22 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
                                             const SolverOptions& solver,
                                             const MetricSelection& selection = {});
 
+/// A trial of the projection `name` that is not interpolation: builds its operator and measures
+/// it (measure_projection), or, for a matrix-free projection (projection.hpp), lets it measure
+/// itself on the evaluation grid. std::invalid_argument when `selection` (empty: all) names a
+/// metric a matrix-free projection does not declare in ProjectionProperties::measures.
+ApproximationMeasurement measure_projection_trial(std::string_view name,
+                                                  const ParameterSet& parameters,
+                                                  const ProjectionRequest& request,
+                                                  const TargetFunction& target,
+                                                  std::size_t evaluation_points,
+                                                  const MetricSelection& selection = {});
+
+/// The names of the metrics `selection` (empty: all) names that a matrix-free projection with
+/// `properties` does not compute (ProjectionProperties::measures), in table order.
+std::vector<std::string> unmeasured_metrics(const ProjectionProperties& properties,
+                                            const MetricSelection& selection);
+
 /// P_n(s) at each point, with the same solver (values below round-off clamped to 0), in the
 /// blocks of measure_approximation.
 Eigen::VectorXd power_function(const AnyKernel& kernel, const GramSolver& solver,

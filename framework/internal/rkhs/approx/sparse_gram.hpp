@@ -57,6 +57,12 @@ void record_interpolant_metrics(const AnyKernel& kernel, std::span<const double>
 /// Leaves NaN in every metric `selection` does not name (empty: keeps all).
 void keep_selected(const MetricSelection& selection, ApproximationMeasurement& out);
 
+/// Asks the BLAS behind CHOLMOD (Debian's libblas.so.3 alternative: reference BLAS, or OpenBLAS
+/// when installed) for one thread, once per process (openblas_set_num_threads(1) when the symbol
+/// is loaded): a trial's values must not depend on the threads a BLAS starts. Every caller of
+/// CHOLMOD calls it first (the sparse path, multilevel interpolation).
+void single_threaded_blas();
+
 /// The n x n Gram matrix G_ij = k(c_i, c_j) of a kernel with support_radius > 0, both
 /// triangles stored (column-major, compressed), without its zeros but for the diagonal. Each
 /// entry of the upper triangle is computed once (AnyKernel::cross_into on the centres of two

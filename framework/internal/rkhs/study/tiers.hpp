@@ -5,7 +5,9 @@
 //
 // Running a tier keeps, on each plugin axis where some entry names a tier, only the entries of
 // that tier; an axis whose entries name no tier is not restricted (so marking one kernel
-// "quick" does not drop the default target). Only the expectations of the tier are checked.
+// "quick" does not drop the default target). `[grid] tier_n = { quick = [10, 20] }` names the
+// values of n a tier runs (all of them for a tier it does not name). Only the expectations of
+// the tier are checked.
 
 #include <string>
 #include <string_view>
@@ -15,7 +17,8 @@
 
 namespace rkhs {
 
-/// Every tier named in the study (plugin entries and expectations), sorted, without repeats.
+/// Every tier named in the study (plugin entries, expectations and [grid] tier_n), sorted,
+/// without repeats.
 std::vector<std::string> study_tiers(const StudyDefinition& study);
 
 /// The study restricted to `tier` as described above. Throws StudyError when the study names
