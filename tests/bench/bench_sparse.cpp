@@ -20,8 +20,9 @@
 // where sparse becomes the faster (log-log interpolation between the bracketing sizes).
 //
 // One thread: run it as `OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 build/release/bench/bench_sparse`
-// (main also asks OpenBLAS for one thread; the trials run in an arena of one thread, so the
-// blocks of their pass do not spread to the other cores). About 2.5 minutes on a 2-core EPYC.
+// (main also asks OpenBLAS for one thread; every timed body runs in an arena of one thread, so
+// the framework's parallel strips, tiles and blocks do not spread to the other core). About 2.5
+// minutes on a 2-core EPYC.
 #include <benchmark/benchmark.h>
 #include <dlfcn.h>
 #include <fmt/format.h>
@@ -79,6 +80,14 @@ std::vector<double> grid(std::int64_t n) {
   return unit_box<D>().uniform_points(static_cast<std::size_t>(n));
 }
 
+// Runs `work` in an arena of one thread: the framework's run_parts (GramSolver's strips and
+// tiles, the trial's blocks) then stay on the calling thread, whose CPU time the benchmark
+// reports; outside it they would spread to the other core, uncounted.
+template <class Work>
+void on_one_thread(Work&& work) {
+  rkhs::run_concurrently(1, 1, [&](std::size_t) { work(); });
+}
+
 // CHOLMOD's supernodal LL^T with access to the factor for the partial solves (P, L^-1, L^-T),
 // as the sparse path holds it.
 class SparseCholesky
@@ -99,13 +108,14 @@ template <int D>
 void sparse_factorisation(benchmark::State& state) {
   const auto kernel = wendland<D>(state.range(0));
   const auto x = grid<D>(state.range(0));
-  for (auto _ : state) {
-    const Eigen::SparseMatrix<double> gram = rkhs::sparse_gram(*kernel, x);
-    Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> cholesky(gram);
-    benchmark::DoNotOptimize(cholesky.info());
-    state.counters["nnz_G"] = static_cast<double>(gram.nonZeros());
-    state.counters["nnz_L"] = cholesky.cholmod().lnz;
-  }
+  for (auto _ : state)
+    on_one_thread([&] {
+      const Eigen::SparseMatrix<double> gram = rkhs::sparse_gram(*kernel, x);
+      Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> cholesky(gram);
+      benchmark::DoNotOptimize(cholesky.info());
+      state.counters["nnz_G"] = static_cast<double>(gram.nonZeros());
+      state.counters["nnz_L"] = cholesky.cholmod().lnz;
+    });
   state.SetComplexityN(state.range(0));
 }
 
@@ -113,10 +123,11 @@ template <int D>
 void dense_factorisation(benchmark::State& state) {
   const auto kernel = wendland<D>(state.range(0));
   const auto x = grid<D>(state.range(0));
-  for (auto _ : state) {
-    const rkhs::GramSolver solver(kernel->gram(x), {}, rkhs::GramSpectrumMode::estimate);
-    benchmark::DoNotOptimize(solver.spectrum());
-  }
+  for (auto _ : state)
+    on_one_thread([&] {
+      const rkhs::GramSolver solver(kernel->gram(x), {}, rkhs::GramSpectrumMode::estimate);
+      benchmark::DoNotOptimize(solver.spectrum());
+    });
   state.SetComplexityN(state.range(0));
 }
 
@@ -136,20 +147,22 @@ void sparse_power_phase(benchmark::State& state) {
   Eigen::VectorXd quadratic(m_total), solution_norm_squared(m_total);
   cholmod_common common;
   cholmod_start(&common);
-  for (auto _ : state) {
-    const Eigen::SparseMatrix<double> cross = rkhs::sparse_cross_columns(*kernel, points, centres);
-    for (Eigen::Index first = 0; first < m_total; first += per_block) {
-      const Eigen::Index count = std::min(per_block, m_total - first);
-      Eigen::MatrixXd columns = Eigen::MatrixXd(cross.middleCols(first, count));
-      solve_in_place(CHOLMOD_P, cholesky.factor(), columns, common);
-      solve_in_place(CHOLMOD_L, cholesky.factor(), columns, common);
-      quadratic.segment(first, count) = columns.colwise().squaredNorm().transpose();
-      solve_in_place(CHOLMOD_Lt, cholesky.factor(), columns, common);
-      solution_norm_squared.segment(first, count) = columns.colwise().squaredNorm().transpose();
-    }
-    benchmark::DoNotOptimize(quadratic.data());
-    benchmark::DoNotOptimize(solution_norm_squared.data());
-  }
+  for (auto _ : state)
+    on_one_thread([&] {
+      const Eigen::SparseMatrix<double> cross =
+          rkhs::sparse_cross_columns(*kernel, points, centres);
+      for (Eigen::Index first = 0; first < m_total; first += per_block) {
+        const Eigen::Index count = std::min(per_block, m_total - first);
+        Eigen::MatrixXd columns = Eigen::MatrixXd(cross.middleCols(first, count));
+        solve_in_place(CHOLMOD_P, cholesky.factor(), columns, common);
+        solve_in_place(CHOLMOD_L, cholesky.factor(), columns, common);
+        quadratic.segment(first, count) = columns.colwise().squaredNorm().transpose();
+        solve_in_place(CHOLMOD_Lt, cholesky.factor(), columns, common);
+        solution_norm_squared.segment(first, count) = columns.colwise().squaredNorm().transpose();
+      }
+      benchmark::DoNotOptimize(quadratic.data());
+      benchmark::DoNotOptimize(solution_norm_squared.data());
+    });
   cholmod_finish(&common);
   state.counters["M"] = static_cast<double>(m_total);
   state.counters["nnz_L"] = cholesky.cholmod().lnz;
@@ -168,18 +181,19 @@ void dense_power_phase(benchmark::State& state) {
   const std::size_t m_total = unit_box<D>().point_count(points);
   Eigen::MatrixXd columns(n, 256);
   Eigen::VectorXd quadratic(256), norms(256);
-  for (auto _ : state) {
-    for (std::size_t first = 0; first < m_total; first += 256) {
-      const std::size_t rows = std::min<std::size_t>(256, m_total - first);
-      Eigen::MatrixXd block(static_cast<Eigen::Index>(rows), n);
-      kernel->cross_into(std::span<const double>(points).subspan(first * D, rows * D), centres,
-                         block);
-      columns.leftCols(static_cast<Eigen::Index>(rows)) = block.transpose();
-      solver.quadratic_forms_in_place(columns.leftCols(static_cast<Eigen::Index>(rows)),
-                                      quadratic.data(), norms.data());
-    }
-    benchmark::DoNotOptimize(quadratic.data());
-  }
+  for (auto _ : state)
+    on_one_thread([&] {
+      for (std::size_t first = 0; first < m_total; first += 256) {
+        const std::size_t rows = std::min<std::size_t>(256, m_total - first);
+        Eigen::MatrixXd block(static_cast<Eigen::Index>(rows), n);
+        kernel->cross_into(std::span<const double>(points).subspan(first * D, rows * D), centres,
+                           block);
+        columns.leftCols(static_cast<Eigen::Index>(rows)) = block.transpose();
+        solver.quadratic_forms_in_place(columns.leftCols(static_cast<Eigen::Index>(rows)),
+                                        quadratic.data(), norms.data());
+      }
+      benchmark::DoNotOptimize(quadratic.data());
+    });
   state.counters["M"] = static_cast<double>(m_total);
   state.SetComplexityN(n);
 }
@@ -203,7 +217,7 @@ void trial(benchmark::State& state, rkhs::GramAlgebra algebra) {
   options.algebra = algebra;
   double power = 0;
   for (auto _ : state)
-    rkhs::run_concurrently(1, 1, [&](std::size_t) {
+    on_one_thread([&] {
       power = rkhs::measure_approximation(*kernel, *target, centres, static_cast<std::size_t>(n),
                                           options, selection)
                   .metrics[rkhs::ApproximationMetric::power_function_sup];
