@@ -101,6 +101,58 @@ TEST_CASE("selected metrics equal the full measurement's and the rest are not co
   }
 }
 
+TEST_CASE("floors from a sample of the points where no floor metric is reported",
+          "[approximation][work][floor]") {
+  // power_function_floor and error_floor, when reported, are the maxima of |G^-1 k_X(s_m)|^2
+  // over every point, as in the full measurement. When only the flags and floor
+  // columns of power_function_sup, l2_error and sup_error need them, the second solve runs on a
+  // sample of the points and at the points that set the sups (docs/metrics.md, "Floors"): a
+  // lower bound of the full maximum, within a factor of 2 of it.
+  Domain square{1.0, false};
+  square.dimension = 2;
+  square.width = 1.0;
+  const auto k = kernel("matern", {{"nu", 2.5}, {"length_scale", 0.2}}, square);
+  const auto* entry = target_registry().find("expression");
+  REQUIRE(entry);
+  std::map<std::string, ParameterValue> given{{"f", std::string("exp(x1) * cos(x2) + x1 * x2")}};
+  const auto f = entry->factory(
+      ParameterSet::resolve(entry->info.parameters, given,
+                            entry->info.user_parameters ? &*entry->info.user_parameters : nullptr),
+      square);
+  std::vector<double> centres;
+  constexpr int m = 46;  // n = 2116: at least the 2048 centres from which the floors are sampled
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) {
+      centres.push_back(static_cast<double>(i) / (m - 1));
+      centres.push_back(static_cast<double>(j) / (m - 1));
+    }
+  const std::size_t points = 32 * 32;
+  const auto reported = measure_approximation(*k, *f, centres, points, {},
+                                              only({M::power_function_sup, M::power_function_floor,
+                                                    M::l2_error, M::sup_error, M::error_floor}));
+  REQUIRE(reported.solve_method == "cholesky");
+
+  // Either floor listed: both are maxima over every point.
+  const auto one_floor = measure_approximation(
+      *k, *f, centres, points, {},
+      only({M::power_function_sup, M::power_function_floor, M::l2_error, M::sup_error}));
+  CHECK(one_floor.metrics[M::power_function_floor] == reported.metrics[M::power_function_floor]);
+  CHECK(one_floor.floors[M::sup_error] == reported.floors[M::sup_error]);
+
+  const auto sampled = measure_approximation(
+      *k, *f, centres, points, {}, only({M::power_function_sup, M::l2_error, M::sup_error}));
+  CHECK(sampled.metrics[M::power_function_sup] == reported.metrics[M::power_function_sup]);
+  CHECK(sampled.metrics[M::sup_error] == reported.metrics[M::sup_error]);
+  for (const auto metric : {M::power_function_sup, M::sup_error, M::l2_error}) {
+    INFO(approximation_metric_names()[static_cast<std::size_t>(metric)]);
+    const double ratio = sampled.floors[metric] / reported.floors[metric];
+    CHECK(ratio <= 1.0 + 1e-12);
+    CHECK(ratio >= 0.5);
+  }
+  for (const auto& flag : {"power_function_at_floor", "l2_error_at_floor", "sup_error_at_floor"})
+    CHECK(has_flag(sampled, flag) == has_flag(reported, flag));
+}
+
 TEST_CASE("projection norms of the interpolation projection from the trial's own factorisation",
           "[approximation][work][projection]") {
   const Domain circle{4.0, true};

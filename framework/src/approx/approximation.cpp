@@ -134,14 +134,32 @@ namespace {
 // glibc maps afresh each time).
 constexpr std::size_t points_per_block = 512;
 
+// The sampled round-off floors (docs/metrics.md, "Floors"): where a trial reports neither
+// power_function_floor nor error_floor, the second solve |G^-1 k_X(s_m)|^2 runs on every
+// cardinal_sample_stride-th point (m = 0, 17, 34, ..., and the last point; 17 is prime, so on
+// the tensor grids of domain.uniform_points the sample meets every row and column) and on the
+// points that set power_function_sup and sup_error, not on every point.
+constexpr std::size_t cardinal_sample_stride = 17;
+// Below this many centres the floors stay the maximum over every point (n^2 M flops for the
+// second solve, about 2.6 s at n = 2047, M = 16384 on one AVX2 core): rate fits weigh values by
+// their floors, and a sampled floor (up to 1.75 times lower on scattered_centres) moves their
+// statistics (a Delta AIC note of 20 became 16); every shipped study is below it.
+constexpr std::size_t sampled_floor_min_centres = 2048;
+
+bool in_cardinal_sample(std::size_t m, std::size_t point_count) {
+  return m % cardinal_sample_stride == 0 || m + 1 == point_count;
+}
+
 // One pass over the evaluation points in blocks (run_parts: on idle threads of the trial's
 // arena): the cross matrix K_b = k(s_b, X) of each block, then what `work` asks of it.
 // `alpha` and `at_points` are needed for work_residual; `cross` (M x n), when not null,
-// receives the whole cross matrix.
+// receives the whole cross matrix. With `sampled_cardinal` and a Cholesky factor, the second
+// solve of work_cardinal runs only at the points in_cardinal_sample, and solution_norm_squared
+// is 0 at the others (a lower bound: the floors are the maximum over the sample).
 GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
-                   std::span<const double> centres, std::span<const double> points,
-                   unsigned work, const Eigen::VectorXd& alpha, const Eigen::VectorXd& at_points,
-                   Eigen::MatrixXd* cross) {
+                   std::span<const double> centres, std::span<const double> points, unsigned work,
+                   const Eigen::VectorXd& alpha, const Eigen::VectorXd& at_points,
+                   Eigen::MatrixXd* cross, bool sampled_cardinal = false) {
   const Domain& domain = kernel.domain();
   const auto d = static_cast<std::size_t>(domain.dimension);
   const std::size_t point_count = domain.point_count(points);
@@ -150,6 +168,8 @@ GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
   const bool power = work & (work_power | work_cardinal);
   const bool cardinal = work & work_cardinal;
   const bool residual = work & work_residual;
+  // The sample needs L^-1 k_X(s) from the first solve: a Cholesky factor (not the pseudo-inverse).
+  const bool sampled = cardinal && sampled_cardinal && solver.kept_vectors() == nullptr;
   GridPass out;
   Eigen::VectorXd quadratic;
   if (power) {
@@ -158,6 +178,19 @@ GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
   }
   if (residual) out.residual.resize(m_total);
   if (cross) cross->resize(m_total, n);
+  // The sampled points' L^-1 k_X(s_m), column m / stride (the last point after the others),
+  // solved with L^T together after the pass: one wide triangular solve instead of thin ones.
+  Eigen::MatrixXd sample;
+  const auto sample_column = [&](std::size_t m) {
+    return static_cast<Eigen::Index>(m % cardinal_sample_stride == 0 ? m / cardinal_sample_stride
+                                                                     : sample.cols() - 1);
+  };
+  if (sampled) {
+    const std::size_t strided = (point_count + cardinal_sample_stride - 1) / cardinal_sample_stride;
+    const bool last_extra = (point_count - 1) % cardinal_sample_stride != 0;
+    sample.resize(n, static_cast<Eigen::Index>(strided + (last_extra ? 1 : 0)));
+    out.solution_norm_squared.setZero();
+  }
   const std::size_t blocks = (point_count + points_per_block - 1) / points_per_block;
   run_parts(blocks, [&](std::size_t b) {
     const std::size_t first = b * points_per_block;
@@ -174,7 +207,15 @@ GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
     if (residual)
       out.residual.segment(offset, count).noalias() =
           at_points.segment(offset, count) - block * alpha;
-    if (power) {
+    if (power && sampled) {
+      Eigen::MatrixXd columns = block.transpose();
+      solver.quadratic_forms_in_place(columns, quadratic.data() + offset, nullptr);
+      // columns holds L^-1 k_X(s) now: keep the sampled ones for the second solve below.
+      for (std::size_t i = 0; i < rows; ++i)
+        if (in_cardinal_sample(first + i, point_count))
+          sample.col(sample_column(first + i)) = columns.col(static_cast<Eigen::Index>(i));
+      check_cancelled();
+    } else if (power) {
       Eigen::MatrixXd columns = block.transpose();
       solver.quadratic_forms_in_place(columns, quadratic.data() + offset,
                                       cardinal ? out.solution_norm_squared.data() + offset
@@ -182,8 +223,43 @@ GridPass grid_pass(const AnyKernel& kernel, const GramSolver& solver,
       check_cancelled();
     }
   });
+  if (sampled) {
+    const auto columns = static_cast<std::size_t>(sample.cols());
+    const std::size_t parts = (columns + points_per_block - 1) / points_per_block;
+    run_parts(parts, [&](std::size_t part) {
+      const auto first = static_cast<Eigen::Index>(part * points_per_block);
+      const auto count =
+          static_cast<Eigen::Index>(std::min(points_per_block, columns - part * points_per_block));
+      solver.solve_lower_transposed_in_place(sample.middleCols(first, count));
+      check_cancelled();
+    });
+    for (std::size_t m = 0; m < point_count; ++m)
+      if (in_cardinal_sample(m, point_count))
+        out.solution_norm_squared(static_cast<Eigen::Index>(m)) =
+            sample.col(sample_column(m)).squaredNorm();
+  }
   if (power) out.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
   return out;
+}
+
+// |G^-1 k_X(s_m)|^2 exactly at the points that set power_function_sup and sup_error, into
+// pass.solution_norm_squared: with the sample of grid_pass, the floors' maximum includes them.
+void cardinal_at_sup_points(const AnyKernel& kernel, const GramSolver& solver,
+                            std::span<const double> centres, std::span<const double> points,
+                            GridPass& pass) {
+  const auto d = static_cast<std::size_t>(kernel.domain().dimension);
+  const auto n = static_cast<Eigen::Index>(kernel.domain().point_count(centres));
+  std::array<Eigen::Index, 2> at{-1, -1};
+  if (pass.power_squared.size() > 0) pass.power_squared.maxCoeff(&at[0]);
+  if (pass.residual.size() > 0) pass.residual.cwiseAbs().maxCoeff(&at[1]);
+  for (const Eigen::Index m : at) {
+    if (m < 0) continue;
+    Eigen::MatrixXd row(1, n);
+    kernel.cross_into(points.subspan(static_cast<std::size_t>(m) * d, d), centres, row);
+    Eigen::MatrixXd column = row.transpose();
+    double quadratic = 0;
+    solver.quadratic_forms_in_place(column, &quadratic, &pass.solution_norm_squared(m));
+  }
 }
 
 // The floor of ||Pi f||_H = sqrt(alpha^T G alpha): the larger of what a backward error E of
@@ -298,7 +374,8 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
                                              std::span<const double> centres,
                                              std::size_t evaluation_points,
                                              const Eigen::MatrixXd& gram, const GramSolver& solver,
-                                             unsigned work, Eigen::MatrixXd* cross_out) {
+                                             unsigned work, Eigen::MatrixXd* cross_out,
+                                             bool sampled_cardinal = false) {
   // ||I - Pi_n||_{H -> C} of interpolation is the power function (below).
   if (work & work_projection_residual) work |= work_power;
   const Domain& domain = kernel.domain();
@@ -333,8 +410,13 @@ ApproximationMeasurement measure_interpolant(const AnyKernel& kernel, const Targ
   // residual, in one blocked pass.
   const unsigned grid_work = work & (work_power | work_cardinal | work_residual);
   GridPass pass;
+  // The floors from a sample of the points (grid_pass) where neither floor is reported itself.
+  const bool sampled =
+      sampled_cardinal && (work & work_cardinal) && solver.kept_vectors() == nullptr;
   if (grid_work || cross_out)
-    pass = grid_pass(kernel, solver, centres, points, grid_work, alpha, at_points, cross_out);
+    pass =
+        grid_pass(kernel, solver, centres, points, grid_work, alpha, at_points, cross_out, sampled);
+  if (sampled) cardinal_at_sup_points(kernel, solver, centres, points, pass);
   check_cancelled();
   record_interpolant_metrics(kernel, points, n, spectrum, work, alpha,
                              (work & work_interpolant) ? alpha.dot(gram * alpha) : nan,
@@ -374,8 +456,17 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
                           work & work_spectrum ? GramSpectrumMode::exact
                                                : GramSpectrumMode::estimate);
   check_cancelled();
+  // power_function_floor and error_floor are maxima over every point; where neither is asked
+  // for, the floors only size the columns and flags of the other metrics (a sample suffices).
+  using M = ApproximationMetric;
+  auto asked = [&](M metric) {
+    const auto i = static_cast<std::size_t>(metric);
+    return selection.empty() || (i < selection.size() && selection[i]);
+  };
+  const bool sampled_cardinal = !asked(M::power_function_floor) && !asked(M::error_floor) &&
+                                kernel.domain().point_count(centres) >= sampled_floor_min_centres;
   auto out = measure_interpolant(kernel, target, centres, evaluation_points, gram, solver, work,
-                                 nullptr);
+                                 nullptr, sampled_cardinal);
   // ||Pi||_{H -> H} of the operator built from the same solver.
   if (work & work_operator_norm) {
     ProjectionOperator op;
