@@ -15,7 +15,8 @@ SOURCE_DIR/docs/study-times.json, beside the figures of the studies not run:
   rkhs_study    `rkhs-study --version` of the binary timed
   date          the day it was timed
 
-and, for the file as a whole, the command, the processor and the core count.
+and, for the file as a whole, the command, the processor and the core count (a study timed on
+another processor has its own `processor`).
 tests/docs/check_readme.py checks that README's "time" column quotes these figures and that no
 study file changed since it was timed (its SHA-256), so a timing cannot drift from the study it
 describes: after changing a study, run this script with --study NAME.
@@ -89,9 +90,11 @@ def main():
     output = arguments.source / OUTPUT
     figures = json.loads(output.read_text()) if output.exists() else {}
     version = subprocess.run([executable, "--version"], capture_output=True, text=True)
+    # The processor of the file is that of the studies without their own "processor": a study
+    # timed on another machine says which (the README's times are of the same size, not ratios).
+    figures.setdefault("processor", processor())
     figures.update({
         "command": f"rkhs-study run STUDY --threads {arguments.threads} --fresh --no-plots --quiet",
-        "processor": processor(),
         "cores": os.cpu_count(),
     })
     times = figures.setdefault("studies", {})
@@ -99,6 +102,8 @@ def main():
         for study in studies:
             entry = time_study(executable, version.stdout.strip(), study, arguments.threads,
                                pathlib.Path(work))
+            if processor() != figures["processor"]:
+                entry["processor"] = processor()
             times[study.stem] = entry
             print(f"{study.stem}: {entry['trials']} trials, {entry['wall_seconds']:.2f} s wall, "
                   f"{entry['cpu_seconds']:.2f} s cpu", flush=True)

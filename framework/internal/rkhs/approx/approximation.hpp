@@ -21,6 +21,16 @@ double fill_distance(std::span<const double> centres, const Domain& domain);
 /// Separation distance q = min_{i != j} |c_i - c_j| / 2; NaN for fewer than two centres.
 double separation_distance(std::span<const double> centres, const Domain& domain);
 
+/// The floor of ||Pi f||_H = sqrt(alpha^T G alpha) = `norm` (approximation.cpp): the larger of
+/// what a backward error of n eps lambda_max in G moves it by and what the data's round-off,
+/// eps `data_norm`, becomes through the smallest eigenvalue the solve keeps.
+double native_norm_floor(double norm, double coefficients_squared, double data_norm,
+                         const GramSpectrum& spectrum, Eigen::Index n);
+/// The floors of gram_min_eigenvalue, gram_max_eigenvalue (Weyl: n eps lambda_max) and
+/// gram_condition_number into `floors`.
+void set_spectrum_floors(const GramSpectrum& spectrum, double n,
+                         MetricValues<ApproximationMetric>& floors);
+
 /// Names of the metrics of an approximation trial, in output order: the names of
 /// MetricTable<ApproximationMetric> (rkhs/approx/metrics.hpp, which holds their units and
 /// NaN rules).
