@@ -8,6 +8,7 @@
 #include <cstring>
 #include <map>
 
+#include "approx_support.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/multilevel.hpp"
 #include "rkhs/approx/projection.hpp"
@@ -18,34 +19,9 @@
 #include "rkhs/kernel/kernel.hpp"
 
 using namespace rkhs;
+using namespace rkhs::test;
 
 namespace {
-
-using Given = std::map<std::string, ParameterValue>;
-
-Domain unit_square() {
-  Domain d{1.0, false};
-  d.dimension = 2;
-  d.width = 1.0;
-  return d;
-}
-
-std::unique_ptr<AnyKernel> wendland(int k, double radius, const Domain& domain) {
-  const auto* entry = kernel_registry().find("wendland");
-  REQUIRE(entry);
-  return entry->factory(ParameterSet::resolve(entry->info.parameters,
-                                              Given{{"k", std::int64_t{k}}, {"radius", radius}}),
-                        domain);
-}
-
-std::unique_ptr<TargetFunction> expression(const std::string& f, const Domain& domain) {
-  const auto* entry = target_registry().find("expression");
-  REQUIRE(entry);
-  return entry->factory(
-      ParameterSet::resolve(entry->info.parameters, Given{{"f", f}},
-                            entry->info.user_parameters ? &*entry->info.user_parameters : nullptr),
-      domain);
-}
 
 ParameterSet multilevel_parameters(std::int64_t m0, double nu) {
   const auto* entry = projection_registry().find("multilevel");
@@ -69,7 +45,7 @@ const char* const smooth_target = "exp(x1) * cos(x2) + x1 * x2";
 
 TEST_CASE("multilevel: one level is the sparse path's interpolant at its centres",
           "[approx][multilevel]") {
-  const Domain domain = unit_square();
+  const Domain domain = box(2);
   const auto target = expression(smooth_target, domain);
   // Level 0 with m0 = 8: 9 x 9 centres, radius nu h_0 = 4 / 8.
   const MultilevelSettings settings{8, 4.0};
@@ -102,7 +78,7 @@ TEST_CASE(
     "multilevel: the sum interpolates f on the finest grid, and each level reduces the "
     "error",
     "[approx][multilevel]") {
-  const Domain domain = unit_square();
+  const Domain domain = box(2);
   const auto target = expression(smooth_target, domain);
   const auto kernel = wendland(1, 1.0, domain);
   const MultilevelSettings settings{4, 4.0};
@@ -137,7 +113,7 @@ TEST_CASE(
 
 TEST_CASE("multilevel: the projection's metrics are bit-identical on one and two threads",
           "[approx][multilevel]") {
-  const Domain domain = unit_square();
+  const Domain domain = box(2);
   const auto target = expression(smooth_target, domain);
   const auto kernel = wendland(1, 1.0, domain);
   const auto parameters = multilevel_parameters(4, 4.0);
@@ -175,7 +151,7 @@ TEST_CASE("multilevel: the projection's metrics are bit-identical on one and two
 
 TEST_CASE("multilevel: an n that is not a level's centre count is refused, naming the valid ones",
           "[approx][multilevel]") {
-  const Domain domain = unit_square();
+  const Domain domain = box(2);
   const auto kernel = wendland(1, 1.0, domain);
   const auto* entry = projection_registry().find("multilevel");
   REQUIRE(entry);
@@ -193,7 +169,7 @@ TEST_CASE("multilevel: an n that is not a level's centre count is refused, namin
 
 TEST_CASE("multilevel: the predicted footprint is of the levels' sparse factors",
           "[approx][multilevel]") {
-  const Domain domain = unit_square();
+  const Domain domain = box(2);
   const auto target = expression(smooth_target, domain);
   const auto kernel = wendland(1, 1.0, domain);
   const MultilevelSettings settings{4, 4.0};

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "approx_support.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/dense_kernels.hpp"
 #include "rkhs/approx/projection.hpp"
@@ -108,9 +109,7 @@ TEST_CASE("floors from a sample of the points where no floor metric is reported"
   // columns of power_function_sup, l2_error and sup_error need them, the second solve runs on a
   // sample of the points and at the points that set the sups (docs/metrics.md, "Floors"): a
   // lower bound of the full maximum, within a factor of 2 of it.
-  Domain square{1.0, false};
-  square.dimension = 2;
-  square.width = 1.0;
+  const Domain square = test::box(2);
   const auto k = kernel("matern", {{"nu", 2.5}, {"length_scale", 0.2}}, square);
   const auto* entry = target_registry().find("expression");
   REQUIRE(entry);
@@ -281,9 +280,7 @@ TEST_CASE("every dense-kernel variant this processor runs agrees with the baseli
 TEST_CASE("the tiled Cholesky factorisation: Eigen's, and the same bits on one thread or two",
           "[approximation][work][dense]") {
   // A Matern Gram matrix of condition about 1e7 in 2-D, n = 1100 (the tiles do not divide n).
-  Domain square{1.0, false};
-  square.dimension = 2;
-  square.width = 1.0;
+  const Domain square = test::box(2);
   const auto k = kernel("matern", {{"nu", 2.5}, {"length_scale", 0.2}}, square);
   std::vector<double> centres;
   for (int i = 0; i < 1100; ++i) {
@@ -327,9 +324,7 @@ TEST_CASE("the Gram matrix assembled in strips is the cross matrix's lower trian
           "[kernel][work]") {
   // 1-D (a kernel without support or feature map) and 2-D (a point kernel), n large enough for
   // strips, on one thread and on two: every entry is k(c_i, c_j) for i >= j, bit for bit.
-  Domain square{1.0, false};
-  square.dimension = 2;
-  square.width = 1.0;
+  const Domain square = test::box(2);
   const Domain circle{4.0, true};
   struct Case {
     const Domain* domain;

@@ -8,6 +8,7 @@
 #include <map>
 #include <numbers>
 
+#include "approx_support.hpp"
 #include "rkhs/approx/approximation.hpp"
 #include "rkhs/approx/centres.hpp"
 #include "rkhs/approx/sparse_gram.hpp"
@@ -17,35 +18,9 @@
 #include "rkhs/kernel/kernel.hpp"
 
 using namespace rkhs;
+using namespace rkhs::test;
 
 namespace {
-
-using Given = std::map<std::string, ParameterValue>;
-
-Domain box(int dimension, bool periodic = false) {
-  Domain d{1.0, periodic};
-  d.dimension = dimension;
-  d.width = 1.0;
-  d.height = dimension == 3 ? 1.0 : 0.0;
-  return d;
-}
-
-std::unique_ptr<AnyKernel> wendland(int k, double radius, const Domain& domain) {
-  const auto* entry = kernel_registry().find("wendland");
-  REQUIRE(entry);
-  return entry->factory(ParameterSet::resolve(entry->info.parameters,
-                                              Given{{"k", std::int64_t{k}}, {"radius", radius}}),
-                        domain);
-}
-
-std::unique_ptr<TargetFunction> expression(const std::string& f, const Domain& domain) {
-  const auto* entry = target_registry().find("expression");
-  REQUIRE(entry);
-  return entry->factory(
-      ParameterSet::resolve(entry->info.parameters, Given{{"f", f}},
-                            entry->info.user_parameters ? &*entry->info.user_parameters : nullptr),
-      domain);
-}
 
 std::vector<double> centres(const std::string& name, std::size_t n, const Domain& domain) {
   const auto* entry = centre_registry().find(name);
@@ -53,7 +28,6 @@ std::vector<double> centres(const std::string& name, std::size_t n, const Domain
   return entry->factory(ParameterSet::resolve(entry->info.parameters, {}))->place(n, domain, 0);
 }
 
-// Every metric but the one only the dense path computes.
 MetricSelection sparse_metrics() {
   // Every metric of the interpolation projection (not the matrix-free projections' own) but
   // the operator norm.

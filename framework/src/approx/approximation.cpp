@@ -278,6 +278,7 @@ double native_norm_floor(double norm, double coefficients_squared, double data_n
   return std::max(backward, data);
 }
 
+namespace {
 // The floors of the extreme eigenvalues (Weyl: a perturbation of G by n eps lambda_max moves
 // each by at most that much) and of their ratio.
 void set_spectrum_floors(const GramSpectrum& spectrum, double n,
@@ -290,7 +291,19 @@ void set_spectrum_floors(const GramSpectrum& spectrum, double n,
       spectrum.lambda_min > 0 ? spectrum.condition_number * perturbation / spectrum.lambda_min
                               : std::numeric_limits<double>::infinity();
 }
+}  // namespace
 
+void record_spectrum_metrics(const GramSpectrum& spectrum, Eigen::Index n, unsigned work,
+                             ApproximationMeasurement& out) {
+  using M = ApproximationMetric;
+  if (work & work_spectrum) {
+    out.metrics[M::gram_condition_number] = spectrum.condition_number;
+    out.metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
+    out.metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
+    set_spectrum_floors(spectrum, static_cast<double>(n), out.floors);
+  }
+  if (spectrum.singular) out.flags.push_back("gram_singular");
+}
 
 // Leaves NaN in every metric `selection` does not name (MetricSelection; empty: keep all), so
 // a trial's record holds exactly what it was asked to compute.
@@ -311,13 +324,7 @@ void record_interpolant_metrics(const AnyKernel& kernel, std::span<const double>
   using M = ApproximationMetric;
   const Domain& domain = kernel.domain();
   auto& metrics = out.metrics;
-  if (work & work_spectrum) {
-    metrics[M::gram_condition_number] = spectrum.condition_number;
-    metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
-    metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
-    set_spectrum_floors(spectrum, static_cast<double>(n), out.floors);
-  }
-  if (spectrum.singular) out.flags.push_back("gram_singular");
+  record_spectrum_metrics(spectrum, n, work, out);
   const double round_off = static_cast<double>(n) * eps * spectrum.lambda_max;
   const bool cardinal = work & work_cardinal;
   const double largest_solution_norm_squared =

@@ -67,13 +67,7 @@ ApproximationMeasurement measure_projection(const AnyKernel& kernel, const Targe
                    work & work_spectrum ? GramSpectrumMode::exact : GramSpectrumMode::estimate);
     const auto& spectrum = solver->spectrum();
     out.solve_method += "; basis: " + solver->method();
-    if (work & work_spectrum) {
-      metrics[M::gram_condition_number] = spectrum.condition_number;
-      metrics[M::gram_min_eigenvalue] = spectrum.lambda_min;
-      metrics[M::gram_max_eigenvalue] = spectrum.lambda_max;
-      set_spectrum_floors(spectrum, static_cast<double>(dim), out.floors);
-    }
-    if (spectrum.singular) out.flags.push_back("gram_singular");
+    record_spectrum_metrics(spectrum, static_cast<Eigen::Index>(dim), work, out);
   }
 
   // The power function of H_j: (b_i, k(s, .))_H = b_i(s).

@@ -26,10 +26,6 @@ double separation_distance(std::span<const double> centres, const Domain& domain
 /// eps `data_norm`, becomes through the smallest eigenvalue the solve keeps.
 double native_norm_floor(double norm, double coefficients_squared, double data_norm,
                          const GramSpectrum& spectrum, Eigen::Index n);
-/// The floors of gram_min_eigenvalue, gram_max_eigenvalue (Weyl: n eps lambda_max) and
-/// gram_condition_number into `floors`.
-void set_spectrum_floors(const GramSpectrum& spectrum, double n,
-                         MetricValues<ApproximationMetric>& floors);
 
 /// Names of the metrics of an approximation trial, in output order: the names of
 /// MetricTable<ApproximationMetric> (rkhs/approx/metrics.hpp, which holds their units and
@@ -55,6 +51,11 @@ struct ApproximationMeasurement {
   std::string solve_method;     ///< GramSolver::method()
   std::vector<std::string> flags;  ///< gram_singular, power_function_at_floor, sup_error_at_floor, ...
 };
+
+/// gram_condition_number, gram_min_eigenvalue and gram_max_eigenvalue with their floors (Weyl:
+/// n eps lambda_max) when `work` has work_spectrum, and the gram_singular flag, into `out`.
+void record_spectrum_metrics(const GramSpectrum& spectrum, Eigen::Index n, unsigned work,
+                             ApproximationMeasurement& out);
 
 /// The relative round-off of a solve with a Gram matrix of this spectrum and size n (backward
 /// error n eps lambda_max, amplified by cond(G)), at most 1 (1 for a singular or unknown
