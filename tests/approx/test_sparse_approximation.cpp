@@ -220,3 +220,125 @@ TEST_CASE("sparse and dense paths agree at n = 4096 in 2-D (slower)",
   const auto target = expression("exp(x1) * cos(x2) + x1 * x2", square);
   check_agreement(*kernel, *target, centres("uniform", 4096, square), 16384, 1e-9);
 }
+
+namespace {
+
+MetricSelection select(std::initializer_list<ApproximationMetric> metrics) {
+  MetricSelection selection(MetricValues<ApproximationMetric>::count, false);
+  for (const auto metric : metrics) selection[static_cast<std::size_t>(metric)] = true;
+  return selection;
+}
+
+ApproximationMeasurement measure_selected(const AnyKernel& kernel, const TargetFunction& target,
+                                          const std::vector<double>& x, std::size_t points,
+                                          const MetricSelection& selection, int threads = 1) {
+  SolverOptions options;
+  options.algebra = GramAlgebra::sparse;
+  ApproximationMeasurement out;
+  run_concurrently(1, threads, [&](std::size_t) {
+    out = measure_approximation(kernel, target, x, points, options, selection);
+  });
+  return out;
+}
+
+// With at least sampled_floor_min_centres centres and neither floor reported, the sparse path
+// finds the power function's sup from local bounds (bounded_power_sup): the same sup, errors and
+// flags as the full pass over every point, floors from a sample (at most the full ones).
+void check_bounded_sup(const AnyKernel& kernel, const TargetFunction& target,
+                       const std::vector<double>& x, std::size_t points) {
+  using M = ApproximationMetric;
+  REQUIRE(kernel.domain().point_count(x) >= sampled_floor_min_centres);
+  const auto bounded_selection = select({M::power_function_sup, M::l2_error, M::sup_error});
+  const auto full_selection = select(
+      {M::power_function_sup, M::l2_error, M::sup_error, M::power_function_floor, M::error_floor});
+  const auto bounded = measure_selected(kernel, target, x, points, bounded_selection);
+  const auto full = measure_selected(kernel, target, x, points, full_selection);
+  INFO(bounded.solve_method);
+  REQUIRE_THAT(bounded.solve_method, Catch::Contains("from local bounds"));
+  CHECK_THAT(full.solve_method, !Catch::Contains("from local bounds"));
+  for (const auto metric : {M::power_function_sup, M::l2_error, M::sup_error}) {
+    INFO(approximation_metric_names()[static_cast<std::size_t>(metric)]);
+    CHECK(bounded.metrics[metric] == Approx(full.metrics[metric]).epsilon(1e-12));
+    // The floors are maxima over a sample of the points the full pass takes them over.
+    CHECK(bounded.floors[metric] <= full.floors[metric] * (1 + 1e-12));
+    CHECK(bounded.floors[metric] > 0);
+  }
+  CHECK(bounded.flags == full.flags);
+  // Few points solved: the words "N of M points solved".
+  const auto at = bounded.solve_method.find("bounds: ");
+  REQUIRE(at != std::string::npos);
+  const auto solved = std::stoul(bounded.solve_method.substr(at + 8));
+  CHECK(solved < points / 10);
+  // The same points and values on two threads.
+  const auto two = measure_selected(kernel, target, x, points, bounded_selection, 2);
+  CHECK(two.solve_method == bounded.solve_method);
+  for (std::size_t i = 0; i < two.metrics.size(); ++i) {
+    INFO(approximation_metric_names()[i]);
+    CHECK(std::memcmp(&two.metrics.values()[i], &bounded.metrics.values()[i], sizeof(double)) == 0);
+    CHECK(std::memcmp(&two.floors.values()[i], &bounded.floors.values()[i], sizeof(double)) == 0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE(
+    "the power function's sup from local bounds equals the full pass's with few points solved",
+    "[approximation][sparse]") {
+  SECTION("3-D, 13^3 grid centres, radius 0.3 (3.6 spacings)") {
+    const Domain unit_cube = box(3);
+    const auto kernel = wendland(1, 0.3, unit_cube);
+    const auto target = expression("exp(x1) * cos(x2) + x1 * x2 * x3", unit_cube);
+    check_bounded_sup(*kernel, *target, centres("uniform", 2197, unit_cube), 15625);
+  }
+  SECTION("3-D, phi_{3,2}, 2500 Halton centres, radius 0.4") {
+    const Domain unit_cube = box(3);
+    const auto kernel = wendland(2, 0.4, unit_cube);
+    const auto target = expression("exp(x1) * cos(x2) + x3", unit_cube);
+    check_bounded_sup(*kernel, *target, centres("halton", 2500, unit_cube), 13824);
+  }
+  SECTION("2-D torus, 48^2 grid centres, radius 0.12") {
+    const Domain torus = box(2, true);
+    const auto kernel = wendland(1, 0.12, torus);
+    const auto target = expression("sin(2 * pi * x1) * cos(2 * pi * x2)", torus);
+    check_bounded_sup(*kernel, *target, centres("uniform", 2304, torus), 36864);
+  }
+  SECTION("2-D, random centres, radius 0.1") {
+    const Domain square = box(2);
+    const auto kernel = wendland(1, 0.1, square);
+    const auto target = expression("exp(x1) * cos(x2) + x1 * x2", square);
+    check_bounded_sup(*kernel, *target, centres("random", 2100, square), 16384);
+  }
+}
+
+TEST_CASE("bounded_power_sup finds the largest power function over every point",
+          "[approximation][sparse]") {
+  // An exact evaluator from the dense power function: the sup found equals the largest value
+  // over every point, and only the points `always` are evaluated without the search.
+  const Domain square = box(2);
+  const auto kernel = wendland(1, 0.25, square);
+  const auto x = centres("halton", 300, square);
+  const auto points = square.uniform_points(4096);
+  const Eigen::MatrixXd gram = kernel->gram(x);
+  const Eigen::LLT<Eigen::MatrixXd> factor(gram);
+  const Eigen::MatrixXd cross = kernel->cross(points, x);  // M x n
+  Eigen::MatrixXd solved = cross.transpose();
+  factor.matrixL().solveInPlace(solved);
+  const Eigen::VectorXd power_squared =
+      (kernel->diagonal(points) - solved.colwise().squaredNorm().transpose()).cwiseMax(0.0);
+  const ExactPowerBlock exact = [&](std::span<const std::size_t> which,
+                                    Eigen::Ref<Eigen::VectorXd> power,
+                                    Eigen::Ref<Eigen::VectorXd> norms) {
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      power(static_cast<Eigen::Index>(k)) = power_squared(static_cast<Eigen::Index>(which[k]));
+      norms(static_cast<Eigen::Index>(k)) = 1.0;
+    }
+  };
+  const std::vector<std::size_t> always{0, 17};
+  const auto found = bounded_power_sup(*kernel, x, points, always, exact);
+  CHECK(found.power_squared.maxCoeff() == power_squared.maxCoeff());
+  CHECK(found.evaluated.size() < 400);
+  CHECK(std::find(found.evaluated.begin(), found.evaluated.end(), 17) != found.evaluated.end());
+  const auto sample = bounded_power_sup(*kernel, x, points, always, exact, false);
+  CHECK(sample.evaluated == always);
+  CHECK(sample.power_squared(1) == power_squared(17));
+}

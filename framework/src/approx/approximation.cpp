@@ -140,11 +140,6 @@ constexpr std::size_t points_per_block = 512;
 // the tensor grids of domain.uniform_points the sample meets every row and column) and on the
 // points that set power_function_sup and sup_error, not on every point.
 constexpr std::size_t cardinal_sample_stride = 17;
-// Below this many centres the floors stay the maximum over every point (n^2 M flops for the
-// second solve, about 2.6 s at n = 2047, M = 16384 on one AVX2 core): rate fits weigh values by
-// their floors, and a sampled floor (up to 1.75 times lower on scattered_centres) moves their
-// statistics (a Delta AIC note of 20 became 16); every shipped study is below it.
-constexpr std::size_t sampled_floor_min_centres = 2048;
 
 bool in_cardinal_sample(std::size_t m, std::size_t point_count) {
   return m % cardinal_sample_stride == 0 || m + 1 == point_count;

@@ -135,15 +135,17 @@ ProjectionFootprint predict_multilevel(const AnyKernel& kernel, const Multilevel
     const auto level_kernel =
         kernel_with_radius(kernel, settings.nu * largest_spacing(domain, settings.m0, j));
     const auto factor = predict_sparse_factor(level_kernel->properties(), domain, n);
-    // Bytes as sparse_trial_megabytes (trial_cost.cpp) counts them: 12 a stored nonzero of G
-    // and 44 of its assembly, 6 of CHOLMOD's copy of its upper triangle, 10 a nonzero of the
-    // supernodal factor; a chunk's cross matrix holds (nonzeros of G / n) entries a point, 56
-    // bytes each with its assembly, on two threads.
+    // Bytes as sparse_trial_megabytes (trial_cost.cpp) counts them: at most 20 a nonzero of G
+    // while it is assembled, then 12 a stored nonzero of G, 6 of CHOLMOD's copy of its upper
+    // triangle and 10 a nonzero of the supernodal factor; a chunk's cross matrix holds
+    // (nonzeros of G / n) entries a point, 56 bytes each with its assembly, on two threads.
     const double per_point = factor.gram_nonzeros / static_cast<double>(n);
     const double chunks = 2.0 * 56.0 * per_point *
                           std::min(static_cast<double>(points_per_chunk), std::max(points, fine));
-    largest_level = std::max(largest_level, (12.0 + 44.0 + 6.0) * factor.gram_nonzeros +
-                                                10.0 * factor.factor_nonzeros + chunks);
+    largest_level = std::max(largest_level,
+                             std::max(20.0 * factor.gram_nonzeros,
+                                      18.0 * factor.gram_nonzeros + 10.0 * factor.factor_nonzeros) +
+                                 chunks);
     out.gram_nonzeros += factor.gram_nonzeros;
     out.factor_nonzeros += factor.factor_nonzeros;
     // The factorisation, one solve, and the residual updates on X_J and the evaluation points.

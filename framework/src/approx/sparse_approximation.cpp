@@ -238,24 +238,31 @@ Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const
   const std::size_t n = domain.point_count(centres);
   CellGrid grid = cell_geometry(domain, support_radius(kernel), n);
   bucket(grid, domain, centres);
-  std::vector<Eigen::Triplet<double>> entries;
-  // Each pair of cells once: the upper half, mirrored.
-  for_each_neighbour_block(
-      kernel, grid, grid, true,
-      [&](const Eigen::MatrixXd& block, std::span<const std::size_t> rows,
-          std::span<const std::size_t> cols, bool same_cell) {
-        for (Eigen::Index j = 0; j < block.cols(); ++j)
-          for (Eigen::Index i = 0; i < (same_cell ? j + 1 : block.rows()); ++i) {
-            const double v = block(i, j);
-            const auto gi = static_cast<int>(rows[static_cast<std::size_t>(i)]);
-            const auto gj = static_cast<int>(cols[static_cast<std::size_t>(j)]);
-            if (v == 0 && gi != gj) continue;
-            entries.emplace_back(gi, gj, v);
-            if (gi != gj) entries.emplace_back(gj, gi, v);
-          }
-      });
-  Eigen::SparseMatrix<double> gram(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-  gram.setFromTriplets(entries.begin(), entries.end());
+  // Each pair of cells once: the upper triangle as triplets (reserved for the predicted
+  // nonzeros), compressed, then mirrored into both triangles: about 20 bytes a nonzero of G at
+  // the peak, not the 50 of mirrored triplets.
+  Eigen::SparseMatrix<double> upper(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(static_cast<std::size_t>(
+        0.6 * predicted_gram_nonzeros(kernel.properties(), domain, n) + static_cast<double>(n)));
+    for_each_neighbour_block(
+        kernel, grid, grid, true,
+        [&](const Eigen::MatrixXd& block, std::span<const std::size_t> rows,
+            std::span<const std::size_t> cols, bool same_cell) {
+          for (Eigen::Index j = 0; j < block.cols(); ++j)
+            for (Eigen::Index i = 0; i < (same_cell ? j + 1 : block.rows()); ++i) {
+              const double v = block(i, j);
+              const auto gi = static_cast<int>(rows[static_cast<std::size_t>(i)]);
+              const auto gj = static_cast<int>(cols[static_cast<std::size_t>(j)]);
+              if (v == 0 && gi != gj) continue;
+              entries.emplace_back(std::min(gi, gj), std::max(gi, gj), v);
+            }
+        });
+    upper.setFromTriplets(entries.begin(), entries.end());
+  }
+  Eigen::SparseMatrix<double> gram = upper.selfadjointView<Eigen::Upper>();
+  upper = Eigen::SparseMatrix<double>();
   count_sparse_work(static_cast<std::uint64_t>(gram.nonZeros()), 0, 0);
   return gram;
 }
@@ -292,6 +299,15 @@ double analysed_factor_nonzeros(const Eigen::SparseMatrix<double>& gram) {
   cholesky.common().print = 0;
   cholesky.analyzePattern(gram);
   return cholesky.common().lnz;
+}
+
+bool sparse_sup_from_bounds(std::size_t n, const MetricSelection& selection) {
+  const auto asked = [&](ApproximationMetric metric) {
+    const auto i = static_cast<std::size_t>(metric);
+    return selection.empty() || (i < selection.size() && selection[i]);
+  };
+  return n >= sampled_floor_min_centres && !asked(ApproximationMetric::power_function_floor) &&
+         !asked(ApproximationMetric::error_floor);
 }
 
 bool choose_sparse(const AnyKernel& kernel, std::size_t n, const SolverOptions& options,
@@ -389,44 +405,101 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
     target.evaluate(points, std::span<double>(at_points.data(), point_count));
   }
 
-  // The blocked pass over the evaluation points: block b's columns of the sparse cross matrix,
-  // densified, permuted and solved with L (and L^T for the floors), each block by itself.
+  // The evaluation points in chunks of at most about 2^23 cross-matrix entries (memory O(n x
+  // block), never n x M): each chunk's sparse cross columns give its residual and, on the full
+  // pass, its blocks of columns densified, permuted and solved with L (and L^T for the floors),
+  // each block by itself. Where the floors may come from a sample, the power function's sup
+  // comes from bounded_power_sup instead, which solves for a few points only.
   const bool power = work & (work_power | work_cardinal), cardinal = work & work_cardinal;
   const bool residual_wanted = work & work_residual;
+  const bool bounded = power && sparse_sup_from_bounds(static_cast<std::size_t>(n), selection);
   const auto m_total = static_cast<Eigen::Index>(point_count);
+  const auto d = static_cast<std::size_t>(domain.dimension);
+  const auto solve_block = [&](Eigen::MatrixXd& columns, Eigen::Ref<Eigen::VectorXd> quadratic,
+                               Eigen::VectorXd* norms) {
+    cholmod_common common;
+    cholmod_start(&common);
+    solve_in_place(CHOLMOD_P, cholesky.factor(), columns, common);
+    solve_in_place(CHOLMOD_L, cholesky.factor(), columns, common);
+    quadratic = columns.colwise().squaredNorm().transpose();
+    if (norms) {
+      solve_in_place(CHOLMOD_Lt, cholesky.factor(), columns, common);
+      *norms = columns.colwise().squaredNorm().transpose();
+    }
+    cholmod_finish(&common);
+  };
   Eigen::VectorXd quadratic, solution_norm_squared, residual;
-  if (power || residual_wanted) {
-    const Eigen::SparseMatrix<double> cross = sparse_cross_columns(kernel, points, centres);
-    check_cancelled();
-    if (power) quadratic.resize(m_total);
-    if (cardinal) solution_norm_squared.resize(m_total);
-    if (residual_wanted) residual = at_points - cross.transpose() * alpha;
+  if ((power && !bounded) || residual_wanted) {
+    if (power && !bounded) quadratic.resize(m_total);
+    if (cardinal && !bounded) solution_norm_squared.resize(m_total);
+    if (residual_wanted) residual.resize(m_total);
     // At most about 32 MB of dense columns per block.
     const Eigen::Index per_block =
         std::clamp<Eigen::Index>((Eigen::Index{1} << 22) / std::max<Eigen::Index>(n, 1), 16, 512);
-    const auto blocks = static_cast<std::size_t>((m_total + per_block - 1) / per_block);
-    if (power)
+    const double per_point = static_cast<double>(gram.nonZeros()) / static_cast<double>(n);
+    const Eigen::Index per_chunk =
+        per_block * std::max<Eigen::Index>(
+                        1, static_cast<Eigen::Index>(std::ldexp(1.0, 23) / per_point / per_block));
+    for (Eigen::Index chunk = 0; chunk < m_total; chunk += per_chunk) {
+      const Eigen::Index in_chunk = std::min(per_chunk, m_total - chunk);
+      const Eigen::SparseMatrix<double> cross = sparse_cross_columns(
+          kernel,
+          std::span<const double>(points).subspan(static_cast<std::size_t>(chunk) * d,
+                                                  static_cast<std::size_t>(in_chunk) * d),
+          centres);
+      check_cancelled();
+      if (residual_wanted)
+        residual.segment(chunk, in_chunk) =
+            at_points.segment(chunk, in_chunk) - cross.transpose() * alpha;
+      if (!power || bounded) continue;
+      const auto blocks = static_cast<std::size_t>((in_chunk + per_block - 1) / per_block);
       run_parts(blocks, [&](std::size_t b) {
         const Eigen::Index first = static_cast<Eigen::Index>(b) * per_block;
-        const Eigen::Index count = std::min(per_block, m_total - first);
+        const Eigen::Index count = std::min(per_block, in_chunk - first);
         Eigen::MatrixXd columns = Eigen::MatrixXd(cross.middleCols(first, count));
-        cholmod_common common;
-        cholmod_start(&common);
-        solve_in_place(CHOLMOD_P, cholesky.factor(), columns, common);
-        solve_in_place(CHOLMOD_L, cholesky.factor(), columns, common);
-        quadratic.segment(first, count) = columns.colwise().squaredNorm().transpose();
-        if (cardinal) {
-          solve_in_place(CHOLMOD_Lt, cholesky.factor(), columns, common);
-          solution_norm_squared.segment(first, count) = columns.colwise().squaredNorm().transpose();
-        }
-        cholmod_finish(&common);
+        Eigen::VectorXd norms;
+        solve_block(columns, quadratic.segment(chunk + first, count), cardinal ? &norms : nullptr);
+        if (cardinal) solution_norm_squared.segment(chunk + first, count) = norms;
         check_cancelled();
       });
+    }
   }
 
   GridPass pass;
-  if (power) pass.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
-  pass.solution_norm_squared = std::move(solution_norm_squared);
+  if (bounded) {
+    // The floors' sample: 64 points spread over the grid, the point that sets sup_error, and
+    // the points bounded_power_sup evaluates for the sup (which include the one that sets it).
+    std::vector<std::size_t> sample;
+    for (std::size_t k = 0; k < 64; ++k) sample.push_back(k * (point_count - 1) / 63);
+    if (residual_wanted) {
+      Eigen::Index worst = 0;
+      residual.cwiseAbs().maxCoeff(&worst);
+      sample.push_back(static_cast<std::size_t>(worst));
+    }
+    const ExactPowerBlock exact = [&](std::span<const std::size_t> which,
+                                      Eigen::Ref<Eigen::VectorXd> power_squared,
+                                      Eigen::Ref<Eigen::VectorXd> norms_out) {
+      std::vector<double> at(which.size() * d);
+      for (std::size_t k = 0; k < which.size(); ++k)
+        std::copy_n(&points[which[k] * d], d, &at[k * d]);
+      Eigen::MatrixXd columns = Eigen::MatrixXd(sparse_cross_columns(kernel, at, centres));
+      Eigen::VectorXd quadratic_here(columns.cols()), norms;
+      solve_block(columns, quadratic_here, &norms);
+      power_squared = (kernel.diagonal(at) - quadratic_here).cwiseMax(0.0);
+      norms_out = norms;
+    };
+    const bool search = work & work_power;
+    BoundedPowerSup sup = bounded_power_sup(kernel, centres, points, sample, exact, search);
+    if (search)
+      out.solve_method +=
+          fmt::format("; the power function's sup from local bounds: {} of {} points solved",
+                      sup.evaluated.size(), point_count);
+    pass.power_squared = std::move(sup.power_squared);
+    pass.solution_norm_squared = std::move(sup.solution_norm_squared);
+  } else {
+    if (power) pass.power_squared = (kernel.diagonal(points) - quadratic).cwiseMax(0.0);
+    pass.solution_norm_squared = std::move(solution_norm_squared);
+  }
   pass.residual = std::move(residual);
   record_interpolant_metrics(kernel, points, n, spectrum, work, alpha,
                              (work & work_interpolant) ? alpha.dot(gram * alpha) : nan,

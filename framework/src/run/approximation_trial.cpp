@@ -68,9 +68,15 @@ TrialFootprint approximation_footprint(const StudyDefinition& study, const Trial
     TrialFootprint sparse{sparse_trial_megabytes(factor.gram_nonzeros, factor.factor_nonzeros,
                                                  trial.n, study.evaluation_points),
                           true, factor.gram_nonzeros, factor.factor_nonzeros};
-    // The factorisation, and a solve with L and one with L^T (the floors) per point.
-    sparse.sparse_flops = factor.factor_flops + 4.0 * factor.factor_nonzeros *
-                                                    static_cast<double>(study.evaluation_points);
+    // The factorisation, and a solve with L and one with L^T (the floors) per point solved:
+    // every point, or about a hundred where the power function's sup comes from local bounds
+    // (64 x 64 factorisations, one for about each centre, and a 64 x 64 solve per point).
+    const auto points = static_cast<double>(study.evaluation_points);
+    sparse.sparse_flops =
+        factor.factor_flops + (sparse_sup_from_bounds(trial.n, study.computed_metrics())
+                                   ? 4.0 * factor.factor_nonzeros * 128.0 +
+                                         1e5 * static_cast<double>(trial.n) + 8192.0 * points
+                                   : 4.0 * factor.factor_nonzeros * points);
     return sparse;
   } catch (const std::exception&) {
     return dense;  // the trial fails at once, with the reason

@@ -62,16 +62,21 @@ double trial_matrix_megabytes(std::size_t n, std::size_t evaluation_points) noex
 
 double sparse_trial_megabytes(double gram_nonzeros, double factor_nonzeros, std::size_t n,
                               std::size_t evaluation_points) noexcept {
-  // Bytes: a stored nonzero of G or of the cross matrix takes 12 (value, row index); their
-  // assembly from triplets takes 16 more per entry (32 while the vector grows) and 12 for the
-  // transposed copy setFromTriplets makes. CHOLMOD keeps a permuted copy of G's upper
-  // triangle; its supernodal factor stores L's nonzeros with about a quarter more for the
-  // supernodes' dense blocks. The solves take blocks of at most 32 MB on each of two threads.
+  // Bytes: a stored nonzero of G or of the cross matrix takes 12 (value, row index). G is
+  // assembled from triplets of its upper triangle (8 a nonzero of G, reserved, and 12 for the
+  // compressed upper triangle with setFromTriplets' transposed copy), then mirrored (6 for the
+  // upper triangle beside the 12 of G): at most 20 a nonzero. CHOLMOD keeps a permuted copy of
+  // G's upper triangle (6); its supernodal factor stores L's nonzeros with about a quarter more
+  // for the supernodes' dense blocks (10). The cross matrix is built by chunks of evaluation
+  // points of at most about 2^23 entries (measure_sparse_approximation), one chunk at a time,
+  // from triplets (16 an entry, 32 while the vector grows, and 12 for the transposed copy); the
+  // solves take blocks of at most 32 MB on each of two threads.
   const double per_point = gram_nonzeros / std::max(1.0, static_cast<double>(n));
-  const double cross = per_point * static_cast<double>(evaluation_points);
-  const double assembly = 44.0 * std::max(gram_nonzeros, cross);
-  const double held = 12.0 * gram_nonzeros + 6.0 * gram_nonzeros + 10.0 * factor_nonzeros;
-  return (held + 12.0 * cross + assembly) / 1048576.0 + 64.0;
+  const double cross = std::min(per_point * static_cast<double>(evaluation_points),
+                                std::ldexp(1.0, 23) + 512.0 * per_point);
+  const double gram_phase = std::max(
+      20.0 * gram_nonzeros, 12.0 * gram_nonzeros + 6.0 * gram_nonzeros + 10.0 * factor_nonzeros);
+  return (gram_phase + 56.0 * cross) / 1048576.0 + 64.0;
 }
 
 std::string TrialFootprint::describe() const {

@@ -72,8 +72,9 @@ TrialFootprint trial_footprint(const StudyDefinition& study, const TrialSpec& tr
 
 /// The sparse path's peak memory, MiB, from its predicted nonzeros (sparse_gram.hpp): the Gram
 /// matrix with its assembly, CHOLMOD's permuted copy of its upper triangle and its supernodal
-/// factor, the sparse cross matrix with its assembly (about gram_nonzeros / n nonzeros per
-/// evaluation point) and the dense blocks of the solves.
+/// factor, the sparse cross matrix of a chunk of evaluation points with its assembly (about
+/// gram_nonzeros / n nonzeros per point, at most about 2^23 in a chunk) and the dense blocks of
+/// the solves.
 double sparse_trial_megabytes(double gram_nonzeros, double factor_nonzeros, std::size_t n,
                               std::size_t evaluation_points) noexcept;
 

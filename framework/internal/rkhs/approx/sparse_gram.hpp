@@ -8,8 +8,11 @@
 //   fill_distance, separation_distance     as the dense path
 //   power_function_sup, _floor             P(s)^2 = k(s, s) - |L^-1 P k_X(s)|^2 and the floor's
 //                                          |G^-1 k_X(s)|^2 = |L^-T L^-1 P k_X(s)|^2, by blocks of
-//                                          evaluation points
-//   l2_error, sup_error, error_floor       alpha = G^-1 f(X) and the sparse cross matrix
+//                                          evaluation points; with 2048 centres or more and
+//                                          neither floor reported, the sup from local upper
+//                                          bounds and a few points solved (bounded_power_sup)
+//   l2_error, sup_error, error_floor       alpha = G^-1 f(X) and the sparse cross matrix, by
+//                                          chunks of evaluation points
 //   interpolant_native_norm                sqrt(alpha^T G alpha)
 //   projection_norm_H_to_C                 the power function
 // The round-off floors use lambda_max of G from Lanczos on the sparse matrix and lambda_min from
@@ -27,8 +30,10 @@
 // thread when it is OpenBLAS (openblas_set_num_threads(1)).
 
 #include <Eigen/SparseCore>
+#include <functional>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "rkhs/approx/approximation.hpp"
 
@@ -43,6 +48,22 @@ struct GridPass {
   Eigen::VectorXd solution_norm_squared;  ///< |G^-1 k_X(s_m)|^2 (work_cardinal)
   Eigen::VectorXd residual;               ///< f(s_m) - Pi_n f(s_m) (work_residual)
 };
+
+/// Where a trial reports neither power_function_floor nor error_floor and has at least this many
+/// centres, both paths take the floors from a sample of the evaluation points (docs/metrics.md,
+/// "Floors"): the dense path every 17th point and the points that set a sup, the sparse path the
+/// points bounded_power_sup evaluates (below). With fewer centres the floors stay the maximum
+/// over every point (n^2 M flops for the dense path's second solve, about 2.6 s at n = 2047,
+/// M = 16384 on one AVX2 core): rate fits weigh values by their floors, and a sampled floor (up
+/// to 1.75 times lower on scattered_centres) moves their statistics (a Delta AIC note of 20
+/// became 16); every shipped study of the interpolation path is below it.
+inline constexpr std::size_t sampled_floor_min_centres = 2048;
+
+/// Whether a trial of n centres on the sparse path that computes `selection` (empty: every
+/// metric) takes power_function_sup from bounded_power_sup and the floors from the points it
+/// solves: n >= sampled_floor_min_centres and neither power_function_floor nor error_floor
+/// selected. Such a trial solves for about a hundred points, not for every one.
+bool sparse_sup_from_bounds(std::size_t n, const MetricSelection& selection);
 
 /// Sets, from `pass` over `points`, what `work` asks of the interpolant Pi_n f = sum_i alpha_i
 /// k(c_i, .) of n centres: the power function's sup and floor, the native norm
@@ -100,6 +121,41 @@ SparseFactorPrediction predict_sparse_factor(const KernelProperties& properties,
 /// The nonzeros of L that CHOLMOD's analysis of `gram` (its fill-reducing ordering, as the
 /// sparse path orders it) finds, without factorising.
 double analysed_factor_nonzeros(const Eigen::SparseMatrix<double>& gram);
+
+/// Computes, for the evaluation points `indices` (at most a few dozen), their exact P(s)^2 and
+/// |G^-1 k_X(s)|^2 into `power_squared` and `solution_norm_squared`; called from several threads
+/// at once on disjoint blocks.
+using ExactPowerBlock = std::function<void(std::span<const std::size_t> indices,
+                                           Eigen::Ref<Eigen::VectorXd> power_squared,
+                                           Eigen::Ref<Eigen::VectorXd> solution_norm_squared)>;
+
+/// The points bounded_power_sup computed exactly, in the order it computed them, with their
+/// values; `refined` counts the points whose bounds it tightened (0: none).
+struct BoundedPowerSup {
+  std::vector<std::size_t> evaluated;
+  Eigen::VectorXd power_squared;
+  Eigen::VectorXd solution_norm_squared;
+  std::size_t refined = 0;
+};
+
+/// The largest P(s)^2 over `points`, found with few exact evaluations
+/// (sparse_power_bound.cpp): the power function of a subset Y of the centres bounds that of all
+/// of them from above (P_X(s) <= P_Y(s): a larger space approximates k(s, .) at least as well),
+/// so every point gets the bound P_Y(s)^2 of the 64 centres nearest the middle of its cell (a
+/// dense 64 x 64 Cholesky factorisation per cell of about one centre, shared by the points in
+/// it), plus an allowance for the bound's round-off (10^3 |Y| eps cond(L_Y) (k(s, s) +
+/// |L_Y^-1 k_Y(s)|^2), cond(L_Y) estimated by the ratio of L_Y's extreme diagonal entries). The
+/// points `always` and the 32 largest bounds are evaluated exactly first (`exact`), then the
+/// largest bounds left in rounds of two blocks of 32, until no bound left reaches the largest
+/// exact value; when more than 256 candidates are left once, their bounds are tightened with the
+/// 256 centres nearest each point. The largest of `power_squared` is then the largest P^2 over
+/// every point, as exactly as the exact evaluations compute it; its point is among `evaluated`.
+/// Every step runs in a fixed order, so the points evaluated do not depend on the threads.
+/// Without `search`, only the points `always` are evaluated (a sample for the floors).
+BoundedPowerSup bounded_power_sup(const AnyKernel& kernel, std::span<const double> centres,
+                                  std::span<const double> points,
+                                  std::span<const std::size_t> always, const ExactPowerBlock& exact,
+                                  bool search = true);
 
 /// Whether measure_approximation takes the sparse path for `kernel` at n centres, computing
 /// `work` (ApproximationWork bits): never for GramAlgebra::dense; always for `sparse`, which
