@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <thread>
 
@@ -631,4 +632,60 @@ amplitude = )" + amplitude +
   const auto flags = documented.flags;
   CHECK(std::find(flags.begin(), flags.end(), "gram_singular") != flags.end());
   CHECK(std::isinf(documented.metrics[singular.metric_index("gram_condition_number")]));
+}
+
+TEST_CASE(
+    "limits.memory_megabytes keeps the trials running at once within their predicted matrices",
+    "[run]") {
+  // Dense trials of n = 400, 300, 200 with E = 4096 points: 8 (3 n^2 + 2 n E) bytes, 28.7,
+  // 20.8 and 13.4 MB. A limit of 40 MB lets the largest run beside the smallest only.
+  const char* text = R"(
+[study]
+name = "memory"
+evaluation_points = 4096
+[domain]
+radius = 4
+[grid]
+n = [200, 300, 400]
+[[kernel]]
+name = "gaussian"
+sigma = [0.5, 0.7]
+[limits]
+memory_megabytes = 40
+)";
+  const auto study = parse_study(text, "memory.toml");
+  CHECK(study.limits.memory_megabytes == 40);
+  const auto trials = study.trials();
+  std::mutex mutex;
+  double in_use = 0, most = 0, largest = 0;
+  std::map<std::string, double> footprint;
+  for (const auto& trial : trials) {
+    footprint[trial.key] = trial_footprint(study, trial).megabytes;
+    largest = std::max(largest, footprint[trial.key]);
+  }
+  REQUIRE(largest < 40);
+  RunOptions options{2, {}};
+  options.on_trial_started = [&](const TrialSpec& trial) {
+    std::lock_guard lock(mutex);
+    in_use += footprint[trial.key];
+    most = std::max(most, in_use);
+  };
+  options.on_trial_finished = [&](const TrialSpec& trial, const TrialResult&) {
+    std::lock_guard lock(mutex);
+    in_use -= footprint[trial.key];
+  };
+  const auto limited = run_trials(study, trials, options);
+  CHECK(most <= 40);
+  CHECK(most > largest);  // two trials did run at once
+  // The same results as without the limit.
+  const auto unlimited =
+      run_trials(parse_study(std::string(text).replace(std::string(text).find("memory_megabytes"),
+                                                       21, "trials = 1000"),
+                             "memory.toml"),
+                 trials, {2, {}});
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    INFO(trials[i].key);
+    CHECK(limited[i].ok);
+    CHECK(bitwise_equal(limited[i].metrics, unlimited[i].metrics));
+  }
 }

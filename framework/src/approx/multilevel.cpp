@@ -194,7 +194,8 @@ MultilevelResult multilevel_interpolation(const AnyKernel& kernel, const TargetF
     Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> cholesky;
     cholesky.cholmod().print = 0;
     cholesky.cholmod().quick_return_if_not_posdef = 1;
-    cholesky.compute(gram);
+    analyse_one_at_a_time([&] { cholesky.analyzePattern(gram); });
+    cholesky.factorize(gram);
     if (cholesky.info() != Eigen::Success)
       throw std::runtime_error(fmt::format(
           "multilevel level {}: the Gram matrix of {} centres (radius {}) is not positive "

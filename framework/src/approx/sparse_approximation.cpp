@@ -233,6 +233,12 @@ void single_threaded_blas() {
   });
 }
 
+void analyse_one_at_a_time(const std::function<void()>& analyse) {
+  static std::mutex one_at_a_time;
+  const std::lock_guard lock(one_at_a_time);
+  analyse();
+}
+
 Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres) {
   const Domain& domain = kernel.domain();
   const std::size_t n = domain.point_count(centres);
@@ -297,7 +303,7 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
 double analysed_factor_nonzeros(const Eigen::SparseMatrix<double>& gram) {
   SparseCholesky cholesky;
   cholesky.common().print = 0;
-  cholesky.analyzePattern(gram);
+  analyse_one_at_a_time([&] { cholesky.analyzePattern(gram); });
   return cholesky.common().lnz;
 }
 
@@ -345,7 +351,7 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   SparseCholesky cholesky;
   cholesky.common().print = 0;  // a matrix that is not positive definite is answered below
   cholesky.common().quick_return_if_not_posdef = 1;
-  cholesky.analyzePattern(gram);
+  analyse_one_at_a_time([&] { cholesky.analyzePattern(gram); });
   const cholmod_common& analysed = cholesky.common();
   const int ordering = analysed.method[analysed.selected].ordering;
   const double factor_nonzeros = analysed.lnz;

@@ -210,35 +210,63 @@ struct RunState {
 // starts, under the mutex that also calls on_trial_started, so trials start in exactly that
 // order whatever the thread count, the scheduling backend and whichever task a thread happens to
 // take (a oneTBB thread that steals takes the far end of a range, which here would be the
-// cheapest trials).
+// cheapest trials). With limits.memory_megabytes, a task claims the first trial of `order` left
+// whose predicted matrices fit beside those of the trials running, or waits for one to finish;
+// a trial runs alone whatever its size. The results do not depend on it, only the order in
+// which trials start.
 void run_in_arena(RunState& state) {
   const auto order = largest_first_order(state.study, state.trials);
   const auto& options = state.options;
   const int threads = options.threads > 0 ? options.threads : default_concurrency();
-  std::size_t claimed = 0;  // trials of `order` taken by a task (guarded by state.mutex)
+  const double budget = state.study.limits.memory_megabytes;
+  std::vector<double> megabytes(order.size(), 0.0);  // by position in `order`
+  if (budget > 0)
+    for (std::size_t k = 0; k < order.size(); ++k)
+      megabytes[k] = trial_footprint(state.study, state.trials[order[k]]).megabytes;
+  std::vector<bool> claimed(order.size(), false);  // guarded by state.mutex
+  std::size_t first_left = 0;                      // claimed[k] for every k < first_left
+  double in_use = 0;                               // MB of the trials running
+  std::size_t running = 0;
   run_concurrently(order.size(), threads, [&](std::size_t) {
     const bool stop = options.stop_requested && options.stop_requested();
-    std::size_t i = 0;
+    std::size_t k = 0;
     {
-      std::lock_guard lock(state.mutex);
-      if (state.abandoned) return;
-      i = order[claimed++];
+      std::unique_lock lock(state.mutex);
+      for (;;) {
+        if (state.abandoned) return;
+        k = first_left;
+        if (budget > 0 && !stop)
+          while (k < order.size() &&
+                 (claimed[k] || (running > 0 && in_use + megabytes[k] > budget)))
+            ++k;
+        if (k < order.size()) break;
+        state.changed.wait(lock);  // every trial that would fit waits for room
+      }
+      claimed[k] = true;
+      while (first_left < order.size() && claimed[first_left]) ++first_left;
       if (!stop) {
-        state.phase[i] = RunState::running;
-        if (options.on_trial_started) options.on_trial_started(state.trials[i]);
+        in_use += megabytes[k];
+        ++running;
+        state.phase[order[k]] = RunState::running;
+        if (options.on_trial_started) options.on_trial_started(state.trials[order[k]]);
       }
     }
+    const std::size_t i = order[k];
     TrialResult result =
         stop ? not_started()
              : run_trial(state.study, state.trials[i], options.stop_requested, &state.lap_maps);
     std::lock_guard lock(state.mutex);
+    if (!stop) {
+      in_use -= megabytes[k];
+      --running;
+    }
+    state.changed.notify_all();
     if (state.abandoned) return;
     state.phase[i] = RunState::done;
     state.results[i] = std::move(result);
     if (!state.results[i].skipped && options.on_trial_finished)
       options.on_trial_finished(state.trials[i], state.results[i]);
     ++state.finished;
-    state.changed.notify_all();
   });
 }
 

@@ -311,11 +311,14 @@ const toml::node& read_grid_and_limits(const Reporter& report, const toml::table
 
   std::uint64_t max_trials = default_max_trials;
   if (const auto* limits = optional_table(report, root, "limits")) {
-    check_keys(report, *limits, "limits.", {"trial_seconds", "matrix_megabytes", "trials"});
+    check_keys(report, *limits, "limits.",
+               {"trial_seconds", "matrix_megabytes", "memory_megabytes", "trials"});
     study.limits.trial_seconds =
         get_number(report, *limits, "trial_seconds", "limits.", 0, -1e-300);
     study.limits.matrix_megabytes = get_number(report, *limits, "matrix_megabytes", "limits.",
                                                study.limits.matrix_megabytes, 0);
+    study.limits.memory_megabytes = get_number(report, *limits, "memory_megabytes", "limits.",
+                                               study.limits.memory_megabytes, 0);
     max_trials =
         get_whole_number(report, *limits, "trials", "limits.", max_trials, 1, max_max_trials,
                          " (every trial of the grid is held in memory, about 1.7 KB each)");

@@ -105,6 +105,11 @@ struct TrialSpec {
 struct StudyLimits {
   double trial_seconds = 0;          ///< a trial running longer fails (0: no limit)
   double matrix_megabytes = 2048;    ///< a trial whose dense matrices exceed this fails up front
+  /// The trials running at once together stay within this many MB of predicted matrices
+  /// (trial_footprint): a trial that would not fit waits for others to finish, a smaller one
+  /// further down the order starts meanwhile, and a trial runs alone whatever its size (0: no
+  /// limit).
+  double memory_megabytes = 0;
 };
 
 /// "approximation", "adaptive": the name of `kind` (describe(kind).name()).

@@ -84,6 +84,14 @@ void keep_selected(const MetricSelection& selection, ApproximationMeasurement& o
 /// CHOLMOD calls it first (the sparse path, multilevel interpolation).
 void single_threaded_blas();
 
+/// Runs `analyse` (a CHOLMOD analysis: analyzePattern), one at a time in the process: CHOLMOD's
+/// METIS ordering draws from a process-wide random state that each call reseeds, so two analyses at
+/// once (two trials on two threads) interleave their draws and order differently from run to run
+/// (seen: 2.88e8 against 2.92e8 nonzeros in L for the same matrix of 35937 centres, and values that
+/// moved in their last digits). Every analysis of the sparse path and of the multilevel
+/// projection goes through here.
+void analyse_one_at_a_time(const std::function<void()>& analyse);
+
 /// The n x n Gram matrix G_ij = k(c_i, c_j) of a kernel with support_radius > 0, both
 /// triangles stored (column-major, compressed), without its zeros but for the diagonal. Each
 /// entry of the upper triangle is computed once (AnyKernel::cross_into on the centres of two
