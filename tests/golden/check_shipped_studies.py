@@ -5,7 +5,7 @@ tests/golden/studies/<study>/.
 
 Adaptive studies run on a short horizon (one lap, one snapshot; a laps axis becomes one lap and
 the limit) so the whole check takes a few minutes on two cores; approximation studies run as
-shipped.
+shipped, but for those in GOLDEN_TIERS, which run one of their tiers.
 
 Values are compared by their floors, so that the files hold on every x86-64 processor and need
 no re-recording for one: the last digits of a double depend on the processor (glibc picks its
@@ -121,6 +121,13 @@ def sanitizer_grid(study, text):
     return text.replace(shipped, smaller), kept
 
 
+# Studies whose full tier takes minutes on 2 cores are pinned at a tier of theirs
+# (`rkhs-study check --tier NAME`): the same code paths at smaller n. wendland_3d's full tier
+# (n up to 35937 in 3-D) takes about 5 minutes, twice per CI run (golden and golden_portable);
+# its quick tier about half a minute. docs/study-times.json times the full tiers.
+GOLDEN_TIERS = {"wendland_3d": "quick"}
+
+
 # --portable: the run another x86-64 processor would make. glibc's exp, log, sin and pow take
 # their baseline SSE2 code paths instead of the FMA ones (GLIBC_TUNABLES masks the features glibc
 # chooses them by): other bits in the last places of every value, the same files within floors.
@@ -151,9 +158,10 @@ def run_study(exe, source, work, study, sanitizer=False, portable=False):
     environment = dict(os.environ, RKHS_STUDY_DENSE_KERNELS=DENSE_KERNELS)
     if portable:
         environment["GLIBC_TUNABLES"] = PORTABLE_GLIBC_TUNABLES
+    tier = ["--tier", GOLDEN_TIERS[name]] if name in GOLDEN_TIERS else []
     result = subprocess.run(
         [exe, "check", "--no-store", "--quiet", "--threads", "2", "--out", name,
-         "--data-dir", str(source / "studies" / "data"), definition.name],
+         "--data-dir", str(source / "studies" / "data"), *tier, definition.name],
         cwd=work, capture_output=True, text=True, check=False, env=environment)
     # 0 all pass, 1 a failure, 3 inconclusive: short horizons fail some expectations, and that
     # is pinned too; 5 a study with no [[expect]] (its trials run and its outputs are written
