@@ -335,6 +335,57 @@ bool choose_sparse(const AnyKernel& kernel, std::size_t n, const SolverOptions& 
   return predicted_gram_nonzeros(kernel.properties(), kernel.domain(), n) <= 0.25 * count * count;
 }
 
+namespace {
+
+// On the dense columns `columns` (k_X(s) of some points): quadratic := |L^-1 P k_X(s)|^2 and,
+// when `norms` is given, norms := |G^-1 k_X(s)|^2, each column by itself (a CHOLMOD common of
+// its own, so that blocks may run concurrently).
+void solve_columns(cholmod_factor* factor, Eigen::MatrixXd& columns,
+                   Eigen::Ref<Eigen::VectorXd> quadratic, Eigen::VectorXd* norms) {
+  cholmod_common common;
+  cholmod_start(&common);
+  solve_in_place(CHOLMOD_P, factor, columns, common);
+  solve_in_place(CHOLMOD_L, factor, columns, common);
+  quadratic = columns.colwise().squaredNorm().transpose();
+  if (norms) {
+    solve_in_place(CHOLMOD_Lt, factor, columns, common);
+    *norms = columns.colwise().squaredNorm().transpose();
+  }
+  cholmod_finish(&common);
+}
+
+// The pass of sparse_sup_from_bounds: the points bounded_power_sup solves for the sup (with
+// `search`), and the floors' sample: 64 points spread over the grid and, with a `residual`, the
+// point that sets sup_error.
+BoundedPowerSup bounded_pass(const AnyKernel& kernel, std::span<const double> centres,
+                             std::span<const double> points, cholmod_factor* factor,
+                             const Eigen::VectorXd* residual, bool search) {
+  const auto d = static_cast<std::size_t>(kernel.domain().dimension);
+  const std::size_t point_count = kernel.domain().point_count(points);
+  std::vector<std::size_t> sample;
+  for (std::size_t k = 0; k < 64; ++k) sample.push_back(k * (point_count - 1) / 63);
+  if (residual) {
+    Eigen::Index worst = 0;
+    residual->cwiseAbs().maxCoeff(&worst);
+    sample.push_back(static_cast<std::size_t>(worst));
+  }
+  const ExactPowerBlock exact = [&](std::span<const std::size_t> which,
+                                    Eigen::Ref<Eigen::VectorXd> power_squared,
+                                    Eigen::Ref<Eigen::VectorXd> norms_out) {
+    std::vector<double> at(which.size() * d);
+    for (std::size_t k = 0; k < which.size(); ++k)
+      std::copy_n(&points[which[k] * d], d, &at[k * d]);
+    Eigen::MatrixXd columns = Eigen::MatrixXd(sparse_cross_columns(kernel, at, centres));
+    Eigen::VectorXd quadratic(columns.cols()), norms;
+    solve_columns(factor, columns, quadratic, &norms);
+    power_squared = (kernel.diagonal(at) - quadratic).cwiseMax(0.0);
+    norms_out = norms;
+  };
+  return bounded_power_sup(kernel, centres, points, sample, exact, search);
+}
+
+}  // namespace
+
 std::optional<ApproximationMeasurement> measure_sparse_approximation(
     const AnyKernel& kernel, const TargetFunction& target, std::span<const double> centres,
     std::size_t evaluation_points, const SolverOptions& options, const MetricSelection& selection) {
@@ -421,19 +472,6 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   const bool bounded = power && sparse_sup_from_bounds(static_cast<std::size_t>(n), selection);
   const auto m_total = static_cast<Eigen::Index>(point_count);
   const auto d = static_cast<std::size_t>(domain.dimension);
-  const auto solve_block = [&](Eigen::MatrixXd& columns, Eigen::Ref<Eigen::VectorXd> quadratic,
-                               Eigen::VectorXd* norms) {
-    cholmod_common common;
-    cholmod_start(&common);
-    solve_in_place(CHOLMOD_P, cholesky.factor(), columns, common);
-    solve_in_place(CHOLMOD_L, cholesky.factor(), columns, common);
-    quadratic = columns.colwise().squaredNorm().transpose();
-    if (norms) {
-      solve_in_place(CHOLMOD_Lt, cholesky.factor(), columns, common);
-      *norms = columns.colwise().squaredNorm().transpose();
-    }
-    cholmod_finish(&common);
-  };
   Eigen::VectorXd quadratic, solution_norm_squared, residual;
   if ((power && !bounded) || residual_wanted) {
     if (power && !bounded) quadratic.resize(m_total);
@@ -464,7 +502,8 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
         const Eigen::Index count = std::min(per_block, in_chunk - first);
         Eigen::MatrixXd columns = Eigen::MatrixXd(cross.middleCols(first, count));
         Eigen::VectorXd norms;
-        solve_block(columns, quadratic.segment(chunk + first, count), cardinal ? &norms : nullptr);
+        solve_columns(cholesky.factor(), columns, quadratic.segment(chunk + first, count),
+                      cardinal ? &norms : nullptr);
         if (cardinal) solution_norm_squared.segment(chunk + first, count) = norms;
         check_cancelled();
       });
@@ -473,29 +512,9 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
 
   GridPass pass;
   if (bounded) {
-    // The floors' sample: 64 points spread over the grid, the point that sets sup_error, and
-    // the points bounded_power_sup evaluates for the sup (which include the one that sets it).
-    std::vector<std::size_t> sample;
-    for (std::size_t k = 0; k < 64; ++k) sample.push_back(k * (point_count - 1) / 63);
-    if (residual_wanted) {
-      Eigen::Index worst = 0;
-      residual.cwiseAbs().maxCoeff(&worst);
-      sample.push_back(static_cast<std::size_t>(worst));
-    }
-    const ExactPowerBlock exact = [&](std::span<const std::size_t> which,
-                                      Eigen::Ref<Eigen::VectorXd> power_squared,
-                                      Eigen::Ref<Eigen::VectorXd> norms_out) {
-      std::vector<double> at(which.size() * d);
-      for (std::size_t k = 0; k < which.size(); ++k)
-        std::copy_n(&points[which[k] * d], d, &at[k * d]);
-      Eigen::MatrixXd columns = Eigen::MatrixXd(sparse_cross_columns(kernel, at, centres));
-      Eigen::VectorXd quadratic_here(columns.cols()), norms;
-      solve_block(columns, quadratic_here, &norms);
-      power_squared = (kernel.diagonal(at) - quadratic_here).cwiseMax(0.0);
-      norms_out = norms;
-    };
     const bool search = work & work_power;
-    BoundedPowerSup sup = bounded_power_sup(kernel, centres, points, sample, exact, search);
+    BoundedPowerSup sup = bounded_pass(kernel, centres, points, cholesky.factor(),
+                                       residual_wanted ? &residual : nullptr, search);
     if (search)
       out.solve_method +=
           fmt::format("; the power function's sup from local bounds: {} of {} points solved",
