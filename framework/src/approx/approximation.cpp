@@ -461,13 +461,7 @@ ApproximationMeasurement measure_approximation(const AnyKernel& kernel,
   check_cancelled();
   // power_function_floor and error_floor are maxima over every point; where neither is asked
   // for, the floors only size the columns and flags of the other metrics (a sample suffices).
-  using M = ApproximationMetric;
-  auto asked = [&](M metric) {
-    const auto i = static_cast<std::size_t>(metric);
-    return selection.empty() || (i < selection.size() && selection[i]);
-  };
-  const bool sampled_cardinal = !asked(M::power_function_floor) && !asked(M::error_floor) &&
-                                kernel.domain().point_count(centres) >= sampled_floor_min_centres;
+  const bool sampled_cardinal = floors_from_sample(kernel.domain().point_count(centres), selection);
   auto out = measure_interpolant(kernel, target, centres, evaluation_points, gram, solver, work,
                                  nullptr, sampled_cardinal);
   // ||Pi||_{H -> H} of the operator built from the same solver.

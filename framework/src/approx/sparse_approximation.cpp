@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "rkhs/approx/cell_grid.hpp"
 #include "rkhs/approx/lanczos.hpp"
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
@@ -28,118 +29,6 @@ constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 constexpr double spectrum_tolerance = 1e-11;
 constexpr Eigen::Index spectrum_steps = 500;
 
-// A uniform grid of cells of side at least the support radius on every axis, so that two points
-// closer than the radius lie in the same or in neighbouring cells (across the seam on a
-// periodic axis). The points of each cell are kept in increasing index order.
-struct CellGrid {
-  int dimension = 1;
-  bool periodic = false;
-  std::array<std::int64_t, Domain::max_dimension> count{1, 1, 1};
-  std::array<double, Domain::max_dimension> side{1, 1, 1};
-  std::vector<std::size_t> start;   // cell c holds order[start[c] .. start[c + 1])
-  std::vector<std::size_t> order;   // point indices, by cell
-  std::vector<double> coordinates;  // the points' coordinates in `order`
-
-  std::size_t cells() const {
-    std::size_t total = 1;
-    for (int a = 0; a < dimension; ++a) total *= static_cast<std::size_t>(count[a]);
-    return total;
-  }
-};
-
-// The cell geometry for `radius` on `domain`: floor(extent / radius) cells per axis (at least
-// one), fewer when there would be more cells than 4 `points` + 64 (the cells stay at least
-// `radius` wide).
-CellGrid cell_geometry(const Domain& domain, double radius, std::size_t points) {
-  CellGrid grid;
-  grid.dimension = domain.dimension;
-  grid.periodic = domain.periodic;
-  const double budget = 4.0 * static_cast<double>(points) + 64.0;
-  for (int a = 0; a < grid.dimension; ++a) {
-    const double per_axis = std::floor(domain.extent(a) / radius);
-    grid.count[a] = static_cast<std::int64_t>(
-        std::clamp(per_axis, 1.0, std::pow(budget, 1.0 / grid.dimension)));
-    grid.side[a] = domain.extent(a) / static_cast<double>(grid.count[a]);
-  }
-  return grid;
-}
-
-std::int64_t axis_cell(const CellGrid& grid, const Domain& domain, double x, int axis) {
-  if (grid.periodic) x = domain.wrap(x, axis);
-  const auto cell = static_cast<std::int64_t>(std::floor(x / grid.side[axis]));
-  return std::clamp<std::int64_t>(cell, 0, grid.count[axis] - 1);
-}
-
-// Buckets `points` into `grid` (whose geometry is set), stably.
-void bucket(CellGrid& grid, const Domain& domain, std::span<const double> points) {
-  const auto d = static_cast<std::size_t>(grid.dimension);
-  const std::size_t n = points.size() / d, cells = grid.cells();
-  std::vector<std::size_t> cell_of(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    std::size_t c = 0;
-    for (int a = grid.dimension - 1; a >= 0; --a)
-      c = c * static_cast<std::size_t>(grid.count[a]) +
-          static_cast<std::size_t>(axis_cell(grid, domain, points[i * d + a], a));
-    cell_of[i] = c;
-  }
-  grid.start.assign(cells + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) ++grid.start[cell_of[i] + 1];
-  for (std::size_t c = 0; c < cells; ++c) grid.start[c + 1] += grid.start[c];
-  grid.order.resize(n);
-  std::vector<std::size_t> next(grid.start.begin(), grid.start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) grid.order[next[cell_of[i]]++] = i;
-  grid.coordinates.resize(n * d);
-  for (std::size_t k = 0; k < n; ++k)
-    std::copy_n(points.begin() + static_cast<std::ptrdiff_t>(grid.order[k] * d), d,
-                grid.coordinates.begin() + static_cast<std::ptrdiff_t>(k * d));
-}
-
-// The cells next to cell `c` (itself included), each once, increasing.
-void neighbours(const CellGrid& grid, std::size_t c, std::vector<std::size_t>& out) {
-  std::array<std::int64_t, Domain::max_dimension> at{};
-  std::size_t rest = c;
-  for (int a = 0; a < grid.dimension; ++a) {
-    at[a] = static_cast<std::int64_t>(rest % static_cast<std::size_t>(grid.count[a]));
-    rest /= static_cast<std::size_t>(grid.count[a]);
-  }
-  out.clear();
-  int offsets = 1;
-  for (int a = 0; a < grid.dimension; ++a) offsets *= 3;
-  for (int o = 0; o < offsets; ++o) {
-    int code = o;
-    std::size_t index = 0, stride = 1;
-    bool inside = true;
-    for (int a = 0; a < grid.dimension; ++a) {
-      std::int64_t x = at[a] + code % 3 - 1;
-      code /= 3;
-      if (x < 0 || x >= grid.count[a]) {
-        if (!grid.periodic) {
-          inside = false;
-          break;
-        }
-        x = (x + grid.count[a]) % grid.count[a];
-      }
-      index += static_cast<std::size_t>(x) * stride;
-      stride *= static_cast<std::size_t>(grid.count[a]);
-    }
-    if (inside) out.push_back(index);
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-}
-
-std::span<const double> cell_points(const CellGrid& grid, std::size_t c) {
-  const auto d = static_cast<std::size_t>(grid.dimension);
-  return std::span<const double>(grid.coordinates)
-      .subspan(grid.start[c] * d, (grid.start[c + 1] - grid.start[c]) * d);
-}
-
-// The indices (into the bucketed point set) of the points of cell `c`, in `cell_points` order.
-std::span<const std::size_t> cell_indices(const CellGrid& grid, std::size_t c) {
-  return std::span<const std::size_t>(grid.order)
-      .subspan(grid.start[c], grid.start[c + 1] - grid.start[c]);
-}
-
 // For every cell a of `rows` holding points and every neighbouring cell b of `columns` (the
 // same cell geometry) holding points, in increasing order of a, then b, on the calling thread:
 // visit(block, row_indices, column_indices, a == b) with block(i, j) = k(row point i, column
@@ -153,7 +42,7 @@ void for_each_neighbour_block(const AnyKernel& kernel, const CellGrid& rows,
   for (std::size_t a = 0; a < rows.cells(); ++a) {
     const auto first = cell_points(rows, a);
     if (first.empty()) continue;
-    neighbours(rows, a, near);
+    cells_around(rows, rows.position(a), 1, near);
     for (const std::size_t b : near) {
       if (upper && b < a) continue;
       const auto second = cell_points(columns, b);
@@ -242,7 +131,7 @@ void analyse_one_at_a_time(const std::function<void()>& analyse) {
 Eigen::SparseMatrix<double> sparse_gram(const AnyKernel& kernel, std::span<const double> centres) {
   const Domain& domain = kernel.domain();
   const std::size_t n = domain.point_count(centres);
-  CellGrid grid = cell_geometry(domain, support_radius(kernel), n);
+  CellGrid grid = cells_at_least(domain, support_radius(kernel), n);
   bucket(grid, domain, centres);
   // Each pair of cells once: the upper triangle as triplets (reserved for the predicted
   // nonzeros), compressed, then mirrored into both triangles: about 20 bytes a nonzero of G at
@@ -278,7 +167,7 @@ Eigen::SparseMatrix<double> sparse_cross_columns(const AnyKernel& kernel,
                                                  std::span<const double> centres) {
   const Domain& domain = kernel.domain();
   const std::size_t n = domain.point_count(centres), m = domain.point_count(points);
-  CellGrid centre_grid = cell_geometry(domain, support_radius(kernel), n);
+  CellGrid centre_grid = cells_at_least(domain, support_radius(kernel), n);
   CellGrid point_grid = centre_grid;
   bucket(centre_grid, domain, centres);
   bucket(point_grid, domain, points);
@@ -307,7 +196,7 @@ double analysed_factor_nonzeros(const Eigen::SparseMatrix<double>& gram) {
   return cholesky.common().lnz;
 }
 
-bool sparse_sup_from_bounds(std::size_t n, const MetricSelection& selection) {
+bool floors_from_sample(std::size_t n, const MetricSelection& selection) {
   const auto asked = [&](ApproximationMetric metric) {
     const auto i = static_cast<std::size_t>(metric);
     return selection.empty() || (i < selection.size() && selection[i]);
@@ -354,9 +243,9 @@ void solve_columns(cholmod_factor* factor, Eigen::MatrixXd& columns,
   cholmod_finish(&common);
 }
 
-// The pass of sparse_sup_from_bounds: the points bounded_power_sup solves for the sup (with
-// `search`), and the floors' sample: 64 points spread over the grid and, with a `residual`, the
-// point that sets sup_error.
+// The pass of floors_from_sample (on the sparse path): the points bounded_power_sup solves for the
+// sup (with `search`), and the floors' sample: 64 points spread over the grid and, with a
+// `residual`, the point that sets sup_error.
 BoundedPowerSup bounded_pass(const AnyKernel& kernel, std::span<const double> centres,
                              std::span<const double> points, cholmod_factor* factor,
                              const Eigen::VectorXd* residual, bool search) {
@@ -469,7 +358,7 @@ std::optional<ApproximationMeasurement> measure_sparse_approximation(
   // comes from bounded_power_sup instead, which solves for a few points only.
   const bool power = work & (work_power | work_cardinal), cardinal = work & work_cardinal;
   const bool residual_wanted = work & work_residual;
-  const bool bounded = power && sparse_sup_from_bounds(static_cast<std::size_t>(n), selection);
+  const bool bounded = power && floors_from_sample(static_cast<std::size_t>(n), selection);
   const auto m_total = static_cast<Eigen::Index>(point_count);
   const auto d = static_cast<std::size_t>(domain.dimension);
   Eigen::VectorXd quadratic, solution_norm_squared, residual;

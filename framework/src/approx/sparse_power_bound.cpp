@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "rkhs/approx/cell_grid.hpp"
 #include "rkhs/approx/sparse_gram.hpp"
 #include "rkhs/core/cancellation.hpp"
 #include "rkhs/core/concurrency.hpp"
@@ -25,68 +26,15 @@ constexpr std::size_t point_subset_size = 256;
 constexpr std::size_t exact_block = 32;
 constexpr std::size_t refine_above = 8 * exact_block;
 
-// The centres bucketed in a uniform grid of cells holding about one centre each.
-struct CentreCells {
-  int dimension = 1;
-  bool periodic = false;
-  std::array<std::int64_t, Domain::max_dimension> count{1, 1, 1};
-  std::array<double, Domain::max_dimension> side{1, 1, 1};
-  std::vector<std::size_t> start, order;
-
-  std::int64_t axis_cell(const Domain& domain, double x, int a) const {
-    if (periodic) x = domain.wrap(x, a);
-    return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor(x / side[a])), 0,
-                                    count[a] - 1);
-  }
-  std::size_t cells() const {
-    std::size_t total = 1;
-    for (int a = 0; a < dimension; ++a) total *= static_cast<std::size_t>(count[a]);
-    return total;
-  }
-  std::size_t cell_of(const Domain& domain, const double* x) const {
-    std::size_t c = 0;
-    for (int a = dimension - 1; a >= 0; --a)
-      c = c * static_cast<std::size_t>(count[a]) +
-          static_cast<std::size_t>(axis_cell(domain, x[a], a));
-    return c;
-  }
-};
-
-CentreCells bucket_centres(const Domain& domain, std::span<const double> centres) {
-  CentreCells grid;
-  grid.dimension = domain.dimension;
-  grid.periodic = domain.periodic;
-  const std::size_t n = domain.point_count(centres);
-  const double spacing = std::pow(
-      domain.volume() / static_cast<double>(std::max<std::size_t>(n, 1)), 1.0 / domain.dimension);
-  for (int a = 0; a < grid.dimension; ++a) {
-    grid.count[a] = std::max<std::int64_t>(
-        1, static_cast<std::int64_t>(std::llround(domain.extent(a) / spacing)));
-    grid.side[a] = domain.extent(a) / static_cast<double>(grid.count[a]);
-  }
-  const auto d = static_cast<std::size_t>(grid.dimension);
-  std::vector<std::size_t> cell(n);
-  grid.start.assign(grid.cells() + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    cell[i] = grid.cell_of(domain, &centres[i * d]);
-    ++grid.start[cell[i] + 1];
-  }
-  for (std::size_t c = 0; c + 1 < grid.start.size(); ++c) grid.start[c + 1] += grid.start[c];
-  grid.order.resize(n);
-  std::vector<std::size_t> next(grid.start.begin(), grid.start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) grid.order[next[cell[i]]++] = i;
-  return grid;
-}
-
 // The `size` centres nearest `q` (ties to the lower index), in increasing index order: the
 // cubes of cells around q's cell grow until the size-th nearest found lies closer than any
 // centre outside the cube can.
-void nearest_centres(const CentreCells& grid, const Domain& domain, std::span<const double> centres,
+void nearest_centres(const CellGrid& grid, const Domain& domain, std::span<const double> centres,
                      const double* q, std::size_t size, std::vector<std::size_t>& out) {
   const auto d = static_cast<std::size_t>(grid.dimension);
   const std::size_t n = domain.point_count(centres);
   size = std::min(size, n);
-  std::array<std::int64_t, Domain::max_dimension> at{};
+  CellGrid::Position at{};
   double side = std::numeric_limits<double>::infinity();
   for (int a = 0; a < grid.dimension; ++a) {
     at[a] = grid.axis_cell(domain, q[a], a);
@@ -95,34 +43,10 @@ void nearest_centres(const CentreCells& grid, const Domain& domain, std::span<co
   std::vector<std::pair<double, std::size_t>> found;
   std::vector<std::size_t> cells;
   for (std::int64_t r = 0;; ++r) {
-    cells.clear();
     bool everything = true;
-    std::int64_t combinations = 1;
-    for (int a = 0; a < grid.dimension; ++a) {
-      combinations *= 2 * r + 1;
+    for (int a = 0; a < grid.dimension; ++a)
       everything = everything && 2 * r + 1 >= (grid.periodic ? grid.count[a] : 2 * grid.count[a]);
-    }
-    for (std::int64_t o = 0; o < combinations; ++o) {
-      std::int64_t code = o;
-      std::size_t index = 0, stride = 1;
-      bool inside = true;
-      for (int a = 0; a < grid.dimension; ++a) {
-        std::int64_t x = at[a] + code % (2 * r + 1) - r;
-        code /= 2 * r + 1;
-        if (x < 0 || x >= grid.count[a]) {
-          if (!grid.periodic) {
-            inside = false;
-            break;
-          }
-          x = ((x % grid.count[a]) + grid.count[a]) % grid.count[a];
-        }
-        index += static_cast<std::size_t>(x) * stride;
-        stride *= static_cast<std::size_t>(grid.count[a]);
-      }
-      if (inside) cells.push_back(index);
-    }
-    std::sort(cells.begin(), cells.end());
-    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    cells_around(grid, at, r, cells);
     found.clear();
     for (const std::size_t c : cells)
       for (std::size_t k = grid.start[c]; k < grid.start[c + 1]; ++k) {
@@ -191,7 +115,8 @@ BoundedPowerSup bounded_power_sup(const AnyKernel& kernel, std::span<const doubl
   const Domain& domain = kernel.domain();
   const auto d = static_cast<std::size_t>(domain.dimension);
   const std::size_t m = domain.point_count(points);
-  const CentreCells grid = bucket_centres(domain, centres);
+  CellGrid grid = cells_of_one_point(domain, domain.point_count(centres));
+  bucket(grid, domain, centres);
   Eigen::VectorXd upper = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(m),
                                                     std::numeric_limits<double>::infinity());
   BoundedPowerSup out;
@@ -242,12 +167,9 @@ BoundedPowerSup bounded_power_sup(const AnyKernel& kernel, std::span<const doubl
       std::array<double, Domain::max_dimension> middle{};
       for (std::size_t k = part * per_part; k < std::min(occupied.size(), (part + 1) * per_part);
            ++k) {
-        std::size_t rest = occupied[k];
-        for (int a = 0; a < grid.dimension; ++a) {
-          const auto cell = rest % static_cast<std::size_t>(grid.count[a]);
-          rest /= static_cast<std::size_t>(grid.count[a]);
-          middle[a] = (static_cast<double>(cell) + 0.5) * grid.side[a];
-        }
+        const auto cell = grid.position(occupied[k]);
+        for (int a = 0; a < grid.dimension; ++a)
+          middle[a] = (static_cast<double>(cell[a]) + 0.5) * grid.side[a];
         nearest_centres(grid, domain, centres, middle.data(), cell_subset_size, subset);
         subset_bounds(kernel, centres, points, by_cell[occupied[k]], subset, upper);
       }

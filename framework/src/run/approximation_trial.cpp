@@ -73,7 +73,7 @@ TrialFootprint approximation_footprint(const StudyDefinition& study, const Trial
     // (64 x 64 factorisations, one for about each centre, and a 64 x 64 solve per point).
     const auto points = static_cast<double>(study.evaluation_points);
     sparse.sparse_flops =
-        factor.factor_flops + (sparse_sup_from_bounds(trial.n, study.computed_metrics())
+        factor.factor_flops + (floors_from_sample(trial.n, study.computed_metrics())
                                    ? 4.0 * factor.factor_nonzeros * 128.0 +
                                          1e5 * static_cast<double>(trial.n) + 8192.0 * points
                                    : 4.0 * factor.factor_nonzeros * points);

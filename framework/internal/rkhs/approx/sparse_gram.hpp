@@ -59,11 +59,13 @@ struct GridPass {
 /// became 16); every shipped study of the interpolation path is below it.
 inline constexpr std::size_t sampled_floor_min_centres = 2048;
 
-/// Whether a trial of n centres on the sparse path that computes `selection` (empty: every
-/// metric) takes power_function_sup from bounded_power_sup and the floors from the points it
-/// solves: n >= sampled_floor_min_centres and neither power_function_floor nor error_floor
-/// selected. Such a trial solves for about a hundred points, not for every one.
-bool sparse_sup_from_bounds(std::size_t n, const MetricSelection& selection);
+/// Whether a trial of n centres that computes `selection` (empty: every metric) takes its floors
+/// from a sample of the evaluation points: n >= sampled_floor_min_centres and neither
+/// power_function_floor nor error_floor selected. The rule of both paths: the dense path then
+/// solves the second (cardinal) system at the sample only; the sparse path also takes
+/// power_function_sup from bounded_power_sup, solving for about a hundred points, not for
+/// every one.
+bool floors_from_sample(std::size_t n, const MetricSelection& selection);
 
 /// Sets, from `pass` over `points`, what `work` asks of the interpolant Pi_n f = sum_i alpha_i
 /// k(c_i, .) of n centres: the power function's sup and floor, the native norm
