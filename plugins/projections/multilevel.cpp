@@ -75,14 +75,14 @@ class Multilevel final : public Projection {
     }
     out.metrics[M::fill_distance] = 0.5 * std::sqrt(diagonal);
     out.metrics[M::separation_distance] = 0.5 * smallest;
-    out.metrics[M::sup_error] = finest.sup_error;
     const double previous = result.levels.size() > 1
                                 ? result.levels[result.levels.size() - 2].l2_error
                                 : result.target_l2;
     // Round-off of a level's L2 error, at the scale of the target: n_l eps ||f||, the n eps
-    // of a solve with a Gram matrix whose entries are at most 1 (a Wendland function); the
-    // reduction factor's floor propagated from the two errors' to first order (e_{-1} = f
-    // has none).
+    // of a solve with a Gram matrix whose entries are at most 1 (a Wendland function); the sup
+    // error's likewise with max |f| (the last digits of both follow the BLAS kernels CHOLMOD
+    // runs, which differ between processors); the reduction factor's floor propagated from the
+    // two errors' to first order (e_{-1} = f has none).
     const auto error_floor = [&](const MultilevelLevel& l) {
       return static_cast<double>(l.centres) * std::numeric_limits<double>::epsilon() *
              result.target_l2;
@@ -91,6 +91,10 @@ class Multilevel final : public Projection {
     out.metrics[M::l2_error] = finest.l2_error;
     out.floors[M::l2_error] = error_floor(finest);
     if (finest.l2_error <= out.floors[M::l2_error]) out.add_flag("l2_error_at_floor");
+    out.metrics[M::sup_error] = finest.sup_error;
+    out.floors[M::sup_error] = static_cast<double>(finest.centres) *
+                               std::numeric_limits<double>::epsilon() * result.target_sup;
+    if (finest.sup_error <= out.floors[M::sup_error]) out.add_flag("sup_error_at_floor");
     out.metrics[M::level_reduction_factor] = factor;
     out.floors[M::level_reduction_factor] =
         factor *

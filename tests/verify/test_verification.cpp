@@ -386,6 +386,86 @@ rate = { max = -1.0 }
              Catch::StartsWith("the power law fits better, not the exponential model"));
 }
 
+// A multilevel study (Wendland phi_{2,1}, nested grids of m = 4 2^j + 1 points per side, levels
+// j = 0..4), its reduction factor made up from the finest level's fill distance.
+const std::string multilevel = R"toml([study]
+name = "ml"
+abscissa = "h"
+evaluation_points = 16641
+metrics = ["fill_distance", "separation_distance", "level_reduction_factor"]
+[domain]
+lengths = [1.0, 1.0]
+periodic = false
+[grid]
+n = [25, 81, 289, 1089, 4225]
+[[kernel]]
+name = "wendland"
+k = 1
+radius = 1.0
+[[target]]
+name = "expression"
+f = "exp(x1) * cos(x2)"
+[[projection]]
+name = "multilevel"
+[[expect]]
+metric = "level_reduction_factor"
+theory = true
+)toml";
+
+// A tensor grid of n = m^2 points on the unit square: h = spacing / sqrt(2), q = spacing / 2.
+std::pair<double, double> tensor_grid(const TrialSpec& t) {
+  const double spacing = 1.0 / (std::sqrt(static_cast<double>(t.n)) - 1.0);
+  return {spacing / std::sqrt(2.0), spacing / 2.0};
+}
+
+TEST_CASE("theory of multiscale interpolation: a reduction factor below 1 bounded away from it",
+          "[verification]") {
+  KernelProperties sobolev;
+  sobolev.sobolev_order = 2.5;
+  sobolev.dimension = 2;
+  const auto law = theory_rate("level_reduction_factor", sobolev);
+  REQUIRE(law);
+  CHECK_FALSE(law->sharp);
+  CHECK(law->h_exponent == 0.0);
+  REQUIRE(law->values_below);
+  CHECK(*law->values_below == 1.0);
+  const auto band = theory_interval(*law, Abscissa::fill_distance, 0.1);
+  CHECK(band.low == Approx(-0.1));
+  CHECK(band.high == infinity);
+  KernelProperties analytic;
+  analytic.analytic = true;
+  std::string why;
+  CHECK_FALSE(theory_rate("level_reduction_factor", analytic, &why));
+  CHECK_THAT(why, Catch::Contains("finite smoothness") && Catch::Contains("is analytic"));
+
+  auto outcome_of = [](double (*factor)(double h)) {
+    const Synthetic made(
+        "", [&](const TrialSpec& t, const std::string&) { return factor(tensor_grid(t).first); },
+        tensor_grid, multilevel);
+    const auto outcomes = made.verify();
+    REQUIRE(outcomes.size() == 1);
+    INFO(outcomes[0].expected << " / " << outcomes[0].found << " / " << outcomes[0].reason);
+    return outcomes[0];
+  };
+  // A factor of about 0.2 at every level, falling slowly: the theorem's picture.
+  const auto holds = outcome_of([](double h) { return 0.2 * std::pow(h / 0.177, 0.05); });
+  CHECK(holds.verdict == Verdict::pass);
+  CHECK_THAT(holds.expected, Catch::Contains("<= alpha < 1 at every level") &&
+                                 Catch::Contains("tau = 2.5, d = 2") &&
+                                 Catch::Contains("every value below 1") &&
+                                 Catch::Contains("quasi-uniform nested centre sets"));
+  CHECK_THAT(holds.reason, Catch::Contains("every usable value lies below 1 (largest 0.200"));
+  // Below 1 at every level but creeping towards it as h falls (h^-0.3): the slope fails.
+  const auto creeps = outcome_of([](double h) { return 0.3 * std::pow(h / 0.177, -0.3); });
+  CHECK(creeps.verdict == Verdict::fail);
+  CHECK(creeps.rate == Approx(-0.3));
+  CHECK_THAT(creeps.reason, Catch::Contains("every usable value lies below 1"));
+  // Constant but at 1.05: no reduction, the values fail.
+  const auto stalls = outcome_of([](double) { return 1.05; });
+  CHECK(stalls.verdict == Verdict::fail);
+  CHECK_THAT(stalls.reason, Catch::Contains("5 of 5 values at or above 1 beyond their floors"));
+}
+
 TEST_CASE("verdicts: inconclusive when the CI is too wide or the window too short", "[verification]") {
   // Scatter of 30 % in the degree-2 power function: the CI is wider than +-0.1.
   Random random(7);

@@ -173,6 +173,7 @@ MultilevelResult multilevel_interpolation(const AnyKernel& kernel, const TargetF
   out.residual.resize(static_cast<Eigen::Index>(point_count));
   target.evaluate(points, std::span<double>(out.residual.data(), point_count));
   out.target_l2 = domain.l2_norm(std::span<const double>(out.residual.data(), point_count));
+  out.target_sup = point_count > 0 ? out.residual.cwiseAbs().maxCoeff() : 0.0;
 
   for (int j = 0; j <= finest_level; ++j) {
     MultilevelLevel level;

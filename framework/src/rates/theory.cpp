@@ -48,6 +48,22 @@ std::optional<TheoryRate> theory_rate(const MetricInfo& row, const KernelPropert
   if (law == TheoryLaw::none) return none(no_theory_law(metric));
   TheoryRate theory;
   theory.dimension = dimension;
+  if (law == TheoryLaw::level_reduction) {
+    if (properties.analytic || !properties.sobolev_order)
+      return none(fmt::format(
+          "the multiscale theorem bounding {} (Wendland 2010) is stated for kernels of finite "
+          "smoothness, equivalent to a Sobolev space H^tau with tau > d/2; this kernel {}",
+          metric, properties.analytic ? "is analytic" : "gives no sobolev_order in its metadata"));
+    theory.h_exponent = 0.0;
+    theory.sharp = false;
+    theory.values_below = 1.0;
+    theory.quasi_uniform_because = "the theorem is stated for quasi-uniform nested centre sets";
+    theory.statement = fmt::format(
+        "{} <= alpha < 1 at every level, alpha independent of the level (multiscale "
+        "interpolation with rho_l = nu h_l, nu large enough; tau = {}, d = {})",
+        metric, format_real(*properties.sobolev_order), dimension);
+    return theory;
+  }
   if (properties.analytic) {
     theory.model = RateModel::exponential;
     theory.sharp = false;

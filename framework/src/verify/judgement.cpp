@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "rkhs/rates/asymptotic.hpp"
 
@@ -192,6 +193,38 @@ std::string exclusions(const MetricSeries& series, const ModelAnalysis& analysis
   std::string out;
   for (const auto& p : parts) out += "; " + p;
   return out;
+}
+
+Judgement judge_values_below(const MetricSeries& series, const std::vector<bool>& inside,
+                             double bound) {
+  std::size_t used = 0, non_finite = 0, largest_at = 0, beyond = 0;
+  double largest = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < series.values.size(); ++k) {
+    if (!inside[k] || series.failed[k] || series.flagged[k]) continue;
+    const double y = series.values[k];
+    if (!std::isfinite(y)) {
+      ++non_finite;
+      continue;
+    }
+    const double floor = k < series.floors.size() && series.floors[k] > 0 ? series.floors[k] : 0.0;
+    ++used;
+    beyond += y - floor >= bound;
+    if (y > largest) {
+      largest = y;
+      largest_at = static_cast<std::size_t>(series.n[k]);
+    }
+  }
+  if (beyond)
+    return {Verdict::fail, fmt::format("{} of {} values at or above {} beyond their floors "
+                                       "(largest {} at n = {})",
+                                       beyond, used, format_real(bound), num(largest), largest_at)};
+  if (non_finite || used == 0)
+    return {Verdict::inconclusive,
+            non_finite ? fmt::format("{} value{} not finite: not known to lie below {}", non_finite,
+                                     non_finite == 1 ? " is" : "s are", format_real(bound))
+                       : fmt::format("no usable value to compare with {}", format_real(bound))};
+  return {Verdict::pass, fmt::format("every usable value lies below {} (largest {} at n = {})",
+                                     format_real(bound), num(largest), largest_at)};
 }
 
 // Whether the centres of a group are quasi-uniform, judged from the trials' fill and separation

@@ -35,6 +35,12 @@ struct Judgement {
 // The interval rule of verification.hpp.
 Judgement judge_interval(const RateFit* fit, const RateInterval& accepted);
 
+// The values a theory bounds (TheoryRate::values_below): every usable value (not failed, not
+// flagged) among the `inside` ones below `bound`. A value within its floor of the bound is not
+// known to exceed it; a non-finite one makes the verdict inconclusive.
+Judgement judge_values_below(const MetricSeries& series, const std::vector<bool>& inside,
+                             double bound);
+
 // The rates a constant series allows under `model`: every line within its band over its points,
 // slopes up to w = 2 band / |value| per span of ln x (power law) or of n (exponential).
 // +inf for a constant of value 0 with a band, or a span of 0.

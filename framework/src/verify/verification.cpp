@@ -287,25 +287,35 @@ class Verifier {
     o.accepted_high = interval.high;
     const std::string conversion =
         study_.abscissa == Abscissa::n
-            ? fmt::format("slope {} against ln n for quasi-uniform centres (h ~ n^-1/d; measured: {})",
-                          num(slope), uniformity)
+            ? fmt::format(
+                  "slope {} against ln n for quasi-uniform centres (h ~ n^-1/d; measured: {})",
+                  num(slope), uniformity)
         : any_centres
-            ? fmt::format("slope {} against ln h, for any centres (a bound in the fill distance; "
-                          "measured: {}){}",
-                          num(slope), uniformity,
-                          upper_only ? "; the centres are not quasi-uniform, so the attained "
-                                       "order's constants vary with the configuration and only "
-                                       "its upper bound is judged"
-                                     : "")
-            : fmt::format("slope {} against ln h for quasi-uniform centres (the theory is stated "
-                          "in the separation distance q, which is h only for them; measured: {})",
-                          num(slope), uniformity);
-    o.expected = fmt::format("theory: {}, {}; {}; accepted: {} (tolerance {})", theory->statement,
+            ? fmt::format(
+                  "slope {} against ln h, for any centres (a bound in the fill distance; "
+                  "measured: {}){}",
+                  num(slope), uniformity,
+                  upper_only ? "; the centres are not quasi-uniform, so the attained "
+                               "order's constants vary with the configuration and only "
+                               "its upper bound is judged"
+                             : "")
+            : fmt::format("slope {} against ln h for quasi-uniform centres ({}; measured: {})",
+                          num(slope), theory->quasi_uniform_because, uniformity);
+    o.expected = fmt::format("theory: {}, {}; {}; accepted: {} (tolerance {}){}", theory->statement,
                              theory->sharp ? "order attained" : "an upper bound (faster passes)",
-                             conversion, interval_text(interval), num(e.tolerance));
+                             conversion, interval_text(interval), num(e.tolerance),
+                             theory->values_below ? fmt::format(", and every value below {}",
+                                                                format_real(*theory->values_below))
+                                                  : std::string());
     const auto& analysis = series.analysis.power_law;
     record_fit(series, analysis, o);
     auto [verdict, reason] = judge_series(series, analysis, interval);
+    if (theory->values_below) {
+      const auto values =
+          judge_values_below(series, window_members(e, series), *theory->values_below);
+      verdict = worst(verdict, values.verdict);
+      reason += "; " + values.reason;
+    }
     o.verdict = verdict;
     o.reason = reason;
     if (!uniform && !any_centres) {  // the rates above hold for quasi-uniform centres only

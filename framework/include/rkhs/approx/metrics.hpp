@@ -64,6 +64,9 @@ enum class TheoryLaw {
   projection_norm,        ///< ~ h^(tau - d/2) for a uniformly bounded projection of mesh h
   gram_min_eigenvalue,    ///< ~ q^(2 tau - d)
   gram_condition_number,  ///< ~ n q^-(2 tau - d) = h^(-2 tau); grows
+  /// Multiscale interpolation (Wendland 2010): the error falls by a factor <= alpha < 1 from
+  /// one level to the next, alpha independent of the level
+  level_reduction,
 };
 
 /// The law's identifier ("power_function", ...), as `rkhs-study list metrics` prints it; "-"
@@ -77,6 +80,7 @@ constexpr std::string_view theory_law_name(TheoryLaw law) {
     case TheoryLaw::projection_norm: return "projection_norm";
     case TheoryLaw::gram_min_eigenvalue: return "gram_min_eigenvalue";
     case TheoryLaw::gram_condition_number: return "gram_condition_number";
+    case TheoryLaw::level_reduction: return "level_reduction";
   }
   return "-";
 }
@@ -298,7 +302,7 @@ struct MetricTable<ApproximationMetric> {
       { {"level_reduction_factor", "error reduction of the level", F::propagated, "1",
        "multilevel: ||e_j|| / ||e_{j-1}|| in L2(Omega) on the grid, e_j = f - s_0 - ... - s_j, "
        "e_{-1} = f; its floor from the two errors' floors; NaN for other projections", true, "", true,
-       work_interpolant | work_residual, true, TheoryLaw::none, true}, M::level_reduction_factor},
+       work_interpolant | work_residual, true, TheoryLaw::level_reduction, true}, M::level_reduction_factor},
       { {"level_condition_number", "condition number of the level's Gram matrix", F::round_off,
        "1",
        "multilevel: lambda_max / lambda_min of level j's sparse Gram matrix (Lanczos, each "

@@ -56,6 +56,7 @@ struct MultilevelLevel {
 struct MultilevelResult {
   std::vector<MultilevelLevel> levels;
   double target_l2 = 0;                ///< ||f|| in L2 on the evaluation points (e_{-1})
+  double target_sup = 0;               ///< max |f| on the evaluation points
   Eigen::VectorXd residual;            ///< e_J on the evaluation points
   Eigen::VectorXd finest_residual;     ///< e_J on X_J (round-off: s interpolates f there)
   std::vector<double> finest_centres;  ///< X_J

@@ -8,10 +8,10 @@
 // d dimensions, with fill distance h and separation distance q (quasi-uniform: q ~ h ~ n^-1/d):
 //
 //   power_function_sup     ~ h^(tau - d/2)   order attained (two-sided)    } in h for any
-//   sup_error             <= C h^(tau - d/2)  upper bound only (|f - Pi f| <= P ||f||_H)   } centres
-//   l2_error              <= C h^tau          upper bound only (smoother f converge faster) }
-//   gram_min_eigenvalue    ~ q^(2 tau - d)   order attained (two-sided)
-//   gram_condition_number  ~ n q^-(2 tau - d) = h^(-2 tau)   (two-sided)
+//   sup_error             <= C h^(tau - d/2)  upper bound only (|f - Pi f| <= P ||f||_H)   }
+//   centres l2_error              <= C h^tau          upper bound only (smoother f converge faster)
+//   } gram_min_eigenvalue    ~ q^(2 tau - d)   order attained (two-sided) gram_condition_number  ~
+//   n q^-(2 tau - d) = h^(-2 tau)   (two-sided)
 //
 // The textbook "condition number ~ q^-(2 tau - d)" is the bound on 1 / lambda_min; for a fixed
 // kernel on a bounded domain lambda_max grows like n (Gershgorin bounds it by n max k, the
@@ -22,6 +22,20 @@
 // Analytic kernels (Gaussian): every metric above converges (or grows) at least exponentially,
 // so the theory is one-sided and qualitative: the exponential model describes the series
 // better than any power law, and its rate has the right sign.
+//
+// Multiscale interpolation (the `multilevel` projection: level l interpolates the residual of
+// the coarser ones on nested quasi-uniform centres, h_{l+1} = h_l / 2, with the kernel scaled to
+// rho_l = nu h_l), for a kernel equivalent to H^tau, tau > d/2, and f in H^tau (Wendland, Numer.
+// Math. 2010): for nu large enough there is alpha < 1 independent of the level with
+// ||f - s_0 - ... - s_j||_L2 <= C alpha^(j+1) ||f||_H^tau, the residual's scaled native norm
+// falling by alpha from each level to the next. So
+//
+//   level_reduction_factor <= alpha < 1 at every level, and bounded away from 1 as the levels
+//   refine: every value below 1, and against ln h a slope of at least 0 (h^0 an upper bound;
+//   a factor that creeps towards 1 as h falls has a negative slope and fails)
+//
+// The theorem states no rule for alpha (its constant is unknown), so only the bound is judged;
+// for analytic kernels it says nothing.
 
 #include <optional>
 #include <string>
@@ -49,6 +63,12 @@ struct TheoryRate {
   /// eigenvalues), which is h only for quasi-uniform centres. Against n every theory needs
   /// quasi-uniform centres (h ~ n^-1/d).
   bool holds_for_any_centres = false;
+  /// Why the statement needs quasi-uniform centres against ln h, for messages.
+  std::string_view quasi_uniform_because =
+      "the theory is stated in the separation distance q, which is h only for them";
+  /// When the law also bounds every value (the multilevel reduction factor: below 1), that
+  /// bound: each usable value must lie below it.
+  std::optional<double> values_below;
   std::string statement;  ///< "power_function_sup ~ h^(tau - d/2) = h^0.5 (tau = 1, d = 1)"
 };
 
