@@ -128,7 +128,18 @@ def metric_columns(trials: pd.DataFrame):
             and not c.startswith(("kernel_", "target_", "centres_"))]
 
 
-def assert_same_metrics(a: pd.DataFrame, b: pd.DataFrame, relative=1e-14):
+# A floor is an estimate of a size (docs/metrics.md, "Floors"): two computations of it agree
+# within this factor (as tests/golden/check_shipped_studies.py compares them).
+FLOOR_FACTOR = 4.0
+
+
+def assert_same_metrics(a: pd.DataFrame, b: pd.DataFrame, relative=1e-14, floors=True):
+    """Every metric of `a` equals `b`'s within `relative` or, with `floors`, within the larger of
+    the two values' round-off floors (the <metric>_floor columns), the floors themselves within
+    FLOOR_FACTOR. Two implementations of one kernel differ in the last bits of their entries
+    (NumPy's and glibc's exp are not the same code on every processor), and an ill-conditioned
+    Gram matrix magnifies that by as much as the floors say. floors=False: `relative` alone
+    (relative=0.0: bit-identical)."""
     a, b = a.reset_index(drop=True), b.reset_index(drop=True)
     assert len(a) == len(b) > 0
     assert a["status"].tolist() == b["status"].tolist() == ["ok"] * len(a)
@@ -137,9 +148,15 @@ def assert_same_metrics(a: pd.DataFrame, b: pd.DataFrame, relative=1e-14):
     for column in columns:
         x, y = a[column].to_numpy(), b[column].to_numpy()
         both_nan = np.isnan(x) & np.isnan(y)
-        with np.errstate(invalid="ignore"):  # inf - inf where both are inf (equal already)
+        with np.errstate(invalid="ignore", divide="ignore"):  # inf - inf, 0 / 0: equal already
             scale = np.maximum(np.abs(x), np.abs(y))
-            close = (x == y) | (np.abs(x - y) <= relative * scale)
+            allowed = relative * scale
+            if floors and column + "_floor" in a.columns:
+                floor = np.maximum(a[column + "_floor"].to_numpy(), b[column + "_floor"].to_numpy())
+                allowed = np.maximum(allowed, np.nan_to_num(floor))
+            close = (x == y) | (np.abs(x - y) <= allowed)
+            if floors and column.endswith("_floor"):
+                close |= (x > 0) & (y > 0) & (np.maximum(x, y) <= FLOOR_FACTOR * np.minimum(x, y))
         assert (close | both_nan).all(), (column, x, y)
     for column in a.columns:
         if column.endswith("_flag") or column.startswith("flag"):
@@ -211,7 +228,7 @@ def test_a_seeded_python_placement_is_the_same_on_any_thread_count():
                       n="[8, 16, 24, 32, 40, 48]")
     one = rkhs_study.Study.from_toml(text).run(threads=1).trials
     two = rkhs_study.Study.from_toml(text).run(threads=2).trials
-    assert_same_metrics(one, two, relative=0.0)
+    assert_same_metrics(one, two, relative=0.0, floors=False)
     uniform = rkhs_study.Study.from_toml(text.replace("py_jittered", "uniform")).run().trials
     assert not np.array_equal(one["l2_error"].to_numpy(), uniform["l2_error"].to_numpy())
 
