@@ -37,6 +37,7 @@ class Multilevel final : public Projection {
     ProjectionProperties p;
     p.resolution = ProjectionResolution::level;
     p.matrix_free = true;
+    p.kernel_scaled_with_level = true;
     for (const auto m : {M::fill_distance, M::separation_distance, M::l2_error, M::sup_error,
                          M::level_reduction_factor, M::level_condition_number, M::level_nonzeros})
       p.measures |= measured_metric_bit(m);

@@ -464,6 +464,15 @@ TEST_CASE("theory of multiscale interpolation: a reduction factor below 1 bounde
   const auto stalls = outcome_of([](double) { return 1.05; });
   CHECK(stalls.verdict == Verdict::fail);
   CHECK_THAT(stalls.reason, Catch::Contains("5 of 5 values at or above 1 beyond their floors"));
+
+  // The fixed-kernel theory of the errors does not describe a kernel scaled with the level.
+  std::string errors = multilevel;
+  errors.replace(errors.find("\"level_reduction_factor\"]"), 25, "\"l2_error\"]");
+  errors.replace(errors.find("metric = \"level_reduction_factor\""), 33, "metric = \"l2_error\"");
+  CHECK_THAT(error_of(errors),
+             Catch::Contains("expect.theory: projection 'multilevel' scales its kernel with the "
+                             "level (rho_j = nu h_j), so the theory of a fixed kernel for "
+                             "l2_error does not describe it"));
 }
 
 TEST_CASE("verdicts: inconclusive when the CI is too wide or the window too short", "[verification]") {

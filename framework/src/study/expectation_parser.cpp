@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "reference_values.hpp"
+#include "rkhs/approx/projection.hpp"
 #include "rkhs/core/registry.hpp"
 #include "rkhs/kernel/kernel.hpp"
 #include "rkhs/rates/theory.hpp"
@@ -442,13 +443,36 @@ class ExpectationReader {
                            spec.file, spec.lines[k], spec.n[k], fmt::join(ns, ", ")));
     }
     if (e.kind != ExpectationKind::theory) return;
+    const auto* row = study_.kind_descriptor().find_metric(e.metric);
     for (const auto* group : selected) {
+      if (row && row->theory != TheoryLaw::level_reduction && scales_kernel(group->projection))
+        fail(study_.source, table.get("theory")->source(), "expect.theory",
+             fmt::format("projection '{}' scales its kernel with the level (rho_j = nu h_j), so "
+                         "the theory of a fixed kernel for {} does not describe it; its theory "
+                         "is Wendland's multiscale theorem, judged on level_reduction_factor "
+                         "(theory = true there), or declare a rate",
+                         group->projection.name, e.metric));
       std::string why;
       if (!theory_rate(e.metric,
                        kernel_properties(group->kernel.name, group->kernel.parameters, study_.domain),
                        &why))
         fail(study_.source, table.get("theory")->source(), "expect.theory",
              fmt::format("kernel {}: {}", group->kernel.label(), why));
+    }
+  }
+
+  // Whether `projection` scales its kernel with the level (ProjectionProperties::
+  // kernel_scaled_with_level); false when it cannot be built (reported with its entry).
+  static bool scales_kernel(const PluginChoice& projection) {
+    if (projection.name.empty()) return false;
+    try {
+      return projection_registry()
+          .find(projection.name)
+          ->factory(projection.parameters)
+          ->properties()
+          .kernel_scaled_with_level;
+    } catch (const std::exception&) {
+      return false;
     }
   }
 

@@ -81,6 +81,11 @@ struct ProjectionProperties {
   /// A matrix-free projection's metrics: bit i set when it computes metric i of
   /// MetricTable<ApproximationMetric> (measured_metric_bit); unused otherwise.
   std::uint64_t measures = 0;
+  /// Scales the kernel with its resolution (the multilevel projection: support radius
+  /// rho_j = nu h_j on level j), so the theory of a fixed kernel (h^(tau - d/2), h^tau) does
+  /// not describe its trials: `theory = true` is refused on its metrics but those of
+  /// TheoryLaw::level_reduction (rkhs/rates/theory.hpp).
+  bool kernel_scaled_with_level = false;
 };
 
 static_assert(MetricTable<ApproximationMetric>::rows.size() <= 64,
